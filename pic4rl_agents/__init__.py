@@ -1,0 +1,1 @@
+"""SB3 training and testing nodes (to be built: see the agents issue)."""

@@ -1,0 +1,42 @@
+"""pic4rl_metrics: navigation metrics from rosbag2 bags alone.
+
+Imports only rosbags, numpy, pandas, matplotlib (plus yaml and tqdm): judging real-robot bags
+needs no ROS, MuJoCo or torch. Typical use::
+
+    from pic4rl_metrics import compute
+    frame = compute(["bags/run1"]).frame      # one row per bag, one column per metric
+"""
+
+from __future__ import annotations
+
+from .batch import BagResult, MetricsResult, compute, judge_bag
+from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
+from .facts import EpisodeFacts, Footprint, Outcome
+from .metrics import compute_metrics
+from .reader import read_episode
+from .results import METRICS, TABLE1_COLUMNS, EpisodeMetrics
+from .series import Episode
+from .topics import TopicMap, load_topic_map
+
+__all__ = [
+    "METRICS",
+    "TABLE1_COLUMNS",
+    "BagError",
+    "BagResult",
+    "ConfigError",
+    "Episode",
+    "EpisodeError",
+    "EpisodeFacts",
+    "EpisodeMetrics",
+    "Footprint",
+    "MetricsError",
+    "MetricsResult",
+    "Outcome",
+    "TopicError",
+    "TopicMap",
+    "compute",
+    "compute_metrics",
+    "judge_bag",
+    "load_topic_map",
+    "read_episode",
+]

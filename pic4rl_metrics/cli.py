@@ -1,0 +1,175 @@
+"""``pic4rl-metrics``: compute, compare and plot navigation metrics from bags.
+
+Results go to stdout (or ``--out``); progress, warnings and errors go to stderr. The exit
+code is 1 when any bag failed (after all bags were judged and reported), 2 on bad usage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from .aggregate import aggregate
+from .batch import MetricsResult, compute
+from .errors import ConfigError, MetricsError
+from .facts import EpisodeFacts, parse_facts
+from .report import FORMATS, render_comparison, render_episodes
+from .topics import TopicMap, load_topic_map
+
+
+def _add_input_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "bags", nargs="+",
+        help="rosbag2 directories, metadata.yaml, .db3 or .mcap files, directories to search, globs",
+    )
+    topics = parser.add_argument_group("topics (defaults: the bag contract's names)")
+    topics.add_argument("--topic-map", type=Path, help="YAML topic map (and episode facts)")
+    topics.add_argument("--pose-topic", action="append", metavar="TOPIC",
+                        help="Odometry/PoseStamped/PoseWithCovarianceStamped topic; repeat for fallbacks")
+    topics.add_argument("--scan-topic", metavar="TOPIC", help="LaserScan topic")
+    topics.add_argument("--cmd-topic", metavar="TOPIC", help="Twist or TwistStamped topic")
+    topics.add_argument("--goal-topic", metavar="TOPIC", help="goal PoseStamped topic")
+    topics.add_argument("--person-topic", metavar="TOPIC", help="tracked person's pose topic")
+    facts = parser.add_argument_group("episode facts (override what the bags record)")
+    facts.add_argument("--agent", help="agent name, e.g. for a real-robot log")
+    facts.add_argument("--goal", nargs=2, type=float, metavar=("X", "Y"), help="goal position (m)")
+    facts.add_argument("--start", nargs=3, type=float, metavar=("X", "Y", "YAW"), help="start pose")
+    facts.add_argument("--footprint", help="robot footprint: radius R, 'circle:R' or 'rect:LxW' (m)")
+    facts.add_argument("--goal-tolerance", type=float, metavar="M", help="goal tolerance (m)")
+    facts.add_argument("--collision-tolerance", type=float, metavar="M",
+                       help="scan distance beyond the footprint that counts as a collision (m)")
+    facts.add_argument("--safety-margin", type=float, metavar="M",
+                       help="scan distance beyond the footprint that counts as unsafe (m)")
+    facts.add_argument("--max-speed", type=float, metavar="MPS", help="robot's max speed, for the BARN score")
+    run = parser.add_argument_group("running")
+    run.add_argument("--jobs", "-j", type=int, default=1, metavar="N", help="bags judged in parallel")
+    run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                     help="progress bar on stderr (default: when stderr is a terminal)")
+
+
+def _add_output_options(parser: argparse.ArgumentParser, default_format: str) -> None:
+    parser.add_argument("--format", "-f", choices=FORMATS, default=default_format)
+    parser.add_argument("--out", "-o", type=Path, help="write here instead of stdout")
+    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="pic4rl-metrics",
+        description="Navigation metrics (the PIC4rl-gym paper's and more) from rosbag2 bags alone.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("compute", help="one row of metrics per bag")
+    _add_input_options(p)
+    _add_output_options(p, "table")
+    p = sub.add_parser("compare", help="agents or runs side by side (the paper's Table 1)")
+    _add_input_options(p)
+    _add_output_options(p, "table")
+    p.add_argument("--by", default="agent", choices=("agent", "run", "task", "world"),
+                   help="what makes a row")
+    p.add_argument("--with-std", action="store_true", help="cells as mean ± std")
+    p = sub.add_parser("plot", help="a figure per episode and a comparison figure")
+    _add_input_options(p)
+    p.add_argument("--out", "-o", type=Path, required=True, help="directory for the PNG files")
+    p.add_argument("--by", default="agent", help="what colours the comparison figure")
+    return parser
+
+
+def _inputs(args: argparse.Namespace) -> tuple[TopicMap, EpisodeFacts, frozenset[str]]:
+    """Topic map and facts from --topic-map, then the command-line options over them."""
+    topic_map, facts, given = TopicMap(), EpisodeFacts(), frozenset()
+    if args.topic_map is not None:
+        topic_map, facts, given = load_topic_map(args.topic_map)
+    topic_map = topic_map.with_overrides(
+        pose=tuple(args.pose_topic) if args.pose_topic else None, scan=args.scan_topic,
+        cmd_vel=args.cmd_topic, goal=args.goal_topic, person=args.person_topic,
+    )
+    cli = {
+        "agent": args.agent, "goal": args.goal, "start": args.start, "footprint": args.footprint,
+        "goal_tolerance_m": args.goal_tolerance, "collision_tolerance_m": args.collision_tolerance,
+        "safety_margin_m": args.safety_margin, "max_speed_mps": args.max_speed,
+    }
+    cli_facts, cli_given = parse_facts(
+        {k: v for k, v in cli.items() if v is not None}, source="command line"
+    )
+    facts = facts.merged(cli_facts, given=cli_given)
+    return topic_map, facts, given | cli_given
+
+
+def _run(args: argparse.Namespace) -> MetricsResult:
+    topic_map, facts, given = _inputs(args)
+    progress = sys.stderr.isatty() if args.progress is None else args.progress
+    return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
+                   jobs=max(1, args.jobs), progress=progress)
+
+
+def _emit(text: str, out: Path | None, force: bool) -> None:
+    if out is None:
+        sys.stdout.write(text if text.endswith("\n") else text + "\n")
+        return
+    if out.exists() and not force:
+        msg = f"--out {str(out)!r} exists; pass --force to replace it"
+        raise ConfigError(msg)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text if text.endswith("\n") else text + "\n")
+    print(f"wrote {out}", file=sys.stderr)
+
+
+def _report_failures(result: MetricsResult) -> int:
+    for failed in result.failed:
+        print(f"error: {failed.error}", file=sys.stderr)
+    for ok in result.results:
+        if ok.episode is not None:
+            for warning in ok.episode.warnings:
+                print(f"warning: {ok.bag}: {warning}", file=sys.stderr)
+    n_bad, n_all = len(result.failed), len(result.results)
+    if n_bad:
+        print(f"{n_bad} of {n_all} bag(s) failed", file=sys.stderr)
+    return 1 if n_bad else 0
+
+
+def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
+    from .plots import comparison_figure, episode_figure, save_figure  # matplotlib on demand
+
+    out: Path = args.out
+    for r in result.results:
+        if r.episode is None:
+            continue
+        name = Path(r.bag).name.removesuffix(".db3").removesuffix(".mcap")
+        target = out / f"{name}.png"
+        if target.exists():
+            print(f"kept existing {target}", file=sys.stderr)
+            continue
+        save_figure(episode_figure(r.episode, r.metrics), target)
+        print(f"wrote {target}", file=sys.stderr)
+    if len(result.episodes) > 1:
+        target = out / "comparison.png"
+        if target.exists():
+            print(f"kept existing {target}", file=sys.stderr)
+        else:
+            save_figure(comparison_figure(result.episodes, group_by=args.by), target)
+            print(f"wrote {target}", file=sys.stderr)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``pic4rl-metrics``; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    try:
+        result = _run(args)
+        if args.command == "compute":
+            _emit(render_episodes(result.frame, args.format), args.out, args.force)
+        elif args.command == "compare":
+            table = aggregate(result.frame, by=args.by)
+            _emit(render_comparison(table, args.format, with_std=args.with_std), args.out, args.force)
+        else:
+            _plot(args, result)
+    except MetricsError as err:
+        print(f"pic4rl-metrics: {err}", file=sys.stderr)
+        return 2
+    return _report_failures(result)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

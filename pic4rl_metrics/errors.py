@@ -1,0 +1,27 @@
+"""Errors of pic4rl_metrics, one class per boundary.
+
+Messages are built first with the offending value (``{x!r}``) and name the file, topic or
+key, and what was expected; lower errors are translated with ``raise ... from err``.
+"""
+
+from __future__ import annotations
+
+
+class MetricsError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class BagError(MetricsError):
+    """A bag cannot be found, opened or decoded (corrupt, truncated, empty, unknown type)."""
+
+
+class TopicError(BagError):
+    """A topic the metrics need is missing from a bag or has an unsupported type."""
+
+
+class EpisodeError(MetricsError):
+    """The data in a bag cannot make an episode (e.g. fewer than two poses)."""
+
+
+class ConfigError(MetricsError):
+    """A topic map, an episode fact or a command-line value is invalid."""

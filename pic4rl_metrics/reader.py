@@ -1,0 +1,341 @@
+"""Read one bag into an ``Episode``: only the topics the metrics need, only once.
+
+Time base: message header stamps. Headerless messages (``Twist``, the outcome ``String``) are
+moved onto it by the median offset between the pose topic's header stamps and its bag
+receive times; a topic whose stamps are all zero falls back to receive times. Samples are
+sorted by stamp, exact repeats dropped (the last received wins), and non-finite poses
+dropped, each noted in ``Episode.warnings``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.interfaces import Connection
+from rosbags.rosbag2 import ReaderError
+from rosbags.serde import SerdeError
+from rosbags.typesys import Stores, get_typestore
+
+from .errors import BagError, EpisodeError, TopicError
+from .facts import EpisodeFacts, Outcome, parse_facts
+from .series import CmdSeries, Episode, PointSeries, PoseSeries, ScanSeries
+from .topics import TopicMap
+
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+STRING = "std_msgs/msg/String"
+
+SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
+SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
+
+#: Message definitions for bags that embed none (rosbag2 before Iron): the layouts of the
+#: types above are the same in every ROS 2 distribution.
+_TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+
+
+def _stamp_ns(header: Any) -> int:
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+def _yaw(q: Any) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _pose_row(msg: Any, msgtype: str) -> tuple[float, ...]:
+    """(x, y, yaw, vx, vy, wz) of a pose message; NaN twist when the type has none."""
+    pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
+    p, q = pose.position, pose.orientation
+    if msgtype == ODOMETRY:
+        t = msg.twist.twist
+        return (p.x, p.y, _yaw(q), t.linear.x, t.linear.y, t.angular.z)
+    return (p.x, p.y, _yaw(q), math.nan, math.nan, math.nan)
+
+
+class _Topic:
+    """Samples of one topic: header stamps (0 when headerless), receive times, payload."""
+
+    def __init__(self) -> None:
+        self.stamp: list[int] = []
+        self.recv: list[int] = []
+        self.rows: list[Any] = []
+
+
+def _timeline(topic: _Topic, offset_ns: int | None) -> np.ndarray:
+    stamps = np.asarray(topic.stamp, dtype=np.int64)
+    recv = np.asarray(topic.recv, dtype=np.int64)
+    if stamps.size and stamps.any():
+        return stamps
+    return recv + (offset_ns or 0)
+
+
+def _order(t_ns: np.ndarray, name: str, warnings: list[str]) -> np.ndarray:
+    """Indices that sort by stamp and keep the last of exact repeats."""
+    backwards = int(np.sum(np.diff(t_ns) < 0))
+    if backwards:
+        warnings.append(f"{name}: {backwards} stamp(s) went backwards; samples sorted by stamp")
+    order = np.argsort(t_ns, kind="stable")
+    sorted_t = t_ns[order]
+    last_of_run = np.append(sorted_t[1:] != sorted_t[:-1], True)
+    repeats = int(np.sum(~last_of_run))
+    if repeats:
+        warnings.append(f"{name}: {repeats} repeated stamp(s); kept the last message of each")
+    return order[last_of_run]
+
+
+class _BagContents:
+    """Raw samples of the mapped topics of one bag, read in one pass."""
+
+    def __init__(self, path: Path, topic_map: TopicMap) -> None:
+        self.path = path
+        self.topics: dict[str, _Topic] = defaultdict(_Topic)
+        self.custom: dict[str, str] = {}
+        self.notes: list[str] = []
+        try:
+            with AnyReader([path], default_typestore=_TYPESTORE) as reader:
+                self.available = {c.topic: c.msgtype for c in reader.connections}
+                self.custom = dict(reader.readers[0].storage.metadata.custom or {})
+                self.pose_topic = self._choose_pose_topic(topic_map)
+                wanted = self._wanted(topic_map)
+                self._read(reader, [c for c in reader.connections if c.topic in wanted], wanted)
+        except (AnyReaderError, ReaderError, OSError) as err:
+            msg = f"{str(path)!r}: cannot open bag: {err}"
+            raise BagError(msg) from err
+        except (SerdeError, AssertionError, ValueError, IndexError, KeyError) as err:
+            msg = f"{str(path)!r}: cannot decode message: {type(err).__name__}: {err}"
+            raise BagError(msg) from err
+
+    def _choose_pose_topic(self, topic_map: TopicMap) -> str:
+        for topic in topic_map.pose:
+            if topic in self.available:
+                msgtype = self.available[topic]
+                if msgtype not in SUPPORTED_POSE_MSGS:
+                    msg = (
+                        f"{str(self.path)!r}: pose topic {topic!r} has type {msgtype!r}; "
+                        f"expected one of {sorted(SUPPORTED_POSE_MSGS)}"
+                    )
+                    raise TopicError(msg)
+                return topic
+        odometry = sorted(t for t, ty in self.available.items() if ty == ODOMETRY)
+        if "pose" not in topic_map.explicit and len(odometry) == 1:
+            self.notes.append(
+                f"none of the pose topics {list(topic_map.pose)} is in the bag; "
+                f"using its only Odometry topic {odometry[0]!r}"
+            )
+            return odometry[0]
+        candidates = sorted(t for t, ty in self.available.items() if ty in SUPPORTED_POSE_MSGS)
+        hint = f"; pose-like topics in it: {candidates} (pass --pose-topic)" if candidates else ""
+        msg = (
+            f"{str(self.path)!r}: none of the pose topics {list(topic_map.pose)} is in the bag"
+            f"{hint}; it has {sorted(self.available) or 'no topics'}"
+        )
+        raise TopicError(msg)
+
+    def _wanted(self, topic_map: TopicMap) -> dict[str, str]:
+        """Topic -> role for every mapped topic present; explicit roles must be present."""
+        roles = {
+            "scan": (topic_map.scan, {LASER_SCAN}),
+            "cmd_vel": (topic_map.cmd_vel, SUPPORTED_CMD_MSGS),
+            "goal": (topic_map.goal, SUPPORTED_POSE_MSGS),
+            "person": (topic_map.person, SUPPORTED_POSE_MSGS),
+            "facts": (topic_map.facts, {STRING}),
+            "outcome": (topic_map.outcome, {STRING}),
+        }
+        wanted = {self.pose_topic: "pose"}
+        for role, (topic, types) in roles.items():
+            if topic is None:
+                continue
+            if topic not in self.available:
+                if role in topic_map.explicit:
+                    msg = (
+                        f"{str(self.path)!r}: {role} topic {topic!r} is not in the bag; "
+                        f"it has {sorted(self.available)}"
+                    )
+                    raise TopicError(msg)
+                continue
+            if self.available[topic] not in types:
+                msg = (
+                    f"{str(self.path)!r}: {role} topic {topic!r} has type "
+                    f"{self.available[topic]!r}; expected one of {sorted(types)}"
+                )
+                raise TopicError(msg)
+            wanted.setdefault(topic, role)
+        return wanted
+
+    def _read(self, reader: AnyReader, conns: list[Connection], wanted: dict[str, str]) -> None:
+        extractors: dict[str, Callable[[Any, str], Any]] = {
+            "pose": _pose_row,
+            "goal": _pose_row,
+            "person": _pose_row,
+            "scan": lambda m, _t: (
+                m.ranges, m.angle_min, m.angle_increment, m.range_min, m.range_max
+            ),
+            "cmd_vel": lambda m, t: (
+                (m.twist if t == TWIST_STAMPED else m).linear.x,
+                (m.twist if t == TWIST_STAMPED else m).linear.y,
+                (m.twist if t == TWIST_STAMPED else m).angular.z,
+            ),
+            "facts": lambda m, _t: m.data,
+            "outcome": lambda m, _t: m.data,
+        }
+        for conn, recv_ns, raw in reader.messages(connections=conns):
+            role = wanted[conn.topic]
+            msg = reader.deserialize(raw, conn.msgtype)
+            header = getattr(msg, "header", None)
+            sample = self.topics[role]
+            sample.stamp.append(_stamp_ns(header) if header is not None else 0)
+            sample.recv.append(recv_ns)
+            sample.rows.append(extractors[role](msg, conn.msgtype))
+
+
+def _pose_series(raw: _Topic, name: str, warnings: list[str]) -> tuple[PoseSeries, int | None]:
+    """Pose series and the header-minus-receive offset (ns) it defines."""
+    stamps = np.asarray(raw.stamp, dtype=np.int64)
+    recv = np.asarray(raw.recv, dtype=np.int64)
+    if stamps.any():
+        offset = int(np.median(stamps - recv))
+    else:
+        warnings.append(f"{name}: header stamps are zero; using bag receive times")
+        offset = 0
+    t_ns = _timeline(raw, 0)
+    rows = np.asarray(raw.rows, dtype=float).reshape(-1, 6)
+    finite = np.isfinite(rows[:, :3]).all(axis=1)
+    if not finite.all():
+        warnings.append(f"{name}: {int(np.sum(~finite))} pose(s) with NaN/inf dropped")
+    t_ns, rows = t_ns[finite], rows[finite]
+    keep = _order(t_ns, name, warnings)
+    t_ns, rows = t_ns[keep], rows[keep]
+    has_twist = rows.size > 0 and np.isfinite(rows[:, 3:]).all()
+    twist = (rows[:, 3], rows[:, 4], rows[:, 5]) if has_twist else (None, None, None)
+    return PoseSeries(t_ns, rows[:, 0], rows[:, 1], rows[:, 2], *twist), offset
+
+
+def _scan_series(raw: _Topic, offset: int, warnings: list[str]) -> ScanSeries | None:
+    if not raw.rows:
+        return None
+    t_ns = _timeline(raw, offset)
+    keep = _order(t_ns, "scan", warnings)
+    rows = [raw.rows[i] for i in keep]
+    width = max(len(r[0]) for r in rows)
+    ranges = np.full((len(rows), width), np.nan, dtype=np.float32)
+    angles = np.full((len(rows), width), np.nan)
+    for i, (rng, amin, ainc, _, _) in enumerate(rows):
+        ranges[i, : len(rng)] = rng
+        angles[i, : len(rng)] = amin + ainc * np.arange(len(rng))
+    rmin = np.array([r[3] for r in rows], dtype=float)
+    rmax = np.array([r[4] for r in rows], dtype=float)
+    return ScanSeries(t_ns[keep], ranges, angles, rmin, rmax)
+
+
+def _cmd_series(raw: _Topic, offset: int, warnings: list[str]) -> CmdSeries | None:
+    if not raw.rows:
+        return None
+    t_ns = _timeline(raw, offset)
+    keep = _order(t_ns, "cmd_vel", warnings)
+    rows = np.asarray(raw.rows, dtype=float)[keep]
+    return CmdSeries(t_ns[keep], rows[:, 0], rows[:, 1], rows[:, 2])
+
+
+def _point_series(raw: _Topic, offset: int, warnings: list[str]) -> PointSeries | None:
+    if not raw.rows:
+        return None
+    t_ns = _timeline(raw, offset)
+    keep = _order(t_ns, "person", warnings)
+    rows = np.asarray(raw.rows, dtype=float)[keep]
+    return PointSeries(t_ns[keep], rows[:, 0], rows[:, 1])
+
+
+def _facts(
+    bag: _BagContents, offset: int, cli: EpisodeFacts, cli_given: frozenset[str]
+) -> EpisodeFacts:
+    """Merge facts: facts topic < custom_data < goal/outcome topics (if still unknown) < CLI."""
+    source = str(bag.path)
+    facts = EpisodeFacts()
+    for payload in bag.topics["facts"].rows[:1]:
+        try:
+            data = json.loads(payload)
+        except json.JSONDecodeError as err:
+            msg = f"{source!r}: facts topic holds no JSON object: {payload[:80]!r}"
+            raise BagError(msg) from err
+        topic_facts, given = parse_facts(data, source=f"{source}: facts topic")
+        facts = facts.merged(topic_facts, given=given)
+    custom, given = parse_facts(bag.custom, source=f"{source}: custom_data")
+    facts = facts.merged(custom, given=given)
+    goals = bag.topics["goal"].rows
+    if facts.goal is None and goals:
+        facts = facts.merged(EpisodeFacts(goal=goals[-1][:2]), given=frozenset({"goal"}))
+    outcome = bag.topics["outcome"]
+    if outcome.rows:
+        word, stamp = _outcome(outcome.rows[-1], source)
+        if stamp is None:
+            stamp = int(outcome.recv[-1]) + offset
+        if facts.outcome is None:
+            facts = facts.merged(EpisodeFacts(outcome=word), given=frozenset({"outcome"}))
+        facts = facts.merged(EpisodeFacts(outcome_stamp_ns=stamp), given=frozenset({"outcome_stamp_ns"}))
+    return facts.merged(cli, given=cli_given)
+
+
+def _outcome(payload: str, source: str) -> tuple[Outcome, int | None]:
+    text = payload.strip()
+    if text.startswith("{"):
+        try:
+            data = json.loads(text)
+            stamp = data.get("stamp_ns")
+            return Outcome.parse(data["outcome"], source=f"{source}: outcome topic"), (
+                None if stamp is None else int(stamp)
+            )
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as err:
+            msg = f"{source!r}: outcome topic: cannot read {text[:80]!r}: {err}"
+            raise BagError(msg) from err
+    return Outcome.parse(text, source=f"{source}: outcome topic"), None
+
+
+def read_episode(
+    path: Path | str,
+    topic_map: TopicMap | None = None,
+    facts: EpisodeFacts | None = None,
+    given: frozenset[str] = frozenset(),
+) -> Episode:
+    """Read the bag at ``path`` (directory, ``.db3`` or ``.mcap``) into an ``Episode``.
+
+    ``facts``/``given``: values from the command line or a topic map, overriding the bag's.
+    Raises ``BagError``, ``TopicError`` or ``EpisodeError`` naming the bag and the problem.
+    """
+    path = Path(path)
+    topic_map = topic_map or TopicMap()
+    bag = _BagContents(path, topic_map)
+    warnings: list[str] = list(bag.notes)
+    raw_pose = bag.topics["pose"]
+    if len(raw_pose.rows) < 2:
+        msg = (
+            f"{str(path)!r}: pose topic {bag.pose_topic!r} has {len(raw_pose.rows)} message(s); "
+            "at least 2 poses are needed"
+        )
+        raise EpisodeError(msg)
+    pose, offset = _pose_series(raw_pose, bag.pose_topic, warnings)
+    if len(pose) < 2:
+        msg = (
+            f"{str(path)!r}: pose topic {bag.pose_topic!r} has {len(pose)} usable pose(s) "
+            "after dropping NaN and repeated stamps; at least 2 are needed"
+        )
+        raise EpisodeError(msg)
+    return Episode(
+        bag=path,
+        facts=_facts(bag, offset, facts or EpisodeFacts(), given),
+        pose=pose,
+        pose_topic=bag.pose_topic,
+        scan=_scan_series(bag.topics["scan"], offset, warnings),
+        cmd=_cmd_series(bag.topics["cmd_vel"], offset, warnings),
+        person=_point_series(bag.topics["person"], offset, warnings),
+        warnings=tuple(warnings),
+    )
