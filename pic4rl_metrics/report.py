@@ -1,0 +1,277 @@
+"""Text renderings of results: per-episode rows and the paper's per-agent comparison table.
+
+``render_episodes`` takes the per-episode DataFrame (one row per bag); ``render_comparison``
+takes the output of ``aggregate.aggregate``. Both return one string in one of ``FORMATS``.
+Missing values read "–" in table, markdown and LaTeX, are empty in CSV and ``null`` in JSON.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import json
+import math
+import re
+from collections.abc import Sequence
+from pathlib import PurePath
+
+import numpy as np
+import pandas as pd
+
+from .aggregate import DASH
+from .errors import ConfigError
+from .results import ERROR_COLUMN, METRICS, TABLE1_COLUMNS
+
+FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")
+
+#: Metric columns of the per-episode view and their short labels (units come from METRICS).
+EPISODE_VIEW: dict[str, str] = {
+    "outcome": "outcome",
+    "success": "success",
+    "clearance_time_s": "time",
+    "path_length_m": "path",
+    "distance_path_ratio": "dist/path",
+    "lin_vel_mean_mps": "v mean",
+    "ang_vel_std_radps": "ω std",
+    "lin_acc_max_mps2": "max lin acc",
+    "yaw_acc_max_radps2": "max yaw acc",
+    "obstacle_dist_min_m": "min obst",
+    "obstacle_dist_mean_m": "mean obst",
+}
+_TEXT_COLUMNS = frozenset({"bag", "outcome", "success", ERROR_COLUMN})
+_LATEX_SPECIAL = {c: "\\" + c for c in "&%$#_{}"}
+_LATEX_SPECIAL.update({"\\": r"\textbackslash{}", "~": r"\textasciitilde{}", "^": r"\^{}"})
+_SUPERSCRIPT = {"2": "²", "3": "³"}
+
+
+def _check_format(fmt: str) -> str:
+    if fmt not in FORMATS:
+        close = difflib.get_close_matches(str(fmt), FORMATS, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        msg = f"format {fmt!r} is not supported; expected one of {', '.join(FORMATS)}{hint}"
+        raise ConfigError(msg)
+    return fmt
+
+
+def _is_missing(value: object) -> bool:
+    if value is None or value is pd.NA or value is pd.NaT:
+        return True
+    return isinstance(value, (float, np.floating)) and math.isnan(value)
+
+
+def _json_value(value: object) -> object:
+    """A JSON-ready scalar: NaN/None/NA -> None, numpy scalars -> Python ones."""
+    if _is_missing(value):
+        return None
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (pd.Timestamp, PurePath)):
+        return str(value)
+    return value
+
+
+def _num(value: object, digits: int = 2) -> str | None:
+    """``value`` with ``digits`` decimals, or None when missing."""
+    return None if _is_missing(value) else f"{float(value):.{digits}f}"  # type: ignore[arg-type]
+
+
+def plain_text(tex: str) -> str:
+    """A METRICS label or unit in LaTeX ("$v_{mean}$", "m/s$^2$") as plain text ("v mean")."""
+    text = tex.replace("$", "").replace("\\omega", "ω")
+    text = re.sub(r"\^\{?([23])\}?", lambda m: _SUPERSCRIPT[m.group(1)], text)
+    return re.sub(r"_\{([^}]*)\}", r" \1", text)
+
+
+def latex_escape(text: str) -> str:
+    """``text`` with LaTeX's special characters (``_``, ``%``, ``&``, ...) escaped."""
+    return "".join(_LATEX_SPECIAL.get(c, c) for c in str(text))
+
+
+def short_bag(bag: object) -> str:
+    """The last two components of a bag path ("run1/episode_03"), "–" when missing."""
+    if _is_missing(bag) or bag == "":
+        return DASH
+    parts = [p for p in PurePath(str(bag)).parts if p not in ("/", "\\")]
+    return "/".join(parts[-2:]) or str(bag)
+
+
+# --- layouts: header rows + text cells (None = missing) -> one string ----------------------
+
+
+def _fill(rows: list[list[str | None]], missing: str) -> list[list[str]]:
+    return [[missing if c is None else c for c in row] for row in rows]
+
+
+def _fixed_width(headers: list[list[str]], rows: list[list[str | None]], right: list[bool]) -> str:
+    body = _fill(rows, DASH)
+    widths = [max(len(r[i]) for r in headers + body) for i in range(len(right))]
+
+    def line(cells: list[str]) -> str:
+        parts = [c.rjust(w) if r else c.ljust(w) for c, w, r in zip(cells, widths, right)]
+        return "  ".join(parts).rstrip()
+
+    rule = "  ".join("-" * w for w in widths)
+    return "\n".join([*(line(h) for h in headers), rule, *(line(r) for r in body)]) + "\n"
+
+
+def _markdown(header: list[str], rows: list[list[str | None]], right: list[bool]) -> str:
+    def line(cells: list[str]) -> str:
+        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+    rule = "|" + "|".join("---:" if r else ":---" for r in right) + "|"
+    return "\n".join([line(header), rule, *(line(r) for r in _fill(rows, DASH))]) + "\n"
+
+
+def _tabular(headers: list[list[str]], rows: list[list[str | None]]) -> list[str]:
+    """Booktabs tabular lines; cells must already be LaTeX."""
+    lines = [rf"\begin{{tabular}}{{@{{}}{'c' * len(headers[0])}@{{}}}}", r"\toprule"]
+    lines += [" & ".join(h) + r" \\" for h in headers]
+    lines.append(r"\midrule")
+    lines += [" & ".join(r) + r" \\" for r in _fill(rows, "--")]
+    return [*lines, r"\bottomrule", r"\end{tabular}"]
+
+
+def _csv(header: list[str], rows: list[list[str | None]]) -> str:
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerows([header, *_fill(rows, "")])
+    return buf.getvalue()
+
+
+# --- per-episode rows -----------------------------------------------------------------------
+
+
+def _episode_cell(col: str, value: object) -> str | None:
+    if col == "bag":
+        return short_bag(value)
+    if col == ERROR_COLUMN:
+        return "" if _is_missing(value) else str(value)
+    if _is_missing(value):
+        return None
+    if col == "success":
+        return "yes" if float(value) == 1.0 else "no"  # type: ignore[arg-type]
+    return str(value) if col == "outcome" else _num(value)
+
+
+def render_episodes(df: pd.DataFrame, fmt: str) -> str:
+    """One line per episode. csv and json hold every column; table, markdown and latex show
+    the bag (last two path components), the EPISODE_VIEW metrics present and the error."""
+    _check_format(fmt)
+    if fmt == "csv":
+        return df.to_csv(index=False)
+    if fmt == "json":
+        records = [{str(k): _json_value(v) for k, v in r.items()} for r in df.to_dict("records")]
+        return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    cols = [c for c in ("bag", *EPISODE_VIEW, ERROR_COLUMN) if c in df.columns]
+    rows = [[_episode_cell(c, v) for c, v in zip(cols, r)] for r in df[cols].itertuples(False)]
+    right = [c not in _TEXT_COLUMNS for c in cols]
+    units = [plain_text(METRICS[c].unit) if c in METRICS and c != "success" else "" for c in cols]
+    labels = [EPISODE_VIEW.get(c, c) for c in cols]
+    if fmt == "table":
+        return _fixed_width([labels, [f"[{u}]" if u else "" for u in units]], rows, right)
+    if fmt == "markdown":
+        return _markdown([f"{lb} [{u}]" if u else lb for lb, u in zip(labels, units)], rows, right)
+    tex_labels = [METRICS[c].label if c in METRICS else latex_escape(c) for c in cols]
+    tex_units = [f"[{METRICS[c].unit}]" if c in METRICS else "" for c in cols]
+    tex_rows = [[c if c is None else latex_escape(c) for c in r] for r in rows]
+    return "\n".join(_tabular([tex_labels, tex_units], tex_rows)) + "\n"
+
+
+# --- per-agent comparison (the paper's Table 1) --------------------------------------------
+
+
+def _check_columns(agg: pd.DataFrame, columns: Sequence[str]) -> None:
+    for col in columns:
+        if col not in METRICS:
+            close = difflib.get_close_matches(col, list(METRICS), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise ConfigError(f"comparison column {col!r} is not a metric{hint}")
+        needed = "success" if col == "success" else f"{col}_mean"
+        if needed not in agg.columns:
+            msg = f"comparison column {col!r}: the aggregate has no {needed!r} column"
+            raise ConfigError(msg)
+
+
+def _row_name(name: object) -> str:
+    if isinstance(name, tuple):
+        return " / ".join(DASH if _is_missing(n) else str(n) for n in name)
+    return DASH if _is_missing(name) else str(name)
+
+
+def _success_cell(value: object) -> str | None:
+    """The aggregate's "n/total", or None when missing or "–" (nothing judged)."""
+    return None if _is_missing(value) or value == DASH else str(value)
+
+
+def _comparison_cell(row: pd.Series, col: str, with_std: bool, pm: str) -> str | None:
+    if col == "success":
+        return _success_cell(row["success"])
+    mean = _num(row[f"{col}_mean"])
+    if mean is None or not with_std:
+        return mean
+    return f"{mean}{pm}{_num(row.get(f'{col}_std')) or DASH}"
+
+
+def render_comparison(
+    agg: pd.DataFrame,
+    fmt: str,
+    *,
+    columns: Sequence[str] = TABLE1_COLUMNS,
+    caption: str | None = None,
+    label: str | None = None,
+    with_std: bool = False,
+) -> str:
+    """One row per group of ``agg`` (from ``aggregate``), one column per metric in ``columns``.
+
+    Cells are means with 2 decimals ("mean ± std" with ``with_std``); success is "n/total".
+    table/markdown/csv carry labels and units ("time [s]"); latex is a ``table*`` with a label
+    row and a unit row like the paper (``caption`` and ``label`` are inserted as given, LaTeX);
+    json is a list of records keyed by metric column with unrounded means (``<m>_std`` too
+    with ``with_std``) and null for NaN.
+    """
+    _check_format(fmt)
+    columns = list(columns)
+    _check_columns(agg, columns)
+    names = [_row_name(n) for n in agg.index]
+    first = " / ".join(str(n) for n in agg.index.names if n is not None) or "agent"
+    if fmt == "json":
+        records: list[dict[str, object]] = []
+        for name, (_, row) in zip(names, agg.iterrows()):
+            rec: dict[str, object] = {first: name}
+            for col in columns:
+                if col == "success":
+                    rec[col] = _success_cell(row["success"])
+                    continue
+                rec[col] = _json_value(row[f"{col}_mean"])
+                if with_std:
+                    rec[f"{col}_std"] = _json_value(row.get(f"{col}_std"))
+            records.append(rec)
+        return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+    pm = r" $\pm$ " if fmt == "latex" else " ± "
+    rows = [
+        [name, *(_comparison_cell(row, c, with_std, pm) for c in columns)]
+        for name, (_, row) in zip(names, agg.iterrows())
+    ]
+    labels = [plain_text(METRICS[c].label) for c in columns]
+    units = [f"[{plain_text(METRICS[c].unit)}]" for c in columns]
+    right = [False] + [True] * len(columns)
+    if fmt == "table":
+        return _fixed_width([[first, *labels], ["", *units]], rows, right)
+    if fmt == "markdown":
+        return _markdown([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows, right)
+    if fmt == "csv":
+        return _csv([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows)
+
+    tex_rows = [[latex_escape(r[0]), *r[1:]] for r in rows]
+    headers = [
+        ["", *(METRICS[c].label for c in columns)],
+        ["", *(f"[{METRICS[c].unit}]" for c in columns)],
+    ]
+    lines = [r"\begin{table*}[ht]", r"\centering"]
+    lines += [rf"\caption{{{caption}}}"] if caption is not None else []
+    lines += [rf"\label{{{label}}}"] if label is not None else []
+    lines += [r"\resizebox{\textwidth}{!}{%", *_tabular(headers, tex_rows)]
+    lines[-1] += "%"
+    return "\n".join([*lines, "}", r"\end{table*}"]) + "\n"
