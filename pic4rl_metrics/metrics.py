@@ -137,9 +137,11 @@ def _scan_metrics(episode: Episode, clearance: ScanClearance | None) -> Metrics:
         "safety_violation_time_s": NAN,
     }
     if facts.footprint is not None:
-        margin = clearance.margin_m
+        # A scan with no valid beam says nothing: the scan before it holds until the next.
+        seen = np.isfinite(clearance.margin_m)
+        margin, t_ns = clearance.margin_m[seen], scan.t_ns[seen]
         out["collision_count"] = float(_rising_edges(margin <= facts.collision_tolerance_m))
-        out["safety_violation_time_s"] = _hold_time(scan.t_ns, margin <= facts.safety_margin_m)
+        out["safety_violation_time_s"] = _hold_time(t_ns, margin <= facts.safety_margin_m)
     return out
 
 
@@ -248,9 +250,11 @@ def _follow_metrics(episode: Episode) -> Metrics:
     inside = (pose.t_ns >= person.t_ns[0]) & (pose.t_ns <= person.t_ns[-1])
     if not inside.any():
         return dict.fromkeys(keys, NAN)
-    at = pose.t_ns[inside].astype(float)
-    px = np.interp(at, person.t_ns.astype(float), person.x)
-    py = np.interp(at, person.t_ns.astype(float), person.y)
+    t0 = pose.t_ns[0]  # float64 of epoch nanoseconds would round to 256 ns
+    at = (pose.t_ns[inside] - t0).astype(float)
+    person_t = (person.t_ns - t0).astype(float)
+    px = np.interp(at, person_t, person.x)
+    py = np.interp(at, person_t, person.y)
     bearing = bearing_in_body(pose.x[inside], pose.y[inside], pose.yaw[inside], px, py)
     t_s = seconds(pose.t_ns[inside])
     return dict(zip(keys, (
