@@ -112,7 +112,7 @@ class Footprint:
             return np.full(bearing.shape, self.radius_m)
         half_l = 0.5 * self.length_m  # type: ignore[operator]
         half_w = 0.5 * self.width_m  # type: ignore[operator]
-        with np.errstate(divide="ignore"):
+        with np.errstate(divide="ignore", over="ignore"):
             along = half_l / np.abs(np.cos(bearing))
             across = half_w / np.abs(np.sin(bearing))
         return np.minimum(along, across)

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import json
 import math
+import struct
 from collections import defaultdict
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from apsw import Error as SqliteError
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.interfaces import Connection
 from rosbags.rosbag2 import ReaderError
@@ -38,6 +40,14 @@ STRING = "std_msgs/msg/String"
 
 SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
 SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
+
+#: What a damaged storage file or message raises while rosbags reads it: sqlite's errors
+#: (rosbags reads .db3 through apsw), short reads and absurd lengths in MCAP records, and
+#: CDR that does not match its type.
+_DAMAGE = (
+    SqliteError, SerdeError, struct.error, EOFError, OverflowError, MemoryError,
+    AssertionError, ValueError, IndexError, KeyError,
+)
 
 #: Message definitions for bags that embed none (rosbag2 before Iron): the layouts of the
 #: types above are the same in every ROS 2 distribution.
@@ -81,6 +91,8 @@ def _timeline(topic: _Topic, offset_ns: int | None) -> np.ndarray:
 
 def _order(t_ns: np.ndarray, name: str, warnings: list[str]) -> np.ndarray:
     """Indices that sort by stamp and keep the last of exact repeats."""
+    if t_ns.size == 0:
+        return np.zeros(0, dtype=np.intp)
     backwards = int(np.sum(np.diff(t_ns) < 0))
     if backwards:
         warnings.append(f"{name}: {backwards} stamp(s) went backwards; samples sorted by stamp")
@@ -111,8 +123,8 @@ class _BagContents:
         except (AnyReaderError, ReaderError, OSError) as err:
             msg = f"{str(path)!r}: cannot open bag: {err}"
             raise BagError(msg) from err
-        except (SerdeError, AssertionError, ValueError, IndexError, KeyError) as err:
-            msg = f"{str(path)!r}: cannot decode message: {type(err).__name__}: {err}"
+        except _DAMAGE as err:
+            msg = f"{str(path)!r}: damaged bag or message: {type(err).__name__}: {err}"
             raise BagError(msg) from err
 
     def _choose_pose_topic(self, topic_map: TopicMap) -> str:

@@ -1,0 +1,521 @@
+"""Bad input: each broken bag raises a clear error from ``read_episode`` and becomes an error
+row naming the bag and the problem in ``compute``; the batch goes on (a good bag beside it
+keeps its numbers), the CLI prints every row and exits 1, and no input is written to.
+
+Bags are built in temporary directories: good ones with ``synthetic``, malformed ones (stamps
+out of order, a pose topic of the wrong type, no poses) message by message with rosbags.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import random
+import shutil
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from rosbags.rosbag2 import Writer
+from rosbags.typesys import Stores, get_typestore
+
+from pic4rl_metrics import (
+    BagError,
+    ConfigError,
+    EpisodeError,
+    MetricsError,
+    TopicError,
+    compute,
+    read_episode,
+)
+from pic4rl_metrics.cli import main
+from pic4rl_metrics.synthetic import (
+    DEFAULT_T0_NS,
+    Obstacles,
+    Track,
+    straight_line,
+    write_episode_bag,
+)
+
+TS = get_typestore(Stores.ROS2_JAZZY)
+T = TS.types
+ODOMETRY = "nav_msgs/msg/Odometry"
+LINE = straight_line(0.5, 4.0)  # 2 m along +x, 41 poses
+WALL = Obstacles(segments=((-100.0, 1.0, 100.0, 1.0),))  # 1 m to the left
+
+
+# --------------------------------------------------------------------------- bag building
+
+
+def _header(ns: int, frame: str) -> Any:
+    sec, nanosec = divmod(int(ns), 1_000_000_000)
+    return T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](sec, nanosec), frame)
+
+
+def _odometry(ns: int, x: float, y: float, yaw: float, vx: float = 0.0, wz: float = 0.0) -> Any:
+    vec = T["geometry_msgs/msg/Vector3"]
+    q = T["geometry_msgs/msg/Quaternion"](0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+    pose = T["geometry_msgs/msg/Pose"](T["geometry_msgs/msg/Point"](x, y, 0.0), q)
+    twist = T["geometry_msgs/msg/Twist"](vec(vx, 0.0, 0.0), vec(0.0, 0.0, wz))
+    return T[ODOMETRY](
+        _header(ns, "odom"),
+        "base_link",
+        T["geometry_msgs/msg/PoseWithCovariance"](pose, np.zeros(36)),
+        T["geometry_msgs/msg/TwistWithCovariance"](twist, np.zeros(36)),
+    )
+
+
+def _scan(ns: int, ranges: Sequence[float]) -> Any:
+    n = len(ranges)
+    return T["sensor_msgs/msg/LaserScan"](
+        _header(ns, "base_scan"),
+        -math.pi,
+        math.pi - 2 * math.pi / n,
+        2 * math.pi / n,
+        0.0,
+        0.0,
+        0.05,
+        10.0,
+        np.asarray(ranges, dtype=np.float32),
+        np.zeros(0, np.float32),
+    )
+
+
+def _write(
+    path: Path, messages: Sequence[tuple[str, Any]], empty_topics: dict[str, str] | None = None
+) -> Path:
+    """A bag holding ``messages`` (topic, message) in the given order, received 10 ms apart,
+    plus topics that have a connection and no message."""
+    with Writer(path, version=9) as writer:
+        conns: dict[str, Any] = {}
+        for topic, msgtype in (empty_topics or {}).items():
+            conns[topic] = writer.add_connection(topic, msgtype, typestore=TS)
+        for i, (topic, msg) in enumerate(messages):
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msg.__msgtype__, typestore=TS)
+            writer.write(
+                conns[topic], DEFAULT_T0_NS + i * 10_000_000, TS.serialize_cdr(msg, msg.__msgtype__)
+            )
+    return path
+
+
+def _odom_messages(
+    stamps_ms: Sequence[int], xs: Sequence[float], topic: str = "/odom"
+) -> list[tuple[str, Any]]:
+    """Odometry along +x at ``xs`` (m), header stamps in ms after DEFAULT_T0_NS."""
+    return [
+        (topic, _odometry(DEFAULT_T0_NS + ms * 1_000_000, x, 0.0, 0.0, vx=x / 10 + 0.1))
+        for ms, x in zip(stamps_ms, xs, strict=True)
+    ]
+
+
+def _snapshot(root: Path) -> dict[str, tuple[int, int, bytes]]:
+    return {
+        str(p.relative_to(root)): (p.stat().st_mtime_ns, p.stat().st_size, p.read_bytes())
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
+
+
+def _row(result: Any, name: str) -> Any:
+    """The one result whose bag is named ``name`` (last path component)."""
+    found = [r for r in result.results if Path(r.bag).name == name]
+    assert len(found) == 1, [r.bag for r in result.results]
+    return found[0]
+
+
+# --------------------------------------------------------------------------- fixtures
+
+
+@pytest.fixture(scope="module")
+def bad(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A directory of one good and many broken bags, each in its own sub-directory."""
+    root = tmp_path_factory.mktemp("bad")
+    good = write_episode_bag(root / "good", LINE, obstacles=WALL)
+    rng = random.Random(1)
+
+    corrupt = root / "corrupt"
+    shutil.copytree(good, corrupt)
+    next(corrupt.glob("*.db3")).write_bytes(rng.randbytes(50_000))
+
+    data = next(good.glob("*.db3")).read_bytes()
+    (root / "truncated").mkdir()
+    (root / "truncated" / "truncated.db3").write_bytes(data[: len(data) // 2])
+
+    (root / "empty").mkdir()
+
+    garbage = root / "garbage_metadata"
+    shutil.copytree(good, garbage)
+    (garbage / "metadata.yaml").write_text("rosbag2_bagfile_information: {{{ [ :: not yaml\n")
+
+    scan_only = [("/scan", _scan(DEFAULT_T0_NS + i * 100_000_000, [1.0] * 8)) for i in range(5)]
+    _write(
+        root / "no_pose_topic",
+        [
+            *scan_only,
+            (
+                "/cmd_vel",
+                T["geometry_msgs/msg/Twist"](
+                    T["geometry_msgs/msg/Vector3"](0.1, 0.0, 0.0),
+                    T["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0),
+                ),
+            ),
+        ],
+    )
+    _write(
+        root / "string_odom", [("/odom", T["std_msgs/msg/String"](f"pose {i}")) for i in range(5)]
+    )
+    _write(root / "zero_poses", scan_only, empty_topics={"/odom": ODOMETRY})
+    _write(root / "one_pose", _odom_messages([0], [0.0]))
+    return root
+
+
+# --------------------------------------------------------------------------- each broken bag
+
+
+def test_a_db3_of_random_bytes_is_a_bag_error(bad: Path) -> None:
+    with pytest.raises(BagError, match=r"'.*corrupt': cannot open bag: .*not a database"):
+        read_episode(bad / "corrupt")
+
+
+def test_a_truncated_db3_without_metadata_is_a_bag_error(bad: Path) -> None:
+    with pytest.raises(BagError, match=r"truncated\.db3': cannot open bag: .*malformed"):
+        read_episode(bad / "truncated" / "truncated.db3")
+
+
+def _mutations(data: bytes, n: int, *, keep_header: int) -> list[tuple[str, bytes]]:
+    """``n`` damaged copies of ``data`` (seeded): every third cut short, the others with
+    1 to 512 bytes overwritten after the first ``keep_header`` bytes."""
+    rng = random.Random(0)
+    out = []
+    for k in range(n):
+        if k % 3 == 0:
+            cut = rng.randrange(keep_header, len(data))
+            out.append((f"cut at {cut}", data[:cut]))
+            continue
+        mutated = bytearray(data)
+        start = rng.randrange(keep_header, len(data) - 64)
+        for i in range(start, min(len(data), start + rng.choice([1, 8, 64, 512]))):
+            mutated[i] = rng.randrange(256)
+        out.append((f"bytes at {start}", bytes(mutated)))
+    return out
+
+
+@pytest.mark.parametrize(("storage", "suffix"), [("sqlite3", ".db3"), ("mcap", ".mcap")])
+def test_a_storage_file_damaged_inside_is_an_episode_or_a_bag_error(
+    tmp_path: Path, storage: str, suffix: str
+) -> None:
+    """A recorder's file cut short or with bytes overwritten past its header: it may open and
+    fail only while its messages are read. Whatever happens must be an Episode or a
+    MetricsError naming the file, never a storage library's own exception."""
+    good = write_episode_bag(
+        tmp_path / "good",
+        straight_line(0.5, 10.0),
+        obstacles=WALL,
+        storage=storage,
+        write_metadata=False,
+    )
+    data = next(good.glob(f"*{suffix}")).read_bytes()
+    escaped: list[str] = []
+    for k, (what, damaged) in enumerate(_mutations(data, 60, keep_header=4096)):
+        path = tmp_path / f"damaged_{k}{suffix}"
+        path.write_bytes(damaged)
+        try:
+            read_episode(path)
+        except MetricsError as err:
+            assert path.name in str(err)
+        except Exception as err:  # noqa: BLE001 - what escapes is the finding
+            escaped.append(
+                f"{path.name} ({what}): {type(err).__module__}.{type(err).__name__}: {err}"
+            )
+    assert escaped == []
+
+
+def test_an_empty_directory_is_a_bag_error_and_an_error_row(bad: Path) -> None:
+    with pytest.raises(BagError, match=r"'.*empty': cannot open bag"):
+        read_episode(bad / "empty")
+    result = compute([bad / "empty"])
+    assert len(result.results) == 1
+    assert "empty" in result.results[0].error and "no rosbag2 bag" in result.results[0].error
+
+
+def test_garbage_metadata_is_a_bag_error(bad: Path) -> None:
+    with pytest.raises(BagError, match=r"garbage_metadata': cannot open bag: .*(YAML|metadata)"):
+        read_episode(bad / "garbage_metadata")
+
+
+def test_a_bag_without_the_pose_topic_names_the_topics_it_has(bad: Path) -> None:
+    with pytest.raises(
+        TopicError,
+        match=r"no_pose_topic': none of the pose topics \['/ground_truth', '/odom'\] is in the bag"
+        r"; it has \['/cmd_vel', '/scan'\]",
+    ):
+        read_episode(bad / "no_pose_topic")
+
+
+def test_a_pose_topic_of_an_unsupported_type_is_a_topic_error(bad: Path) -> None:
+    with pytest.raises(
+        TopicError,
+        match=r"string_odom': pose topic '/odom' has type 'std_msgs/msg/String'; expected one of",
+    ):
+        read_episode(bad / "string_odom")
+
+
+@pytest.mark.parametrize(("name", "count"), [("zero_poses", 0), ("one_pose", 1)])
+def test_fewer_than_two_poses_is_an_episode_error(bad: Path, name: str, count: int) -> None:
+    with pytest.raises(
+        EpisodeError, match=rf"{name}': pose topic '/odom' has {count} message\(s\); at least 2"
+    ):
+        read_episode(bad / name)
+
+
+def test_the_batch_goes_on_past_every_broken_bag(bad: Path) -> None:
+    before = _snapshot(bad)
+    # An empty directory inside a searched one holds no bag and is passed over; named on
+    # its own it is an error row.
+    result = compute([bad, bad / "empty", bad / "no_such_bag", str(bad / "nothing_*.db3")])
+    after = _snapshot(bad)
+    assert after == before  # nothing written into any input
+
+    expected = {
+        "corrupt": "not a database",
+        "truncated.db3": "malformed",
+        "empty": "no rosbag2 bag",
+        "garbage_metadata": "cannot open bag",
+        "no_pose_topic": "it has ['/cmd_vel', '/scan']",
+        "string_odom": "'std_msgs/msg/String'",
+        "zero_poses": "has 0 message(s)",
+        "one_pose": "has 1 message(s)",
+        "no_such_bag": "no such file or directory",
+        "nothing_*.db3": "no file matches this pattern",
+    }
+    errors = {Path(r.bag).name: r.error for r in result.results if r.error}
+    assert sorted(errors) == sorted(expected)
+    for name, what in expected.items():
+        assert name in errors[name] and what in errors[name], errors[name]
+    good = _row(result, "good")
+    assert good.error == "" and good.metrics is not None
+    assert good.metrics.path_length_m == pytest.approx(2.0, abs=1e-9)
+    assert good.metrics.obstacle_dist_min_m == pytest.approx(1.0, abs=1e-6)
+    frame = result.frame
+    assert len(frame) == len(expected) + 1
+    assert frame.loc[frame["error"] != "", "path_length_m"].isna().all()
+
+
+def test_the_cli_prints_every_row_and_exits_1_when_a_bag_failed(
+    bad: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(
+        [
+            "compute",
+            str(bad / "good"),
+            str(bad / "corrupt"),
+            str(bad / "string_odom"),
+            str(bad / "nope*"),
+            "--format",
+            "csv",
+        ]
+    )
+    out, err = capsys.readouterr()
+    assert code == 1
+    rows = {Path(r["bag"]).name: r for r in csv.DictReader(io.StringIO(out))}
+    assert sorted(rows) == ["corrupt", "good", "nope*", "string_odom"]
+    assert rows["good"]["error"] == "" and float(rows["good"]["path_length_m"]) == pytest.approx(
+        2.0
+    )
+    for name in ("corrupt", "string_odom", "nope*"):
+        assert rows[name]["error"] and rows[name]["path_length_m"] == ""
+        assert f"error: '{bad / name}'" in err
+    assert "3 of 4 bag(s) failed" in err
+
+    assert main(["compute", str(bad / "good"), "--format", "csv"]) == 0
+    capsys.readouterr()
+
+
+def test_a_bag_with_two_odometry_topics_and_no_default_one_lists_the_candidates(
+    tmp_path: Path,
+) -> None:
+    bag = _write(
+        tmp_path / "two_odom",
+        [
+            *_odom_messages([0, 100], [0.0, 0.1], topic="/wheel/odom"),
+            *_odom_messages([0, 100], [0.0, 0.1], topic="/gps/odom"),
+        ],
+    )
+    with pytest.raises(
+        TopicError,
+        match=r"pose-like topics in it: \['/gps/odom', '/wheel/odom'\] \(pass --pose-topic\)",
+    ):
+        read_episode(bag)
+
+
+def test_unreadable_facts_are_an_error_row_naming_the_key(tmp_path: Path) -> None:
+    bag = write_episode_bag(tmp_path / "bad_facts", LINE, facts={"footprint": "banana"})
+    with pytest.raises(ConfigError, match=r"footprint.*'banana'"):
+        read_episode(bag)
+    good = write_episode_bag(tmp_path / "good", LINE)
+    result = compute([bag, good])
+    assert "bad_facts" in _row(result, "bad_facts").error
+    assert "'banana'" in _row(result, "bad_facts").error
+    assert _row(result, "good").metrics is not None
+
+
+# --------------------------------------------------------------------------- odd but readable
+
+
+def test_repeated_and_backwards_stamps_are_sorted_with_warnings(tmp_path: Path) -> None:
+    """Messages received out of header-stamp order, with two repeated stamps (the last one
+    received wins): the metrics equal those of the cleaned-up, sorted bag."""
+    stamps = [0, 100, 300, 200, 400, 100, 500, 700, 600, 700, 800]
+    xs = [0.0, 9.9, 0.3, 0.2, 0.4, 0.1, 0.5, 9.9, 0.6, 0.7, 0.8]  # 9.9: overridden repeats
+    messy = _write(tmp_path / "messy", _odom_messages(stamps, xs))
+    clean = _write(
+        tmp_path / "clean",
+        _odom_messages(
+            [0, 100, 200, 300, 400, 500, 600, 700, 800],
+            [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8],
+        ),
+    )
+    episode = read_episode(messy)
+    assert any("went backwards" in w and "/odom" in w for w in episode.warnings), episode.warnings
+    assert any("2 repeated stamp(s)" in w for w in episode.warnings), episode.warnings
+    assert read_episode(clean).warnings == ()
+    result = compute([messy, clean])
+    messy_m, clean_m = _row(result, "messy").metrics, _row(result, "clean").metrics
+    assert messy_m is not None and clean_m is not None
+    assert messy_m.path_length_m == pytest.approx(0.8, abs=1e-12)
+    differ = {
+        k: (v, asdict(clean_m)[k])
+        for k, v in asdict(messy_m).items()
+        if not (
+            v == asdict(clean_m)[k]
+            or (isinstance(v, float) and math.isnan(v) and math.isnan(asdict(clean_m)[k]))
+        )
+    }
+    assert differ == {}
+    frame = result.frame.set_index("bag")
+    assert "went backwards" in frame.loc[str(messy), "warnings"]
+    assert frame.loc[str(clean), "warnings"] == ""
+
+
+def test_nan_and_inf_scan_values_follow_rep_117(tmp_path: Path) -> None:
+    n = len(LINE)
+    inf, nan = math.inf, math.nan
+    mixed = [[inf, nan, 2.0, 3.0, 20.0, inf, inf, inf] for _ in range(n)]
+    mixed[5] = [-inf, inf, nan, inf, inf, inf, inf, inf]  # -inf: closer than range_min 0.05
+    mixed[6] = [inf, nan, inf, nan, 20.0, inf, inf, inf]  # no valid beam in this scan
+    # 20.0 > range_max and 0.01 < range_min: finite but out of range, so no obstacle either
+    none_valid = [[inf, nan, 20.0, 0.01, inf, inf, inf, inf] for _ in range(n)]
+    result = compute(
+        [
+            write_episode_bag(tmp_path / "mixed", LINE, scans=mixed),
+            write_episode_bag(tmp_path / "none_valid", LINE, scans=none_valid),
+        ]
+    )
+    m = _row(result, "mixed").metrics
+    assert m is not None and m.n_scans == n
+    assert m.obstacle_dist_min_m == pytest.approx(0.05, abs=1e-7)
+    assert math.isfinite(m.obstacle_dist_mean_m)
+    # valid returns: 2.0 and 3.0 in n-2 scans, range_min in one
+    assert m.scan_range_mean_m == pytest.approx(
+        ((n - 2) * 5.0 + 0.05) / (2 * (n - 2) + 1), rel=1e-6
+    )
+    v = _row(result, "none_valid").metrics
+    assert v is not None and v.n_scans == n
+    assert math.isnan(v.obstacle_dist_min_m)
+    assert math.isnan(v.obstacle_dist_mean_m) and math.isnan(v.scan_range_mean_m)
+    assert v.path_length_m == pytest.approx(2.0, abs=1e-9)  # the rest is still judged
+
+
+def _without(track: Track, drop: Sequence[int]) -> Track:
+    keep = np.setdiff1d(np.arange(len(track)), drop)
+    return Track(*(getattr(track, k)[keep] for k in ("t_s", "x", "y", "yaw", "vx", "vy", "wz")))
+
+
+def test_nan_poses_are_dropped_with_a_warning(tmp_path: Path) -> None:
+    x, y, yaw = LINE.x.copy(), LINE.y.copy(), LINE.yaw.copy()
+    x[3], y[10], yaw[20] = math.nan, math.inf, math.nan
+    holey = Track(LINE.t_s, x, y, yaw, LINE.vx, LINE.vy, LINE.wz)
+    bag = write_episode_bag(tmp_path / "holey", holey, cmd=False)
+    reference = write_episode_bag(tmp_path / "reference", _without(LINE, [3, 10, 20]), cmd=False)
+    episode = read_episode(bag)
+    assert any("3 pose(s) with NaN/inf dropped" in w for w in episode.warnings), episode.warnings
+    assert len(episode.pose) == len(LINE) - 3
+    result = compute([bag, reference])
+    got, want = _row(result, "holey").metrics, _row(result, "reference").metrics
+    assert got is not None and want is not None
+    for key, value in asdict(want).items():
+        other = asdict(got)[key]
+        assert other == value or (
+            isinstance(value, float) and math.isnan(value) and math.isnan(other)
+        ), key
+
+
+def test_a_bag_whose_poses_are_all_nan_is_an_episode_error(tmp_path: Path) -> None:
+    nan = np.full(len(LINE), math.nan)
+    bag = write_episode_bag(
+        tmp_path / "all_nan", Track(LINE.t_s, nan, nan, nan, LINE.vx, LINE.vy, LINE.wz)
+    )
+    with pytest.raises(
+        EpisodeError, match=r"all_nan': pose topic '/ground_truth' has 0 usable pose"
+    ):
+        read_episode(bag)
+    row = compute([bag]).results[0]
+    assert "all_nan" in row.error and "usable pose" in row.error
+
+
+# --------------------------------------------------------------------------- topics and inputs
+
+
+def test_an_explicit_scan_topic_that_is_missing_is_an_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bag = write_episode_bag(tmp_path / "no_scan", LINE)  # no obstacles: no /scan at all
+    default = compute([bag]).results[0]
+    assert default.error == "" and default.metrics is not None
+    assert math.isnan(default.metrics.obstacle_dist_min_m) and default.metrics.n_scans == 0
+
+    code = main(["compute", str(bag), "--scan-topic", "/missing", "--format", "csv"])
+    out, err = capsys.readouterr()
+    assert code == 1
+    (row,) = csv.DictReader(io.StringIO(out))
+    assert "scan topic '/missing' is not in the bag" in row["error"] and "no_scan" in row["error"]
+
+
+def test_inputs_that_match_nothing_are_error_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    good = write_episode_bag(tmp_path / "good", LINE)
+    missing, pattern = tmp_path / "absent", str(tmp_path / "*.nothing.db3")
+    result = compute([good, missing, pattern])
+    errors = {r.bag: r.error for r in result.results}
+    assert errors[str(good)] == ""
+    assert errors[str(missing)] == f"{str(missing)!r}: no such file or directory"
+    assert errors[pattern] == f"{pattern!r}: no file matches this pattern"
+
+    assert main(["compute", str(missing), "--format", "csv"]) == 1
+    out, err = capsys.readouterr()
+    (row,) = csv.DictReader(io.StringIO(out))
+    assert "no such file or directory" in row["error"]
+    assert "1 of 1 bag(s) failed" in err
+
+
+def test_a_read_only_bag_is_judged_and_left_as_it_was(tmp_path: Path) -> None:
+    """Judging needs no write access and writes nothing into the bag (run as root, the mode
+    stops no write: the before/after snapshot is what proves it)."""
+    bag = write_episode_bag(tmp_path / "ro", LINE, obstacles=WALL)
+    for p in [*bag.iterdir(), bag]:
+        os.chmod(p, 0o555 if p.is_dir() else 0o444)
+    try:
+        before = _snapshot(bag)
+        row = compute([bag]).results[0]
+        assert row.error == "" and row.metrics is not None
+        assert row.metrics.path_length_m == pytest.approx(2.0, abs=1e-9)
+        assert _snapshot(bag) == before
+    finally:
+        os.chmod(bag, 0o755)
