@@ -14,16 +14,23 @@ import math
 import struct
 from collections import defaultdict
 from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from apsw import Error as SqliteError
-from rosbags.highlevel import AnyReader, AnyReaderError
-from rosbags.interfaces import Connection
-from rosbags.rosbag2 import ReaderError
+from rosbags.interfaces import Connection, MessageDefinitionFormat
+from rosbags.rosbag2 import Reader, ReaderError
 from rosbags.serde import SerdeError
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import (
+    Stores,
+    TypesysError,
+    get_types_from_idl,
+    get_types_from_msg,
+    get_typestore,
+)
+from rosbags.typesys.store import Typestore
 
 from .errors import BagError, EpisodeError, TopicError
 from .facts import EpisodeFacts, Outcome, parse_facts
@@ -45,13 +52,38 @@ SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
 #: (rosbags reads .db3 through apsw), short reads and absurd lengths in MCAP records, and
 #: CDR that does not match its type.
 _DAMAGE = (
-    SqliteError, SerdeError, struct.error, EOFError, OverflowError, MemoryError,
+    SqliteError, SerdeError, TypesysError, struct.error, EOFError, OverflowError, MemoryError,
     AssertionError, ValueError, IndexError, KeyError,
 )
 
 #: Message definitions for bags that embed none (rosbag2 before Iron): the layouts of the
 #: types above are the same in every ROS 2 distribution.
 _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+
+
+@lru_cache(maxsize=64)
+def _typestore_for(msgtype: str, msgdef_format: MessageDefinitionFormat, msgdef: str) -> Typestore:
+    """The typestore that decodes ``msgtype`` as the bag defines it.
+
+    ``_TYPESTORE`` (whose decoders are generated once per process) unless the bag embeds a
+    definition that differs from Jazzy's; cached on the definition text, so opening many bags
+    does not rebuild types and decoders for each (rosbags' ``AnyReader`` does).
+    """
+    if msgdef_format == MessageDefinitionFormat.NONE:
+        return _TYPESTORE
+    if msgdef_format == MessageDefinitionFormat.MSG:
+        types = get_types_from_msg(msgdef, msgtype)
+    else:
+        sep = "=" * 80 + "\n"
+        parts = msgdef.split(sep)[1:] if msgdef.startswith(f"{sep}IDL: ") else []
+        types = {}
+        for idl in [part.split("\n", 1)[1] for part in parts] or [msgdef]:
+            types.update(get_types_from_idl(idl))
+    own = get_typestore(Stores.EMPTY)
+    own.register(types)
+    known = msgtype in _TYPESTORE.fielddefs
+    same = known and own.hash_rihs01(msgtype) == _TYPESTORE.hash_rihs01(msgtype)
+    return _TYPESTORE if same else own
 
 
 def _stamp_ns(header: Any) -> int:
@@ -114,13 +146,13 @@ class _BagContents:
         self.custom: dict[str, str] = {}
         self.notes: list[str] = []
         try:
-            with AnyReader([path], default_typestore=_TYPESTORE) as reader:
+            with Reader(path) as reader:
                 self.available = {c.topic: c.msgtype for c in reader.connections}
-                self.custom = dict(reader.readers[0].storage.metadata.custom or {})
+                self.custom = dict(reader.storage.metadata.custom or {})
                 self.pose_topic = self._choose_pose_topic(topic_map)
                 wanted = self._wanted(topic_map)
                 self._read(reader, [c for c in reader.connections if c.topic in wanted], wanted)
-        except (AnyReaderError, ReaderError, OSError) as err:
+        except (ReaderError, OSError) as err:
             msg = f"{str(path)!r}: cannot open bag: {err}"
             raise BagError(msg) from err
         except _DAMAGE as err:
@@ -184,7 +216,7 @@ class _BagContents:
             wanted.setdefault(topic, role)
         return wanted
 
-    def _read(self, reader: AnyReader, conns: list[Connection], wanted: dict[str, str]) -> None:
+    def _read(self, reader: Reader, conns: list[Connection], wanted: dict[str, str]) -> None:
         extractors: dict[str, Callable[[Any, str], Any]] = {
             "pose": _pose_row,
             "goal": _pose_row,
@@ -200,14 +232,23 @@ class _BagContents:
             "facts": lambda m, _t: m.data,
             "outcome": lambda m, _t: m.data,
         }
-        for conn, recv_ns, raw in reader.messages(connections=conns):
-            role = wanted[conn.topic]
-            msg = reader.deserialize(raw, conn.msgtype)
-            header = getattr(msg, "header", None)
+        # Per connection, resolved once: decoder, extractor and the lists to append to.
+        plan = {}
+        for conn in conns:
+            role, msgdef = wanted[conn.topic], conn.msgdef
+            typestore = _typestore_for(conn.msgtype, msgdef.format, msgdef.data)
             sample = self.topics[role]
-            sample.stamp.append(_stamp_ns(header) if header is not None else 0)
-            sample.recv.append(recv_ns)
-            sample.rows.append(extractors[role](msg, conn.msgtype))
+            plan[conn.id] = (
+                typestore.deserialize_cdr, conn.msgtype, extractors[role],
+                sample.stamp.append, sample.recv.append, sample.rows.append,
+            )
+        for conn, recv_ns, raw in reader.messages(connections=conns):
+            decode, msgtype, extract, add_stamp, add_recv, add_row = plan[conn.id]
+            msg = decode(raw, msgtype)
+            header = getattr(msg, "header", None)
+            add_stamp(_stamp_ns(header) if header is not None else 0)
+            add_recv(recv_ns)
+            add_row(extract(msg, msgtype))
 
 
 def _pose_series(raw: _Topic, name: str, warnings: list[str]) -> tuple[PoseSeries, int | None]:
