@@ -273,12 +273,17 @@ def _pose_series(raw: _Topic, name: str, warnings: list[str]) -> tuple[PoseSerie
     return PoseSeries(t_ns, rows[:, 0], rows[:, 1], rows[:, 2], *twist), offset
 
 
+def _sorted(raw: _Topic, offset: int, name: str, warnings: list[str]) -> tuple[np.ndarray, list[Any]]:
+    """Stamps on the pose time base and the payload rows, sorted and de-duplicated."""
+    t_ns = _timeline(raw, offset)
+    keep = _order(t_ns, name, warnings)
+    return t_ns[keep], [raw.rows[i] for i in keep]
+
+
 def _scan_series(raw: _Topic, offset: int, warnings: list[str]) -> ScanSeries | None:
     if not raw.rows:
         return None
-    t_ns = _timeline(raw, offset)
-    keep = _order(t_ns, "scan", warnings)
-    rows = [raw.rows[i] for i in keep]
+    t_ns, rows = _sorted(raw, offset, "scan", warnings)
     width = max(len(r[0]) for r in rows)
     ranges = np.full((len(rows), width), np.nan, dtype=np.float32)
     angles = np.full((len(rows), width), np.nan)
@@ -287,25 +292,23 @@ def _scan_series(raw: _Topic, offset: int, warnings: list[str]) -> ScanSeries | 
         angles[i, : len(rng)] = amin + ainc * np.arange(len(rng))
     rmin = np.array([r[3] for r in rows], dtype=float)
     rmax = np.array([r[4] for r in rows], dtype=float)
-    return ScanSeries(t_ns[keep], ranges, angles, rmin, rmax)
+    return ScanSeries(t_ns, ranges, angles, rmin, rmax)
 
 
 def _cmd_series(raw: _Topic, offset: int, warnings: list[str]) -> CmdSeries | None:
     if not raw.rows:
         return None
-    t_ns = _timeline(raw, offset)
-    keep = _order(t_ns, "cmd_vel", warnings)
-    rows = np.asarray(raw.rows, dtype=float)[keep]
-    return CmdSeries(t_ns[keep], rows[:, 0], rows[:, 1], rows[:, 2])
+    t_ns, rows = _sorted(raw, offset, "cmd_vel", warnings)
+    v = np.asarray(rows, dtype=float)
+    return CmdSeries(t_ns, v[:, 0], v[:, 1], v[:, 2])
 
 
 def _point_series(raw: _Topic, offset: int, warnings: list[str]) -> PointSeries | None:
     if not raw.rows:
         return None
-    t_ns = _timeline(raw, offset)
-    keep = _order(t_ns, "person", warnings)
-    rows = np.asarray(raw.rows, dtype=float)[keep]
-    return PointSeries(t_ns[keep], rows[:, 0], rows[:, 1])
+    t_ns, rows = _sorted(raw, offset, "person", warnings)
+    p = np.asarray(rows, dtype=float)
+    return PointSeries(t_ns, p[:, 0], p[:, 1])
 
 
 def _facts(
