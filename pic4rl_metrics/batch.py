@@ -10,6 +10,7 @@ import math
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import pandas as pd
@@ -63,7 +64,7 @@ class MetricsResult:
 
     results: tuple[BagResult, ...]
 
-    @property
+    @cached_property
     def frame(self) -> pd.DataFrame:
         return pd.DataFrame([r.row() for r in self.results], columns=list(COLUMNS))
 
