@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property
@@ -128,7 +128,3 @@ def compute(
                 bar.update()
     return MetricsResult(tuple(unmatched + results))
 
-
-def compute_frame(inputs: Sequence[str | Path], **kwargs: object) -> pd.DataFrame:
-    """Shortcut: ``compute(...).frame``."""
-    return compute(inputs, **kwargs).frame  # type: ignore[arg-type]

@@ -63,7 +63,7 @@ class Footprint:
                 raise ConfigError(msg)
 
     @classmethod
-    def parse(cls, value: Any, *, source: str = "footprint") -> Footprint:
+    def parse(cls, value: Any, *, source: str = "facts") -> Footprint:
         """Parse ``{"radius_m": r}``, ``{"length_m": l, "width_m": w}``, their JSON, a number
         (a radius), ``"circle:R"`` or ``"rect:LxW"``."""
         if isinstance(value, Footprint):
@@ -91,19 +91,14 @@ class Footprint:
         except ConfigError as err:
             raise ConfigError(f"{source}: {err}") from err
         except (ValueError, TypeError) as err:
-            pass
+            cause: Exception | None = err
+        else:
+            cause = None
         msg = (
             f"{source}: cannot read footprint {value!r}; expected a radius in metres, "
             "'circle:R', 'rect:LxW' or {'length_m': L, 'width_m': W}"
         )
-        raise ConfigError(msg)
-
-    @property
-    def inscribed_radius_m(self) -> float:
-        """Radius of the largest circle inside the footprint."""
-        if self.radius_m is not None:
-            return self.radius_m
-        return 0.5 * min(self.length_m, self.width_m)  # type: ignore[type-var]
+        raise ConfigError(msg) from cause
 
     def boundary_distance(self, bearing_rad: np.ndarray) -> np.ndarray:
         """Distance (m) from the footprint's centre to its edge along each bearing (rad)."""
@@ -147,16 +142,16 @@ class EpisodeFacts:
         return replace(self, **{name: getattr(other, name) for name in given})
 
 
-def _floats(value: Any, n: int | None, key: str, source: str) -> tuple[float, ...]:
-    """Parse a JSON list (or a list) of ``n`` finite numbers."""
+def _floats(value: Any, counts: tuple[int, ...], key: str, source: str) -> tuple[float, ...]:
+    """Parse a JSON list (or a list) of finite numbers, as many as one of ``counts``."""
     try:
         items = json.loads(value) if isinstance(value, str) else value
         numbers = tuple(float(x) for x in items)
     except (ValueError, TypeError) as err:
         msg = f"{source}: {key}={value!r} is not a list of numbers"
         raise ConfigError(msg) from err
-    if n is not None and len(numbers) not in (n, 3 if n == 2 else n):
-        msg = f"{source}: {key}={value!r} needs {n} numbers"
+    if len(numbers) not in counts:
+        msg = f"{source}: {key}={value!r} needs {' or '.join(map(str, counts))} numbers"
         raise ConfigError(msg)
     if not all(math.isfinite(x) for x in numbers):
         msg = f"{source}: {key}={value!r} holds a non-finite number"
@@ -198,15 +193,12 @@ def parse_facts(data: Mapping[str, Any], *, source: str) -> tuple[EpisodeFacts, 
                 msg = f"{source}: seed={raw!r} is not an integer"
                 raise ConfigError(msg) from err
         elif key == "footprint":
-            values[key] = Footprint.parse(raw, source=f"{source}: footprint")
+            values[key] = Footprint.parse(raw, source=source)
         elif key == "start":
-            start = _floats(raw, 3, key, source)
-            if len(start) != 3:
-                msg = f"{source}: start={raw!r} needs [x, y, yaw]"
-                raise ConfigError(msg)
-            values[key] = start
+            values[key] = _floats(raw, (3,), key, source)
         elif key == "goal":
-            values[key] = _floats(raw, 2, key, source)[:2]
+            # [x, y], or [x, y, yaw] from a pose: the yaw is not used.
+            values[key] = _floats(raw, (2, 3), key, source)[:2]
         elif key == "row_centerline":
             try:
                 points = json.loads(raw) if isinstance(raw, str) else raw
