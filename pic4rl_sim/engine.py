@@ -1,0 +1,258 @@
+"""The simulation engine: one robot in one world, stepped one control period at a time.
+
+No ROS here: the node, the bridge's in-process transport and the tests drive the same
+``Engine``. Same robot, world, seed and commands give identical states and sensor data:
+every random draw comes from per-purpose streams seeded from the episode seed.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from .errors import require
+from .geometry import Pose2D, Twist2D, wrap_angle
+from .model import build_model
+from .robots import Drive, RobotSpec
+from .sampling import check_free, sample_start_goal
+from .sensors import DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
+from .world import WorldSpec
+
+log = logging.getLogger(__name__)
+
+_DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver does
+_BAD_STATE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
+                       mujoco.mjtWarning.mjWARN_BADQVEL)
+# Independent random streams per purpose: reading one sensor never shifts another's noise.
+_STREAMS = ("sampling", "lidar", "depth", "imu", "odometry")
+
+
+@dataclass(frozen=True)
+class EngineConfig:
+    """Timing and episode set-up rules (s, m)."""
+
+    physics_dt_s: float = 0.005
+    control_dt_s: float = 0.1
+    clearance_m: float = 0.2  # free space around the footprint for sampled starts and goals
+    min_goal_distance_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        require(0 < self.physics_dt_s <= 0.05, "physics_dt_s", self.physics_dt_s,
+                "a time step in (0, 0.05] s")
+        require(self.control_dt_s >= self.physics_dt_s, "control_dt_s", self.control_dt_s,
+                f"at least physics_dt_s={self.physics_dt_s}")
+        ratio = self.control_dt_s / self.physics_dt_s
+        require(abs(ratio - round(ratio)) < 1e-6, "control_dt_s", self.control_dt_s,
+                f"a whole multiple of physics_dt_s={self.physics_dt_s}")
+        require(self.clearance_m >= 0, "clearance_m", self.clearance_m, "a distance >= 0")
+        require(self.min_goal_distance_m >= 0, "min_goal_distance_m", self.min_goal_distance_m,
+                "a distance >= 0")
+
+    @property
+    def substeps(self) -> int:
+        return round(self.control_dt_s / self.physics_dt_s)
+
+
+class StepResult(NamedTuple):
+    """What happened in one control period."""
+
+    collided: bool  # the robot touched an obstacle or the person during the period
+    diverged: bool  # the physics blew up; the episode was reset to its start
+
+
+class CommandCheck(NamedTuple):
+    """A command made safe, and what was wrong with the one given (``None`` if nothing)."""
+
+    command: Twist2D
+    problem: str | None
+
+
+def limit_command(command: Twist2D, robot: RobotSpec) -> CommandCheck:
+    """Clamp ``command`` to the robot's limits; a non-finite command becomes a stop."""
+    values = (command.vx, command.vy, command.wz)
+    if not all(math.isfinite(v) for v in values):
+        return CommandCheck(Twist2D(), f"non-finite command {tuple(values)!r} replaced by a stop")
+    lateral = robot.max_lateral_m_s if robot.drive is Drive.OMNI else 0.0
+    limits = (robot.max_linear_m_s, lateral, robot.max_angular_rad_s)
+    clamped = Twist2D(*(min(max(v, -lim), lim) for v, lim in zip(values, limits)))
+    if clamped == Twist2D(*values):
+        return CommandCheck(clamped, None)
+    return CommandCheck(clamped, f"command {tuple(values)!r} clamped to the limits {clamped!r}")
+
+
+class Engine:
+    """A robot in a world with its sensors. ``reset`` starts an episode, ``step`` runs one
+    control period of ``config.substeps`` physics steps."""
+
+    def __init__(self, robot: RobotSpec, world: WorldSpec, config: EngineConfig | None = None,
+                 *, seed: int = 0) -> None:
+        self.robot = robot
+        self.world = world
+        self.config = config or EngineConfig()
+        self.model, self.ids = build_model(robot, world, physics_dt_s=self.config.physics_dt_s)
+        self.data = mujoco.MjData(self.model)
+        body = self.ids.robot_body
+        self.lidar = robot.lidar and Lidar(self.model, robot.lidar, exclude_body=body)
+        self.depth = robot.depth and DepthCamera(self.model, robot.depth, exclude_body=body)
+        self.imu = Imu(robot.imu)
+        self.odometry = WheelOdometry(robot.odometry)
+        self._odom: tuple[Pose2D, Twist2D] = (Pose2D(0, 0, 0), Twist2D())
+        self._rng: dict[str, np.random.Generator] = {}
+        self.seed = seed
+        self.start = Pose2D(0.0, 0.0, 0.0)
+        self.goal = (0.0, 0.0)
+        self.steps = 0
+        self.reset(seed=seed)
+
+    # -- episodes ----------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None, start: Pose2D | None = None,
+              goal: tuple[float, float] | None = None) -> None:
+        """Start an episode: fresh random streams from ``seed`` (default: the last one), the
+        robot at rest at ``start`` and the given ``goal``; either is sampled with clearance
+        when not given, and a given one is checked to be free."""
+        self.seed = self.seed if seed is None else int(seed)
+        streams = np.random.SeedSequence(self.seed).spawn(len(_STREAMS))
+        self._rng = {name: np.random.default_rng(s) for name, s in zip(_STREAMS, streams)}
+        clearance = self.robot.footprint.bounding_radius_m + self.config.clearance_m
+        if start is None or goal is None:
+            sampled_start, sampled_goal = sample_start_goal(
+                self.world, self._rng["sampling"], clearance_m=clearance,
+                min_distance_m=self.config.min_goal_distance_m)
+            start = sampled_start if start is None else start
+            goal = sampled_goal if goal is None else goal
+        check_free(self.world, (start.x, start.y), what="start",
+                   clearance_m=self.robot.footprint.bounding_radius_m)
+        self.start = Pose2D(float(start.x), float(start.y), wrap_angle(float(start.yaw)))
+        self.goal = (float(goal[0]), float(goal[1]))
+        self._restart()
+
+    def _restart(self) -> None:
+        """Put the robot at rest at ``self.start`` with time 0 (also after a divergence)."""
+        d, ids = self.data, self.ids
+        mujoco.mj_resetData(self.model, d)
+        d.qpos[[ids.qpos_x, ids.qpos_y, ids.qpos_yaw]] = self.start
+        self._move_person()
+        mujoco.mj_forward(self.model, d)
+        self.odometry.reset(self.start)
+        self._odom = (self.start, Twist2D())
+        self.steps = 0
+
+    # -- stepping ------------------------------------------------------------------------------
+
+    def step(self, command: Twist2D) -> StepResult:
+        """Track ``command`` (body frame, clamped to the limits) for one control period."""
+        cmd = limit_command(command, self.robot).command
+        m, d, ids = self.model, self.data, self.ids
+        d.ctrl[ids.act_vx], d.ctrl[ids.act_vy], d.ctrl[ids.act_wz] = cmd
+        before = self.robot_pose()
+        warnings = [d.warning[w].number for w in _BAD_STATE_WARNINGS]
+        walk = self._person_walk()
+        touched = False
+        # One substep at a time: the person moves smoothly, and a bump that bounces the robot
+        # off within the period still counts as a collision.
+        for k in range(1, self.config.substeps + 1):
+            if walk is not None:
+                d.mocap_pos[ids.person_mocap] = walk[0] + walk[1] * k
+            mujoco.mj_step(m, d)
+            if d.ncon and not touched:
+                touched = self.in_collision()
+        if self._diverged(warnings):
+            log.error("physics diverged at t=%.3f s of the episode (seed %d); episode reset to "
+                      "its start", self.episode_time_s, self.seed)
+            self._restart()
+            return StepResult(collided=False, diverged=True)
+        mujoco.mj_kinematics(m, d)  # sensors see the state after the last substep
+        self.steps += 1
+        self._odom = self.odometry.update(before, self.robot_pose(), self.config.control_dt_s,
+                                          self._rng["odometry"])
+        return StepResult(collided=touched or self.in_collision(), diverged=False)
+
+    def _person_walk(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The person's position now and its change per substep over this control period;
+        its heading is set for the period's end."""
+        if self.world.person is None:
+            return None
+        t = self.episode_time_s
+        now, _ = self.world.person.pose_at(t)
+        end, _ = self.world.person.pose_at(t + self.config.control_dt_s)
+        self.data.mocap_quat[self.ids.person_mocap] = (math.cos(end.yaw / 2), 0, 0,
+                                                       math.sin(end.yaw / 2))
+        start = np.array([now.x, now.y, 0.0])
+        return start, (np.array([end.x, end.y, 0.0]) - start) / self.config.substeps
+
+    def _diverged(self, warnings_before: list[int]) -> bool:
+        d = self.data
+        if any(d.warning[w].number > n for w, n in zip(_BAD_STATE_WARNINGS, warnings_before)):
+            return True  # MuJoCo reset the state itself: the episode is lost anyway
+        qvel = d.qvel
+        return not (np.isfinite(d.qpos).all() and np.isfinite(qvel).all()
+                    and np.abs(qvel).max(initial=0.0) < _DIVERGED_SPEED)
+
+    def _move_person(self, t_s: float = 0.0) -> None:
+        if self.ids.person_mocap < 0 or self.world.person is None:
+            return
+        pose, _ = self.world.person.pose_at(t_s)
+        self.data.mocap_pos[self.ids.person_mocap] = (pose.x, pose.y, 0.0)
+        self.data.mocap_quat[self.ids.person_mocap] = (math.cos(pose.yaw / 2), 0, 0,
+                                                       math.sin(pose.yaw / 2))
+
+    # -- readers -------------------------------------------------------------------------------
+
+    @property
+    def episode_time_s(self) -> float:
+        """Simulated time since the episode's start (s)."""
+        return float(self.data.time)
+
+    def robot_pose(self) -> Pose2D:
+        """Exact pose of the base in the world."""
+        q, ids = self.data.qpos, self.ids
+        yaw = wrap_angle(float(q[ids.qpos_yaw]))
+        return Pose2D(float(q[ids.qpos_x]), float(q[ids.qpos_y]), yaw)
+
+    def robot_twist(self) -> Twist2D:
+        """Exact velocity of the base in its own frame."""
+        v, ids = self.data.qvel, self.ids
+        yaw = float(self.data.qpos[ids.qpos_yaw])
+        c, s = math.cos(yaw), math.sin(yaw)
+        vx, vy = float(v[ids.dof_x]), float(v[ids.dof_y])
+        return Twist2D(c * vx + s * vy, -s * vx + c * vy, float(v[ids.dof_yaw]))
+
+    def in_collision(self) -> bool:
+        """Whether the robot's body touches anything now."""
+        d = self.data
+        if d.ncon == 0:
+            return False
+        geoms = d.contact.geom[: d.ncon]
+        return bool((self.model.geom_bodyid[geoms] == self.ids.robot_body).any())
+
+    def person_pose(self) -> tuple[Pose2D, tuple[float, float]] | None:
+        """The person's pose and world velocity (m/s) now, or ``None`` without a person."""
+        if self.world.person is None:
+            return None
+        return self.world.person.pose_at(self.episode_time_s)
+
+    def scan(self) -> np.ndarray:
+        """LiDAR ranges now (REP 117: ``inf`` beyond range); error if the robot has none."""
+        require(self.lidar is not None, "robot.lidar", None, "a LiDAR on the robot to read a scan")
+        return self.lidar.read(self.data, self.robot_pose(), self._rng["lidar"])  # type: ignore[union-attr]
+
+    def depth_image(self) -> np.ndarray:
+        """Depth image now (m along the optical axis, float32, height × width)."""
+        require(self.depth is not None, "robot.depth", None, "a depth camera on the robot")
+        return self.depth.read(self.data, self.robot_pose(), self._rng["depth"])  # type: ignore[union-attr]
+
+    def imu_reading(self) -> ImuReading:
+        """IMU now: orientation, yaw rate, body-frame acceleration including gravity."""
+        d, ids = self.data, self.ids
+        return self.imu.read(float(d.qpos[ids.qpos_yaw]), float(d.qvel[ids.dof_yaw]),
+                             (float(d.qacc[ids.dof_x]), float(d.qacc[ids.dof_y])), self._rng["imu"])
+
+    def wheel_odometry(self) -> tuple[Pose2D, Twist2D]:
+        """Wheel odometry: a pose that starts at the true start and drifts, and the body twist."""
+        return self._odom

@@ -1,0 +1,38 @@
+"""Errors of pic4rl_sim, one class per boundary.
+
+Messages name the key (or file) first, then the offending value (``{x!r}``) and what was
+expected, so that a bad parameter file stops the node with one readable line.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from typing import Any
+
+
+class SimError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class ConfigError(SimError):
+    """A robot, world, sensor or node parameter is unknown or invalid."""
+
+
+class WorldError(SimError):
+    """A world cannot be built (bad MJCF file, no free space for a start or goal)."""
+
+
+def require(ok: bool, key: str, value: Any, expected: str) -> None:
+    """Raise ``ConfigError`` naming ``key`` unless ``ok``."""
+    if not ok:
+        msg = f"{key}: {value!r} is invalid; expected {expected}"
+        raise ConfigError(msg)
+
+
+def unknown_key(key: str, known: Iterable[str], *, where: str) -> ConfigError:
+    """An error for an unknown ``key`` in ``where``, with a "did you mean" when one is close."""
+    known = sorted(known)
+    close = difflib.get_close_matches(key, known, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
+    return ConfigError(f"{where}: unknown key {key!r}{hint}")
