@@ -26,8 +26,8 @@ from .world import WorldSpec
 log = logging.getLogger(__name__)
 
 _DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver does
-_BAD_STATE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
-                       mujoco.mjtWarning.mjWARN_BADQVEL)
+_BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQPOS),
+                       int(mujoco.mjtWarning.mjWARN_BADQVEL)]
 # Independent random streams per purpose: reading one sensor never shifts another's noise.
 _STREAMS = ("sampling", "lidar", "depth", "imu", "odometry")
 
@@ -61,7 +61,7 @@ class EngineConfig:
 class StepResult(NamedTuple):
     """What happened in one control period."""
 
-    collided: bool  # the robot touched an obstacle or the person during the period
+    collided: bool  # the robot touches an obstacle at the period's end, or the person during it
     diverged: bool  # the physics blew up; the episode was reset to its start
 
 
@@ -151,17 +151,16 @@ class Engine:
         m, d, ids = self.model, self.data, self.ids
         d.ctrl[ids.act_vx], d.ctrl[ids.act_vy], d.ctrl[ids.act_wz] = cmd
         before = self.robot_pose()
-        warnings = [d.warning[w].number for w in _BAD_STATE_WARNINGS]
+        warnings = d.warning.number[_BAD_STATE_WARNINGS].copy()
         walk = self._person_walk()
         touched = False
-        # One substep at a time: the person moves smoothly, and a bump that bounces the robot
-        # off within the period still counts as a collision.
-        for k in range(1, self.config.substeps + 1):
-            if walk is not None:
+        if walk is None:  # a static world: contact with it lasts while the servos push
+            mujoco.mj_step(m, d, nstep=self.config.substeps)
+        else:  # the person moves smoothly, and a bump that bounces the robot off still counts
+            for k in range(1, self.config.substeps + 1):
                 d.mocap_pos[ids.person_mocap] = walk[0] + walk[1] * k
-            mujoco.mj_step(m, d)
-            if d.ncon and not touched:
-                touched = self.in_collision()
+                mujoco.mj_step(m, d)
+                touched = touched or (d.ncon > 0 and self.in_collision())
         if self._diverged(warnings):
             log.error("physics diverged at t=%.3f s of the episode (seed %d); episode reset to "
                       "its start", self.episode_time_s, self.seed)
@@ -186,13 +185,12 @@ class Engine:
         start = np.array([now.x, now.y, 0.0])
         return start, (np.array([end.x, end.y, 0.0]) - start) / self.config.substeps
 
-    def _diverged(self, warnings_before: list[int]) -> bool:
+    def _diverged(self, warnings_before: np.ndarray) -> bool:
         d = self.data
-        if any(d.warning[w].number > n for w, n in zip(_BAD_STATE_WARNINGS, warnings_before)):
+        if (d.warning.number[_BAD_STATE_WARNINGS] > warnings_before).any():
             return True  # MuJoCo reset the state itself: the episode is lost anyway
-        qvel = d.qvel
-        return not (np.isfinite(d.qpos).all() and np.isfinite(qvel).all()
-                    and np.abs(qvel).max(initial=0.0) < _DIVERGED_SPEED)
+        speed = float(np.abs(d.qvel).max(initial=0.0))
+        return not (speed < _DIVERGED_SPEED and math.isfinite(float(d.qpos.sum())))  # NaN fails
 
     def _move_person(self, t_s: float = 0.0) -> None:
         if self.ids.person_mocap < 0 or self.world.person is None:
