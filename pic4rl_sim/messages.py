@@ -1,0 +1,178 @@
+"""The engine's state as ROS 2 messages, built once per engine and refilled in place each step.
+
+The per-step path is the sim's hot loop (a lockstep client waits for it every control
+period), so messages are allocated once; every header shares one ``Time`` object, and the
+LiDAR ranges and depth pixels are written into the messages' own buffers through numpy views.
+
+Frames: ``world`` is the fixed frame of the world's geometry, goal, person and ground truth;
+``odom`` is wheel odometry's frame, equal to ``world`` when an episode starts (the estimate
+starts at the true start pose, then drifts with the odometry's errors); sensors carry the
+frame ids of ``pic4rl_sim.sensors``. No TF is published (tf2_msgs is not on PyPI).
+"""
+
+from __future__ import annotations
+
+import array
+import sys
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Vector3
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
+from std_msgs.msg import ColorRGBA, Header
+from visualization_msgs.msg import Marker, MarkerArray
+
+from .engine import Engine
+from .geometry import Pose2D, yaw_to_quaternion
+from .sensors import EXACT_VARIANCE
+from .world import WorldSpec
+
+WORLD_FRAME = "world"
+BASE_FRAME = "base_link"
+_RGBA = {
+    "wall": (0.75, 0.75, 0.72, 1.0), "furniture": (0.55, 0.38, 0.22, 1.0),
+    "obstacle": (0.35, 0.45, 0.6, 1.0), "trunk": (0.4, 0.26, 0.13, 1.0),
+    "canopy": (0.2, 0.55, 0.2, 0.6), "person": (0.9, 0.55, 0.2, 1.0),
+    "goal": (0.1, 0.8, 0.1, 0.8),
+}
+_GOAL_MARKER_HEIGHT_M = 0.05
+_POSE_VARIANCE = tuple(EXACT_VARIANCE if i % 7 == 0 else 0.0 for i in range(36))  # diagonal
+
+
+def set_stamp(stamp: Time, stamp_ns: int) -> None:
+    """Write ``stamp_ns`` (ns) into ``stamp`` in place."""
+    stamp.sec, stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+
+
+def _set_pose(pose: Pose, p: Pose2D) -> None:
+    """Fill a ``geometry_msgs/Pose`` from a planar pose."""
+    pose.position.x, pose.position.y = p.x, p.y
+    q = pose.orientation
+    q.x, q.y, q.z, q.w = yaw_to_quaternion(p.yaw)
+
+
+def _odometry(stamp: Time, frame_id: str, exact: bool) -> Odometry:
+    msg = Odometry(header=Header(stamp=stamp, frame_id=frame_id), child_frame_id=BASE_FRAME)
+    if exact:
+        msg.pose.covariance = _POSE_VARIANCE
+        msg.twist.covariance = _POSE_VARIANCE
+    return msg
+
+
+class StateMessages:
+    """One step's messages for ``engine``; ``fill`` refreshes them for a new stamp.
+
+    ``stamp`` is shared by every header and the clock, so one write re-stamps them all.
+    Sensors the robot lacks (and the person, in a world without one) are ``None``.
+    """
+
+    def __init__(self, engine: Engine) -> None:
+        self.stamp = Time()
+        stamp = self.stamp
+        self.clock = Clock(clock=stamp)
+        self.ground_truth = _odometry(stamp, WORLD_FRAME, exact=True)
+        self.odom = _odometry(stamp, engine.odometry.frame_id, exact=False)
+        imu = engine.imu
+        self.imu = Imu(header=Header(stamp=stamp, frame_id=imu.frame_id),
+                       orientation_covariance=imu.orientation_covariance,
+                       angular_velocity_covariance=imu.angular_velocity_covariance,
+                       linear_acceleration_covariance=imu.linear_acceleration_covariance)
+        self.person = (PoseStamped(header=Header(stamp=stamp, frame_id=WORLD_FRAME))
+                       if engine.world.person is not None else None)
+        self.scan: LaserScan | None = None
+        self._ranges: np.ndarray | None = None
+        if engine.lidar is not None:
+            lidar = engine.lidar
+            self.scan = LaserScan(
+                header=Header(stamp=stamp, frame_id=lidar.frame_id),
+                angle_min=lidar.angle_min_rad, angle_max=lidar.angle_max_rad,
+                angle_increment=lidar.angle_increment_rad, time_increment=0.0,
+                scan_time=engine.config.control_dt_s, range_min=lidar.range_min_m,
+                range_max=lidar.range_max_m)
+            self.scan.ranges = array.array("f", bytes(4 * lidar.spec.beams))
+            self._ranges = np.frombuffer(self.scan.ranges, dtype=np.float32)
+        self.depth_image: Image | None = None
+        self.camera_info: CameraInfo | None = None
+        self._pixels: np.ndarray | None = None
+        if engine.depth is not None:
+            cam = engine.depth
+            header = Header(stamp=stamp, frame_id=cam.frame_id)
+            self.depth_image = Image(header=header, height=cam.height, width=cam.width,
+                                     encoding="32FC1", is_bigendian=int(sys.byteorder == "big"),
+                                     step=4 * cam.width)
+            self.depth_image.data = array.array("B", bytes(4 * cam.width * cam.height))
+            self._pixels = np.frombuffer(self.depth_image.data, dtype=np.float32).reshape(
+                cam.height, cam.width)
+            self.camera_info = CameraInfo(
+                header=header, height=cam.height, width=cam.width, distortion_model="plumb_bob",
+                d=[0.0] * 5, k=cam.k_matrix, r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+                p=cam.p_matrix)
+
+    def fill(self, engine: Engine, stamp_ns: int) -> None:
+        """Stamp every message with ``stamp_ns`` (ns) and fill it from ``engine`` now."""
+        set_stamp(self.stamp, stamp_ns)
+        gt = self.ground_truth
+        _set_pose(gt.pose.pose, engine.robot_pose())
+        twist = engine.robot_twist()
+        lin, ang = gt.twist.twist.linear, gt.twist.twist.angular
+        lin.x, lin.y, ang.z = twist.vx, twist.vy, twist.wz
+        pose, twist = engine.wheel_odometry()
+        odom = self.odom
+        _set_pose(odom.pose.pose, pose)
+        lin, ang = odom.twist.twist.linear, odom.twist.twist.angular
+        lin.x, lin.y, ang.z = twist.vx, twist.vy, twist.wz
+        reading = engine.imu_reading()
+        imu = self.imu
+        q, w, a = imu.orientation, imu.angular_velocity, imu.linear_acceleration
+        q.x, q.y, q.z, q.w = reading.orientation_xyzw
+        w.x, w.y, w.z = reading.angular_velocity_xyz
+        a.x, a.y, a.z = reading.linear_acceleration_xyz
+        if self.person is not None:
+            person = engine.person_pose()
+            if person is not None:
+                _set_pose(self.person.pose, person[0])
+        if self._pixels is not None:
+            self._pixels[...] = engine.depth_image()
+        if self._ranges is not None:
+            self._ranges[...] = engine.scan()
+
+
+def goal_pose(goal: tuple[float, float], stamp_ns: int) -> PoseStamped:
+    """The goal as a pose in the world frame (identity orientation: goals have no heading)."""
+    msg = PoseStamped(header=Header(frame_id=WORLD_FRAME))
+    set_stamp(msg.header.stamp, stamp_ns)
+    msg.pose.position.x, msg.pose.position.y = goal
+    return msg
+
+
+def _marker(ns: str, index: int, shape: int, header: Header, kind: str) -> Marker:
+    r, g, b, a = _RGBA.get(kind, _RGBA["obstacle"])
+    return Marker(header=header, ns=ns, id=index, type=shape, action=Marker.ADD,
+                  color=ColorRGBA(r=r, g=g, b=b, a=a), frame_locked=False)
+
+
+def world_markers(world: WorldSpec, goal: tuple[float, float], stamp_ns: int) -> MarkerArray:
+    """One marker per box and cylinder of ``world`` and one for the goal, after a DELETEALL
+    that clears what an earlier world left in a viewer."""
+    header = Header(frame_id=WORLD_FRAME)
+    set_stamp(header.stamp, stamp_ns)
+    markers = [Marker(header=header, action=Marker.DELETEALL)]
+    for i, box in enumerate(world.boxes):
+        m = _marker("boxes", i, Marker.CUBE, header, box.kind)
+        m.pose.position = Point(x=box.x, y=box.y, z=box.z_base_m + 0.5 * box.height_m)
+        x, y, z, w = yaw_to_quaternion(box.yaw_rad)
+        m.pose.orientation = Quaternion(x=x, y=y, z=z, w=w)
+        m.scale = Vector3(x=box.size_x_m, y=box.size_y_m, z=box.height_m)
+        markers.append(m)
+    for i, cyl in enumerate(world.cylinders):
+        m = _marker("cylinders", i, Marker.CYLINDER, header, cyl.kind)
+        m.pose.position = Point(x=cyl.x, y=cyl.y, z=cyl.z_base_m + 0.5 * cyl.height_m)
+        m.scale = Vector3(x=2 * cyl.radius_m, y=2 * cyl.radius_m, z=cyl.height_m)
+        markers.append(m)
+    m = _marker("goal", 0, Marker.CYLINDER, header, "goal")
+    m.pose.position = Point(x=goal[0], y=goal[1], z=0.5 * _GOAL_MARKER_HEIGHT_M)
+    m.scale = Vector3(x=0.3, y=0.3, z=_GOAL_MARKER_HEIGHT_M)
+    markers.append(m)
+    return MarkerArray(markers=markers)
