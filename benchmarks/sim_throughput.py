@@ -177,7 +177,7 @@ def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=2000, help="control steps per loop")
-    parser.add_argument("--repeat", type=int, default=3, help="runs of bare and engine loops")
+    parser.add_argument("--repeat", type=int, default=5, help="runs of bare and engine loops")
     parser.add_argument("--timeout", type=float, default=1.0, help="s to wait for one step")
     args = parser.parse_args(argv)
 

@@ -166,7 +166,6 @@ class Engine:
                       "its start", self.episode_time_s, self.seed)
             self._restart()
             return StepResult(collided=False, diverged=True)
-        mujoco.mj_kinematics(m, d)  # sensors see the state after the last substep
         self.steps += 1
         self._odom = self.odometry.update(before, self.robot_pose(), self.config.control_dt_s,
                                           self._rng["odometry"])

@@ -1,0 +1,54 @@
+"""The engine stands without ROS: rclpy only in the node's modules, never torch or SB3."""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+PACKAGE = REPO / "pic4rl_sim"
+ROS_MODULES = {"node.py", "messages.py"}  # the only places that may import rclpy and messages
+ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "rosgraph_msgs",
+             "visualization_msgs", "rcl_interfaces", "builtin_interfaces")
+NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_metrics", "pic4rl_bridge",
+         "pic4rl_agents")
+
+
+def imported_roots(path: Path) -> set[str]:
+    roots = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            roots |= {alias.name.split(".")[0] for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            roots.add(node.module.split(".")[0])
+    return roots
+
+
+def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> None:
+    modules = sorted(PACKAGE.glob("*.py"))
+    assert {p.name for p in modules} >= {"engine.py", "node.py", "sensors.py"}
+    for path in modules:
+        roots = imported_roots(path)
+        assert not roots & set(NEVER), f"{path.name} imports {sorted(roots & set(NEVER))}"
+        if path.name not in ROS_MODULES:
+            ros = sorted(roots & set(ROS_ROOTS))
+            assert not ros, f"{path.name} imports {ros}"
+
+
+def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None:
+    code = (
+        "import json, sys\n"
+        "import pic4rl_sim.engine, pic4rl_sim.params, pic4rl_sim.worlds\n"
+        f"heavy = {ROS_ROOTS + NEVER!r}\n"
+        "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
+        "print(json.dumps('mujoco' in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    loaded, has_mujoco = (json.loads(line) for line in done.stdout.splitlines()[-2:])
+    assert has_mujoco is True
+    assert loaded == []
