@@ -15,7 +15,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from .errors import require
+from .errors import WorldError, require
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
 from .robots import Drive, RobotSpec
@@ -30,6 +30,7 @@ _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarn
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
 # Independent random streams per purpose: reading one sensor never shifts another's noise.
 _STREAMS = ("sampling", "lidar", "depth", "imu", "odometry")
+_SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 
 @dataclass(frozen=True)
@@ -114,23 +115,41 @@ class Engine:
     def reset(self, *, seed: int | None = None, start: Pose2D | None = None,
               goal: tuple[float, float] | None = None) -> None:
         """Start an episode: fresh random streams from ``seed`` (default: the last one), the
-        robot at rest at ``start`` and the given ``goal``; either is sampled with clearance
-        when not given, and a given one is checked to be free."""
-        self.seed = self.seed if seed is None else int(seed)
-        streams = np.random.SeedSequence(self.seed).spawn(len(_STREAMS))
-        self._rng = {name: np.random.default_rng(s) for name, s in zip(_STREAMS, streams)}
-        clearance = self.robot.footprint.bounding_radius_m + self.config.clearance_m
-        if start is None or goal is None:
-            sampled_start, sampled_goal = sample_start_goal(
-                self.world, self._rng["sampling"], clearance_m=clearance,
-                min_distance_m=self.config.min_goal_distance_m)
-            start = sampled_start if start is None else start
-            goal = sampled_goal if goal is None else goal
-        check_free(self.world, (start.x, start.y), what="start",
-                   clearance_m=self.robot.footprint.bounding_radius_m)
+        robot at rest at ``start`` and the given ``goal``. Either is sampled with clearance
+        when not given, at least ``min_goal_distance_m`` from the other; a given one is
+        checked to be free. On an error the current episode is left untouched."""
+        seed = self.seed if seed is None else int(seed)
+        streams = np.random.SeedSequence(seed).spawn(len(_STREAMS))
+        rng = {name: np.random.default_rng(s) for name, s in zip(_STREAMS, streams)}
+        footprint = self.robot.footprint.bounding_radius_m
+        if start is not None:
+            check_free(self.world, (start.x, start.y), clearance_m=footprint, what="start_pose")
+        if goal is not None:
+            check_free(self.world, goal, clearance_m=0.0, what="goal")
+        start, goal = self._sample_missing(start, goal, rng["sampling"])
+        self.seed, self._rng = seed, rng
         self.start = Pose2D(float(start.x), float(start.y), wrap_angle(float(start.yaw)))
         self.goal = (float(goal[0]), float(goal[1]))
         self._restart()
+
+    def _sample_missing(self, start: Pose2D | None, goal: tuple[float, float] | None,
+                        rng: np.random.Generator) -> tuple[Pose2D, tuple[float, float]]:
+        """``start`` and ``goal``, sampling whichever is ``None`` (far enough from the other)."""
+        if start is not None and goal is not None:
+            return start, goal
+        clearance = self.robot.footprint.bounding_radius_m + self.config.clearance_m
+        min_distance = self.config.min_goal_distance_m
+        for _ in range(_SAMPLING_ROUNDS):
+            s, g = sample_start_goal(self.world, rng, clearance_m=clearance,
+                                     min_distance_m=min_distance)
+            s = start if start is not None else s
+            g = goal if goal is not None else g
+            if math.hypot(g[0] - s.x, g[1] - s.y) >= min_distance:
+                return s, g
+        given = f"start {tuple(start)}" if start is not None else f"goal {goal}"
+        msg = (f"world {self.world.name!r}: no free point {min_distance} m or more from the "
+               f"{given} after {_SAMPLING_ROUNDS} rounds of sampling")
+        raise WorldError(msg)
 
     def _restart(self) -> None:
         """Put the robot at rest at ``self.start`` with time 0 (also after a divergence)."""

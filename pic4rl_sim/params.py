@@ -120,9 +120,9 @@ _SENSOR_DOCS: dict[str, tuple[str, tuple[float, float]]] = {
                                     "(0.02 = 2 % too far)", (-1.0, 1.0)),
     "odometry.angular_scale_error": ("systematic wheel-odometry error on rotation", (-1.0, 1.0)),
     "odometry.linear_noise_std": ("relative noise on each period's odometry displacement",
-                                  (-1.0, 1.0)),
+                                  (0.0, 0.999)),
     "odometry.angular_noise_std": ("relative noise on each period's odometry rotation",
-                                   (-1.0, 1.0)),
+                                   (0.0, 0.999)),
 }
 
 ROBOT = ParamSpec("robot", ParamType.STRING, "jackal",

@@ -134,10 +134,14 @@ class OdometrySpec:
     angular_noise_std: float = 0.0
 
     def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            value = getattr(self, f.name)
-            require(math.isfinite(value) and abs(value) < 1.0, f"odometry.{f.name}", value,
+        for name in ("linear_scale_error", "angular_scale_error"):
+            value = getattr(self, name)
+            require(math.isfinite(value) and abs(value) < 1.0, f"odometry.{name}", value,
                     "a fraction in (-1, 1)")
+        for name in ("linear_noise_std", "angular_noise_std"):
+            value = getattr(self, name)
+            require(math.isfinite(value) and 0.0 <= value < 1.0, f"odometry.{name}", value,
+                    "a fraction in [0, 1)")
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pic4rl_sim.engine import Engine, EngineConfig, limit_command
-from pic4rl_sim.errors import ConfigError
+from pic4rl_sim.errors import ConfigError, WorldError
 from pic4rl_sim.geometry import Pose2D, Twist2D
 from pic4rl_sim.robots import BURGER, HUSKY, JACKAL, OMNI, LidarSpec
 from pic4rl_sim.world import Box, Cylinder, PersonSpec, WorldSpec
@@ -197,3 +197,19 @@ def test_timing_must_be_consistent():
     with pytest.raises(ConfigError, match="physics_dt_s"):
         EngineConfig(physics_dt_s=-1)
     assert EngineConfig(physics_dt_s=0.005, control_dt_s=0.1).substeps == 20
+
+
+def test_a_given_start_gets_a_goal_far_enough_and_a_failed_reset_changes_nothing():
+    world = WorldSpec("room", (-5.0, -5.0, 5.0, 5.0))
+    engine = Engine(JACKAL, world, EngineConfig(min_goal_distance_m=6.0), seed=2)
+    for seed in range(5):
+        engine.reset(seed=seed, start=Pose2D(-4, -4, 0))
+        assert math.hypot(engine.goal[0] + 4, engine.goal[1] + 4) >= 6.0
+    before = (engine.seed, engine.start, engine.goal)
+    noise_state = engine._rng["lidar"].bit_generator.state
+    with pytest.raises(WorldError, match="goal"):
+        engine.reset(seed=99, goal=(50.0, 0.0))  # outside the world
+    with pytest.raises(WorldError, match="start"):
+        engine.reset(seed=99, start=Pose2D(9.0, 0.0, 0.0))
+    assert (engine.seed, engine.start, engine.goal) == before
+    assert engine._rng["lidar"].bit_generator.state == noise_state
