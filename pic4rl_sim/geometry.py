@@ -54,12 +54,6 @@ class Footprint:
             return self.radius_m
         return 0.5 * math.hypot(self.length_m, self.width_m)  # type: ignore[arg-type]
 
-    def as_fact(self) -> dict[str, float]:
-        """The footprint as the bag contract's ``footprint`` fact."""
-        if self.radius_m is not None:
-            return {"radius_m": self.radius_m}
-        return {"length_m": self.length_m, "width_m": self.width_m}  # type: ignore[dict-item]
-
 
 def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
     """Quaternion ``(x, y, z, w)`` of a rotation by ``yaw`` about +z (ROS order)."""
