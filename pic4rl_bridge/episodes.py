@@ -1,0 +1,166 @@
+"""Where each episode starts and ends: PIC4rl-gym's goals-and-poses files and its curriculum.
+
+PIC4rl-gym trains from a JSON of start poses and goals, drawing a new pair every
+``change_goal_and_pose`` episodes (walking them in order when testing), and for the first
+``starting_episodes`` starts at ``initial_pose`` with a random goal near it: the paper's
+curriculum, central area first, obstacles after. Without a file the simulator samples a free
+pair from the episode's seed. The schedule draws everything from the caller's rng, so one seed
+gives one sequence of episodes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pic4rl_sim.geometry import Pose2D
+
+from .config import EpisodesConfig
+from .errors import ConfigError
+from .transport import EpisodeRequest
+
+_SEED_END = 2**31 - 1
+
+
+@dataclass(frozen=True)
+class GoalsAndPoses:
+    """A goals-and-poses file: pair ``i`` starts at ``poses[i]`` and ends at ``goals[i]`` (m, rad);
+    ``initial_pose`` is the starting episodes' start (``None``: the file has none)."""
+
+    initial_pose: Pose2D | None
+    goals: tuple[tuple[float, float], ...]
+    poses: tuple[Pose2D, ...]
+
+
+def _numbers(path: Path, key: str, value: Any, expected: str, size: int) -> tuple[float, ...]:
+    ok = isinstance(value, list) and len(value) == size and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        for v in value)
+    if not ok:
+        raise ConfigError(f"{path}: {key}: {value!r} is invalid; expected {expected} "
+                          "(finite numbers)")
+    return tuple(float(v) for v in value)
+
+
+def _points(path: Path, data: dict[str, Any], key: str, expected: str,
+            size: int) -> list[tuple[float, ...]]:
+    if key not in data:
+        raise ConfigError(f"{path}: missing key {key!r}; expected a list of {expected}")
+    items = data[key]
+    if not isinstance(items, list) or not items:
+        raise ConfigError(f"{path}: {key}: {items!r} is invalid; expected a non-empty list "
+                          f"of {expected}")
+    return [_numbers(path, f"{key}[{i}]", v, expected, size) for i, v in enumerate(items)]
+
+
+def load_goals_and_poses(path: str | Path) -> GoalsAndPoses:
+    """Read a PIC4rl-gym goals-and-poses JSON: ``goals`` [[x, y], ...], ``poses``
+    [[x, y, yaw], ...] of the same length, optional ``initial_pose`` [x, y, yaw] (m, rad)."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read the goals-and-poses file: {err.strerror}") from err
+    except ValueError as err:
+        raise ConfigError(f"{path}: not valid JSON: {err}") from err
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: expected an object with 'goals' and 'poses', "
+                          f"got {type(data).__name__}")
+    goals = _points(path, data, "goals", "[x, y]", 2)
+    poses = _points(path, data, "poses", "[x, y, yaw]", 3)
+    if len(goals) != len(poses):
+        raise ConfigError(f"{path}: 'goals' has {len(goals)} entries but 'poses' has "
+                          f"{len(poses)}; expected one pose per goal")
+    initial = data.get("initial_pose")
+    return GoalsAndPoses(
+        initial_pose=None if initial is None else Pose2D(
+            *_numbers(path, "initial_pose", initial, "[x, y, yaw]", 3)),
+        goals=tuple((g[0], g[1]) for g in goals),
+        poses=tuple(Pose2D(*p) for p in poses))
+
+
+class EpisodeSchedule:
+    """The ``EpisodeRequest`` of each episode (numbered from 0), and its replacements when the
+    simulator rejects one. Episodes ``< starting_episodes`` start at ``initial_pose`` with a
+    goal uniform in ± ``starting_goal_range_m`` around it; later ones use the file's pairs, a
+    new one every ``change_goal_and_pose`` episodes (random, or in order when ``ordered``), or,
+    without ``pairs``, whatever the simulator samples from the seed.
+
+    The env calls ``next_request`` once per episode, in order, then tries the requests of
+    ``attempts``; the schedule remembers the pair in use, so a redrawn pair is kept for the
+    rest of its block."""
+
+    def __init__(self, config: EpisodesConfig, *, pairs: GoalsAndPoses | None = None,
+                 ordered: bool = False) -> None:
+        if config.starting_episodes > 0 and (pairs is None or pairs.initial_pose is None):
+            where = config.file or "episodes.file (empty)"
+            raise ConfigError(f"{where}: missing key 'initial_pose'; episodes.starting_episodes"
+                              f" = {config.starting_episodes} needs a start [x, y, yaw]")
+        self.config = config
+        self.pairs = pairs
+        self.ordered = ordered
+        self.index: int | None = None  # the file pair in use
+        self._block: int | None = None  # its block of change_goal_and_pose episodes
+        self._skipped = 0  # ordered pairs skipped by redraws
+        self._starting = False  # whether the last request was a starting episode's
+
+    def next_request(self, episode: int, rng: np.random.Generator) -> EpisodeRequest:
+        """The request of ``episode`` (>= 0); draws its seed first, then a goal or pair."""
+        if episode < 0:
+            raise ValueError(f"episode: {episode} is invalid; expected an integer >= 0")
+        seed = int(rng.integers(0, _SEED_END))
+        self._starting = episode < self.config.starting_episodes
+        if self._starting:
+            return self._starting_request(seed, rng)
+        if self.pairs is None:
+            return EpisodeRequest(seed)
+        block = (episode - self.config.starting_episodes) // self.config.change_goal_and_pose
+        if block != self._block:
+            self._block = block
+            n = len(self.pairs.goals)
+            self.index = (block + self._skipped) % n if self.ordered else int(rng.integers(n))
+        return self._pair_request(seed)
+
+    def redraw(self, request: EpisodeRequest, rng: np.random.Generator) -> EpisodeRequest:
+        """A replacement for the rejected ``request`` (the last one this schedule made, or a
+        replacement of it): another goal near the initial pose, another pair (the next one
+        when ``ordered``; a different one when random and there are two or more), or, for a
+        sampled episode, a new seed."""
+        if self._starting:
+            return self._starting_request(request.seed, rng)
+        if self.pairs is None or self.index is None:
+            return EpisodeRequest(int(rng.integers(0, _SEED_END)))
+        n = len(self.pairs.goals)
+        if self.ordered:
+            self._skipped += 1
+            self.index = (self.index + 1) % n
+        elif n > 1:
+            other = int(rng.integers(n - 1))
+            self.index = other + (other >= self.index)
+        return self._pair_request(request.seed)
+
+    def attempts(self, first: EpisodeRequest,
+                 rng: np.random.Generator) -> Iterator[EpisodeRequest]:
+        """``first``, then redraws: ``config.max_attempts`` requests in all. The env resets
+        with each until one is not rejected, and gives up when the generator ends."""
+        request = first
+        for attempt in range(self.config.max_attempts):
+            if attempt:
+                request = self.redraw(request, rng)
+            yield request
+
+    def _starting_request(self, seed: int, rng: np.random.Generator) -> EpisodeRequest:
+        start = self.pairs.initial_pose  # type: ignore[union-attr]  # checked in __init__
+        dx, dy = rng.uniform(-1.0, 1.0, size=2) * self.config.starting_goal_range_m
+        return EpisodeRequest(seed, start, (start.x + float(dx), start.y + float(dy)))
+
+    def _pair_request(self, seed: int) -> EpisodeRequest:
+        pairs, i = self.pairs, self.index
+        assert pairs is not None and i is not None  # set by next_request
+        return EpisodeRequest(seed, pairs.poses[i], pairs.goals[i])

@@ -1,0 +1,61 @@
+"""Decoded sensor data: what a task sees at one control step, whichever transport made it.
+
+Both transports build the same ``SensorFrame`` from the same values: the ROS transport decodes
+messages, the in-process transport reads the engine and passes poses through the same
+quaternion round trip and ranges through the same float32 buffers, so that the same seed and
+actions give bit-identical observations and rewards through both.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pic4rl_sim.geometry import Pose2D, Twist2D, yaw_to_quaternion
+
+
+def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
+    """Yaw (rad, in [-pi, pi]) of a quaternion: the rotation about +z of a planar robot."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def as_published(pose: Pose2D) -> Pose2D:
+    """``pose`` as a subscriber decodes it from a message: yaw through its quaternion."""
+    return Pose2D(pose.x, pose.y, yaw_from_quaternion(*yaw_to_quaternion(pose.yaw)))
+
+
+@dataclass(frozen=True)
+class ScanData:
+    """A planar scan (``sensor_msgs/LaserScan`` decoded): ranges (m, float32, REP 117 ±inf)
+    at angles ``angle_min_rad + i * angle_increment_rad`` in the scan's frame, mounted at
+    ``mount`` in the robot's base frame."""
+
+    ranges: np.ndarray
+    angle_min_rad: float
+    angle_increment_rad: float
+    range_min_m: float
+    range_max_m: float
+    mount: Pose2D = Pose2D(0.0, 0.0, 0.0)
+
+    def angles(self) -> np.ndarray:
+        """Beam angles (rad) in the scan's frame."""
+        return self.angle_min_rad + self.angle_increment_rad * np.arange(len(self.ranges))
+
+
+@dataclass(frozen=True)
+class SensorFrame:
+    """Everything a task may read at one step; a sensor the robot lacks is ``None``.
+
+    ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
+    the frame the goal is given in); ``goal`` is the current goal in that frame; ``depth`` is
+    height × width metres (float32, ±inf out of range); ``person`` is the person's pose.
+    """
+
+    stamp_ns: int
+    pose: Pose2D
+    twist: Twist2D
+    goal: tuple[float, float] | None = None
+    scan: ScanData | None = None
+    depth: np.ndarray | None = None
+    person: Pose2D | None = None
