@@ -1,0 +1,326 @@
+"""Write each episode to its own rosbag2 (with rosbags), as the bag contract says.
+
+Bags are the contract between running a robot and judging it, so the recorder writes exactly
+what ``pic4rl_metrics`` reads (``pic4rl_metrics.contract``): the messages as on the wire, the
+episode facts on ``/episode/facts`` and in ``custom_data``, the outcome on ``/episode/outcome``.
+Layout: ``<bags_dir>/<run>/<episode>/`` with the run's config beside the episodes. Nothing
+already on disk is ever overwritten: a run recorded twice into one directory appends episodes
+and keeps every config it was run with.
+
+rosbags' sqlite3 writer keeps the whole bag in one open transaction until ``close()``, so a
+recorder killed mid-episode would lose it all; ``EpisodeBag`` commits every
+``flush_interval_s`` instead, and a killed recorder leaves a ``.db3`` (without
+``metadata.yaml``) that the metrics read.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+import sqlite3
+import time
+from collections.abc import Mapping
+from enum import Enum
+from functools import cache
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+import yaml
+from pic4rl_metrics.contract import FACT_KEYS, FACTS_TOPIC, OUTCOME_TOPIC
+from pic4rl_metrics.facts import Outcome
+from rosbags.interfaces import (
+    Connection,
+    Qos,
+    QosDurability,
+    QosHistory,
+    QosLiveliness,
+    QosReliability,
+    QosTime,
+)
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+from .errors import RecorderError
+from .transport import RawMessage
+
+log = logging.getLogger(__name__)
+
+STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
+#: The outcome words of the contract (``close``'s ``outcome``).
+OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
+STRING = "std_msgs/msg/String"
+CONFIG_NAME = "config"
+EPISODE_PREFIX = "episode_"
+
+_UNSET = QosTime(0, 0)  # rmw's "unspecified": the default (infinite) deadline, lifespan, lease
+#: Offered QoS of latched topics (goals, markers), so that ``ros2 bag play`` re-latches them.
+LATCHED_QOS = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
+                  _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
+#: Offered QoS of every other topic.
+DEFAULT_QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE,
+                  _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
+LATCHED_SUFFIXES = ("goal_pose", "markers")
+
+
+@cache
+def typestore() -> Typestore:
+    """The message types the recorder serializes and describes in the bags (ROS 2 Jazzy's,
+    as ``pic4rl_metrics`` reads them)."""
+    return get_typestore(Stores.ROS2_JAZZY)
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy values, enums and tuples turned into plain JSON-able Python."""
+    if isinstance(value, Enum):
+        return jsonable(value.value)
+    if isinstance(value, np.generic | np.ndarray):
+        return value.tolist()
+    if isinstance(value, Mapping):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    return value
+
+
+def fact_text(value: Any) -> str:
+    """A ``custom_data`` value: strings as they are, numbers as ``str``, the rest as JSON
+    (the rule of ``pic4rl_metrics.synthetic``, so recorded and synthetic bags read alike)."""
+    value = jsonable(value)
+    if isinstance(value, str):
+        return value
+    return json.dumps(value) if isinstance(value, dict | list) else str(value)
+
+
+def custom_data(facts: Mapping[str, Any]) -> dict[str, str]:
+    """``facts`` as ``custom_data``: the contract's keys in ``FACT_KEYS`` order, then any
+    others as given; ``None`` values (not known) left out."""
+    keys = [k for k in FACT_KEYS if k in facts] + [k for k in facts if k not in FACT_KEYS]
+    return {k: fact_text(facts[k]) for k in keys if facts[k] is not None}
+
+
+def offered_qos(topic: str) -> Qos:
+    """Transient-local for goals and markers (re-latched on replay), else reliable/volatile."""
+    return LATCHED_QOS if topic.endswith(LATCHED_SUFFIXES) else DEFAULT_QOS
+
+
+class EpisodeBag:
+    """One episode's bag being written; ``write`` is usable as the transport's tap.
+
+    Durability: with ``sqlite3`` the writes are committed every ``flush_interval_s`` (s of wall
+    time; 0: every write) and right after ``facts``, with ``PRAGMA synchronous=OFF``, so a
+    process killed at any time (SIGKILL included) leaves a ``.db3`` holding everything up to
+    the last commit; only an OS crash or power loss can lose more. A kill in the middle of a
+    commit (milliseconds) leaves a hot ``-journal`` that rosbags' read-only reader ignores:
+    opening the ``.db3`` once with ``sqlite3`` rolls it back. With ``mcap`` there is no such
+    guarantee: rosbags writes the chunk index and footer only on close, so a killed recorder
+    leaves an MCAP file that may not be readable.
+    """
+
+    def __init__(self, path: Path, *, storage: str = "sqlite3",
+                 flush_interval_s: float = 1.0) -> None:
+        if storage not in STORAGES:
+            raise RecorderError(f"{path}: storage {storage!r} is unknown; expected "
+                                f"{' or '.join(STORAGES)}")
+        self.path = Path(path)
+        self.storage = storage
+        self.flush_interval_s = float(flush_interval_s)
+        #: Messages written per topic (facts and outcome included).
+        self.counts: dict[str, int] = {}
+        self._facts: dict[str, Any] = {"run": self.path.parent.name, "episode": self.path.name}
+        self._connections: dict[tuple[str, str], Connection] = {}
+        self._writer: Writer | None = Writer(self.path, version=9,
+                                             storage_plugin=STORAGES[storage])
+        try:
+            self._writer.open()
+        except (WriterError, OSError) as err:
+            self._writer = None
+            raise RecorderError(f"{self.path}: cannot create the episode bag: {err}") from err
+        self._db: sqlite3.Connection | None = None
+        if storage == "sqlite3":
+            db = getattr(self._writer.storage, "conn", None)
+            if not isinstance(db, sqlite3.Connection):
+                self._writer.abort()
+                raise RecorderError(f"{self.path}: rosbags' sqlite3 writer exposes no "
+                                    "connection; cannot commit periodically")
+            db.execute("PRAGMA synchronous=OFF")
+            # Never write uncommitted pages into the .db3: it stays consistent between commits.
+            db.execute("PRAGMA cache_spill=OFF")
+            self._db = db
+        self._last_commit = time.monotonic()
+
+    @property
+    def is_open(self) -> bool:
+        return self._writer is not None
+
+    def write(self, msg: RawMessage) -> None:
+        """Write one message (CDR) at its ``stamp_ns`` (bag time, ns)."""
+        self._write(msg.topic, msg.msgtype, msg.data, msg.stamp_ns)
+        if self._db is not None and time.monotonic() - self._last_commit >= self.flush_interval_s:
+            self._commit()
+
+    def facts(self, facts: Mapping[str, Any], stamp_ns: int) -> None:
+        """Publish ``facts`` (keys of ``FACT_KEYS``; ``run`` and ``episode`` default to the
+        bag's directories) on ``/episode/facts`` at ``stamp_ns`` and keep them for
+        ``custom_data``. Committed at once, so a killed recorder's bag still has them."""
+        self._facts.update(facts)
+        try:
+            text = json.dumps(jsonable(self._facts))
+        except (TypeError, ValueError) as err:
+            raise RecorderError(f"{self.path}: facts are not JSON-able: {err}") from err
+        self._write(FACTS_TOPIC, STRING, _string_cdr(text), stamp_ns)
+        if self._db is not None:
+            self._commit()
+
+    def close(self, outcome: str, stamp_ns: int, facts: Mapping[str, Any] | None = None) -> Path:
+        """End the episode: publish the ``outcome`` (goal, collision or timeout) at
+        ``stamp_ns`` (ns), store every fact and the outcome in ``custom_data``, write
+        ``metadata.yaml``; return the bag directory."""
+        word = jsonable(outcome)
+        if word not in OUTCOMES:
+            raise RecorderError(f"{self.path}: outcome {outcome!r} is not one of "
+                                f"{', '.join(OUTCOMES)}")
+        event = json.dumps({"outcome": word, "stamp_ns": int(stamp_ns)})
+        self._write(OUTCOME_TOPIC, STRING, _string_cdr(event), stamp_ns)
+        self._finish({**self._facts, **(facts or {}), "outcome": word})
+        log.info("episode bag %s: %s, %d messages", self.path, word, sum(self.counts.values()))
+        return self.path
+
+    def abort(self) -> Path:
+        """Close without an outcome (the episode was cut short): everything written is kept
+        and the bag stays readable. Does nothing when already closed."""
+        if self._writer is not None:
+            self._finish(self._facts)
+            log.warning("episode bag %s closed without an outcome", self.path)
+        return self.path
+
+    def __enter__(self) -> EpisodeBag:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.abort()
+
+    def _open_writer(self) -> Writer:
+        if self._writer is None:
+            raise RecorderError(f"{self.path}: the episode bag is closed")
+        return self._writer
+
+    def _write(self, topic: str, msgtype: str, data: bytes, stamp_ns: int) -> None:
+        writer = self._open_writer()
+        stamp = int(stamp_ns)
+        if stamp < 0:
+            raise RecorderError(f"{self.path}: {topic}: bag time {stamp} ns is negative")
+        try:
+            conn = self._connections.get((topic, msgtype))
+            if conn is None:
+                if msgtype not in typestore().fielddefs:
+                    raise RecorderError(f"{self.path}: topic {topic!r} has type {msgtype!r}, "
+                                        "which the recorder's typestore (ROS 2 Jazzy) lacks")
+                conn = writer.add_connection(topic, msgtype, typestore=typestore(),
+                                             offered_qos_profiles=[offered_qos(topic)])
+                self._connections[topic, msgtype] = conn
+            writer.write(conn, stamp, data)
+        except (WriterError, sqlite3.Error, OSError) as err:
+            raise RecorderError(f"{self.path}: cannot write {topic!r}: {err}") from err
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+
+    def _commit(self) -> None:
+        assert self._db is not None
+        try:
+            self._db.commit()
+        except sqlite3.Error as err:
+            raise RecorderError(f"{self.path}: cannot commit: {err}") from err
+        self._last_commit = time.monotonic()
+
+    def _finish(self, facts: Mapping[str, Any]) -> None:
+        writer = self._open_writer()
+        for key, value in custom_data(facts).items():
+            writer.set_custom_data(key, value)
+        self._writer = self._db = None
+        try:
+            writer.close()
+        except (WriterError, sqlite3.Error, OSError) as err:
+            raise RecorderError(f"{self.path}: cannot close the episode bag: {err}") from err
+
+
+def _string_cdr(text: str) -> bytes:
+    """A ``std_msgs/msg/String`` holding ``text``, as CDR."""
+    ts = typestore()
+    return bytes(ts.serialize_cdr(ts.types[STRING](data=text), STRING))
+
+
+class RunRecorder:
+    """The episode bags of one run: ``<bags_dir>/<run>/episode_NNNN/`` and the run's config.
+
+    ``config`` (any YAML-able mapping) is written beside the episodes as ``config.yaml``;
+    when that file exists with other content (another run into the same directory), as
+    ``config-2.yaml``, ``config-3.yaml``, ... instead, never over a file already there.
+    """
+
+    def __init__(self, bags_dir: Path, run: str, *, storage: str = "sqlite3",
+                 flush_interval_s: float = 1.0, config: Mapping[str, Any] | None = None) -> None:
+        if storage not in STORAGES:
+            raise RecorderError(f"{run}: storage {storage!r} is unknown; expected "
+                                f"{' or '.join(STORAGES)}")
+        self.run_dir = Path(bags_dir) / _component(run, "run")
+        self.storage = storage
+        self.flush_interval_s = flush_interval_s
+        self._episodes: list[Path] = []
+        try:
+            self.run_dir.mkdir(parents=True, exist_ok=True)
+            self.config_path = None if config is None else self._write_config(config)
+        except OSError as err:
+            raise RecorderError(f"{self.run_dir}: cannot write the run directory: {err}") from err
+        except yaml.YAMLError as err:
+            raise RecorderError(f"{self.run_dir}: config is not YAML-able: {err}") from err
+
+    @property
+    def episodes(self) -> list[Path]:
+        """The bag directories this recorder began, in order."""
+        return list(self._episodes)
+
+    def begin(self, episode: str | None = None) -> EpisodeBag:
+        """Open the next episode's bag: ``episode`` if given (``RecorderError`` if it exists),
+        else ``episode_NNNN`` numbered after the highest one on disk."""
+        if episode is None:
+            episode = f"{EPISODE_PREFIX}{self._next_index():04d}"
+        path = self.run_dir / _component(episode, "episode")
+        if path.exists():
+            raise RecorderError(f"{path}: the episode bag exists already; not overwriting it")
+        bag = EpisodeBag(path, storage=self.storage, flush_interval_s=self.flush_interval_s)
+        self._episodes.append(path)
+        return bag
+
+    def _next_index(self) -> int:
+        pattern = re.compile(rf"{EPISODE_PREFIX}(\d+)")
+        taken = [int(m.group(1)) for p in self.run_dir.iterdir()
+                 if (m := pattern.fullmatch(p.name))]
+        return max(taken, default=-1) + 1
+
+    def _write_config(self, config: Mapping[str, Any]) -> Path:
+        """Write ``config`` to the first of config.yaml, config-2.yaml, ... that is free or
+        already holds the same text; return that file."""
+        text = yaml.safe_dump(jsonable(config), sort_keys=False)
+        n = 1
+        while True:
+            path = self.run_dir / (f"{CONFIG_NAME}.yaml" if n == 1 else f"{CONFIG_NAME}-{n}.yaml")
+            try:
+                with path.open("x") as f:
+                    f.write(text)
+                log.info("run config written to %s", path)
+                return path
+            except FileExistsError:
+                if path.read_text() == text:
+                    return path
+            n += 1
+
+
+def _component(name: str, what: str) -> str:
+    """``name`` if it is one plain path component, else ``RecorderError``."""
+    if not name or name in (".", "..") or "/" in name or "\\" in name:
+        raise RecorderError(f"{what} name {name!r} must be one directory name (no '/')")
+    return name
