@@ -1,0 +1,64 @@
+"""ROS 2 messages → the plain values of a ``SensorFrame``.
+
+Duck-typed on the message fields, so it needs no rclpy import: the ROS transport decodes what
+it receives, and the in-process transport, when it records, decodes the messages it writes.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+import numpy as np
+from pic4rl_sim.geometry import Pose2D, Twist2D
+
+from .errors import TransportError
+from .frame import ScanData, yaw_from_quaternion
+
+_MM = 1e-3
+
+
+def stamp_ns(header: Any) -> int:
+    """A ``builtin_interfaces/Time`` (or a header holding one) as int nanoseconds."""
+    stamp = getattr(header, "stamp", header)
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def planar_pose(pose: Any) -> Pose2D:
+    """A ``geometry_msgs/Pose`` as (x, y, yaw)."""
+    q = pose.orientation
+    return Pose2D(float(pose.position.x), float(pose.position.y),
+                  yaw_from_quaternion(q.x, q.y, q.z, q.w))
+
+
+def odometry(msg: Any) -> tuple[Pose2D, Twist2D]:
+    """Pose and body twist of a ``nav_msgs/Odometry``."""
+    lin, ang = msg.twist.twist.linear, msg.twist.twist.angular
+    return planar_pose(msg.pose.pose), Twist2D(float(lin.x), float(lin.y), float(ang.z))
+
+
+def scan(msg: Any, mount: Pose2D) -> ScanData:
+    """A ``sensor_msgs/LaserScan`` (float32 ranges kept as they are)."""
+    return ScanData(np.array(msg.ranges, dtype=np.float32), float(msg.angle_min),
+                    float(msg.angle_increment), float(msg.range_min), float(msg.range_max),
+                    mount)
+
+
+def depth_image(msg: Any, *, topic: str = "depth") -> np.ndarray:
+    """A depth ``sensor_msgs/Image`` as metres (float32, height × width): ``32FC1`` in m, or
+    ``16UC1`` in mm as real cameras publish (0 = no return → +inf, REP 118)."""
+    h, w = int(msg.height), int(msg.width)
+    order = ">" if msg.is_bigendian else "<"
+    data = bytes(msg.data)
+    if msg.encoding == "32FC1":
+        pixels = np.frombuffer(data, dtype=f"{order}f4", count=h * w)
+        image = pixels.reshape(h, w).astype(np.float32, copy=True)
+    elif msg.encoding == "16UC1":
+        raw = np.frombuffer(data, dtype=f"{order}u2", count=h * w).reshape(h, w)
+        image = np.where(raw == 0, np.inf, raw * _MM).astype(np.float32)
+    else:
+        raise TransportError(f"{topic}: depth encoding {msg.encoding!r} is not supported; "
+                             "expected 32FC1 (m) or 16UC1 (mm)")
+    if image.dtype.byteorder not in ("=", "|") and sys.byteorder != "little":
+        image = image.astype(np.float32)
+    return image

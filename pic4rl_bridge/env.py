@@ -1,0 +1,271 @@
+"""``NavEnv``: the Gymnasium navigation env, over ROS 2 or in process, recording episodes.
+
+One config file (``sim:`` and ``nav_env:`` sections) says which task, robot, world and transport;
+the task turns decoded sensor frames into observations, rewards and outcomes; the transport
+moves the robot; the recorder, when on, writes each episode to its own bag under
+``<bags_dir>/<run>/<episode>/``. ``terminated`` is goal or collision, ``truncated`` the time
+limit (``episode_max_steps``); ``info["reward_terms"]`` holds each scaled reward term.
+
+``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (start,
+goal, sensor noise) and, with the same actions, the same observations and rewards through
+either transport.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from pic4rl_sim.geometry import Pose2D
+
+from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
+from .episodes import EpisodeSchedule, load_goals_and_poses
+from .errors import BridgeError, ConfigError, EpisodeRejected
+from .frame import SensorFrame
+from .recorder import EpisodeBag, RunRecorder
+from .robot import Scenario
+from .tasks import make_task
+from .tasks.base import EpisodeContext, Judgement, Outcome
+from .transport import EpisodeRequest, Transport
+
+log = logging.getLogger(__name__)
+
+_FRAME_SENSORS = frozenset({"scan", "depth", "person"})
+
+
+def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
+               overrides: Mapping[str, Any], sim: Mapping[str, Any],
+               sim_defaults: Mapping[str, Any]) -> EnvConfig:
+    if config is None:
+        base = EnvConfig()
+    elif isinstance(config, EnvConfig):
+        base = config
+    elif isinstance(config, (str, Path)):
+        base = load_env_config(config)
+    else:
+        params = dict(config)
+        sim_params = params.pop("sim", {})
+        base = env_config_from_params(params, sim_params=sim_params)
+    merged = EnvConfig.replace(base, **overrides) if overrides else base
+    if sim or sim_defaults:
+        merged = dataclasses.replace(merged,
+                                     sim_params={**sim_defaults, **merged.sim_params, **sim})
+    return merged
+
+
+class NavEnv(gym.Env[Any, np.ndarray]):
+    """A robot navigation task as a Gymnasium env.
+
+    ``config``: a config file path, an ``EnvConfig``, or a mapping of dotted env parameters
+    (the sim's under ``"sim"``). ``task``, ``sensor``, ``transport`` and then ``overrides``
+    (dotted: ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are
+    ``sim_defaults`` (the registered env's), then the config's, then ``sim``. ``node``: an
+    rclpy node for the ROS transport (default: its own, in its own context).
+    """
+
+    metadata = {"render_modes": []}  # noqa: RUF012 - Gymnasium's convention
+
+    def __init__(self, config: EnvConfig | str | Path | Mapping[str, Any] | None = None, *,
+                 task: str | None = None, sensor: str | None = None,
+                 transport: str | None = None, sim: Mapping[str, Any] | None = None,
+                 sim_defaults: Mapping[str, Any] | None = None,
+                 overrides: Mapping[str, Any] | None = None, render_mode: str | None = None,
+                 node: Any = None) -> None:
+        if render_mode is not None:
+            raise ConfigError(f"render_mode: {render_mode!r} is invalid; this env renders "
+                              "nothing (watch it in rviz2 or Foxglove through ROS 2)")
+        given = {k: v for k, v in (("task", task), ("sensor", sensor), ("transport", transport))
+                 if v is not None}
+        self.config = _as_config(config, {**given, **(overrides or {})}, sim or {},
+                                 sim_defaults or {})
+        self.scenario = Scenario(self.config)
+        world = self.scenario.world if self.config.task == "vineyard" else None
+        self.task = make_task(self.config, self.scenario.robot, world)
+        self.observation_space = self.task.observation_space
+        self.action_space = self.task.action_space
+        pairs = (load_goals_and_poses(self.config.episodes.file)
+                 if self.config.episodes.file else None)
+        self._pairs = pairs
+        self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs)
+        sensors = self.task.required & _FRAME_SENSORS
+        if self.scenario.spec.lidar is not None:
+            sensors |= {"scan"}
+        self.transport = self._make_transport(frozenset(sensors), node)
+        self.recorder: RunRecorder | None = None
+        if self.config.record.enabled:
+            rec = self.config.record
+            run = rec.run or f"{self.config.task}_{time.strftime('%Y%m%d-%H%M%S')}"
+            self.recorder = RunRecorder(Path(rec.bags_dir), run, storage=rec.storage,
+                                        flush_interval_s=rec.flush_interval_s,
+                                        config=self._run_config())
+        self._episode = 0
+        self._bag: EpisodeBag | None = None
+        self._facts: dict[str, Any] = {}
+        self._frame: SensorFrame | None = None
+        self._context: EpisodeContext | None = None
+        self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
+        self._streak = 0
+        self._steps = 0
+        self._done = True
+
+    def _make_transport(self, sensors: frozenset[str], node: Any) -> Transport:
+        if self.config.transport == TransportName.ROS.value:
+            from .ros_transport import RosTransport
+
+            return RosTransport(self.config, self.scenario, sensors, node=node)
+        from .inprocess import InProcessTransport
+
+        return InProcessTransport(self.config, self.scenario, sensors)
+
+    def _run_config(self) -> dict[str, Any]:
+        """The run's config as a params file: loads back with ``load_env_config``."""
+        sim = dict(self.config.sim_params)
+        return {"sim": {"ros__parameters": sim},
+                "nav_env": {"ros__parameters": self.config.to_params()}}
+
+    # -- Gymnasium API ------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        """Start the next episode. ``options``: ``start`` ([x, y, yaw]), ``goal`` ([x, y]),
+        ``seed`` (the simulator's episode seed) override the schedule for this episode."""
+        super().reset(seed=seed)
+        if seed is not None:  # a seeded reset restarts the sequence of episodes
+            self._episode = 0
+            self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs)
+        self._end_bag(None)
+        request = self._schedule.next_request(self._episode, self.np_random)
+        pinned = bool(options) and ("start" in options or "goal" in options)
+        request = self._apply_options(request, options or {})
+        if self.recorder is not None:
+            self._bag = self.recorder.begin()
+            self.transport.tap = self._bag.write
+        frame = self._start(request, redraw=not pinned)
+        self._frame, self._context = frame, self.task.begin(frame)
+        self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
+        self._streak = self._steps = 0
+        self._done = False
+        self._facts = self._episode_facts(frame, self._context, self._seed_used)
+        if self._bag is not None:
+            self._bag.facts(self._facts, frame.stamp_ns)
+        self._episode += 1
+        obs = self.task.observe(frame, self._context, self._last_action)
+        info = {"episode": self._episode - 1, "seed": self._seed_used,
+                "start": list(self._context.start), "goal": self._context.goal}
+        return obs, info
+
+    def _apply_options(self, request: EpisodeRequest, options: Mapping[str, Any]) -> EpisodeRequest:
+        unknown = set(options) - {"start", "goal", "seed"}
+        if unknown:
+            raise ConfigError(f"reset options: unknown key {sorted(unknown)[0]!r}; expected "
+                              "start, goal, seed")
+        start, goal = options.get("start", request.start), options.get("goal", request.goal)
+        if start is not None and not isinstance(start, Pose2D):
+            ok = len(start) == 3 and all(math.isfinite(float(v)) for v in start)
+            if not ok:
+                raise ConfigError(f"reset options: start: {start!r} is invalid; expected "
+                                  "[x, y, yaw] (m, m, rad)")
+            start = Pose2D(*(float(v) for v in start))
+        if goal is not None:
+            if not (len(goal) == 2 and all(math.isfinite(float(v)) for v in goal)):
+                raise ConfigError(f"reset options: goal: {goal!r} is invalid; expected [x, y] (m)")
+            goal = (float(goal[0]), float(goal[1]))
+        seed = int(options.get("seed", request.seed))
+        return EpisodeRequest(seed, start, goal)
+
+    def _start(self, first: EpisodeRequest, *, redraw: bool) -> SensorFrame:
+        """The first frame of an episode, redrawing rejected requests (a start or goal given
+        to ``reset(options=...)`` is not redrawn)."""
+        reasons = []
+        requests = self._schedule.attempts(first, self.np_random) if redraw else [first]
+        for request in requests:
+            try:
+                frame = self.transport.reset(request)
+            except EpisodeRejected as err:
+                reasons.append(str(err))
+                log.info("episode %d: %s; drawing another", self._episode, err)
+                continue
+            self._seed_used = request.seed
+            return frame
+        raise EpisodeRejected(f"episode {self._episode}: {len(reasons)} start/goal pairs "
+                              f"refused; the last: {reasons[-1]}")
+
+    def step(self, action: np.ndarray) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        if self._done or self._frame is None or self._context is None:
+            raise BridgeError("step() after the episode ended: call reset() first")
+        action = np.clip(np.asarray(action, dtype=np.float32).reshape(self.action_space.shape),
+                         -1.0, 1.0)
+        frame = self.transport.step(self.task.command(action))
+        judgement = self.task.judge(self._frame, frame, self._context, self._streak)
+        self._frame, self._streak, self._last_action = frame, judgement.collision_streak, action
+        self._steps += 1
+        terminated = judgement.outcome is not None
+        truncated = not terminated and self._steps >= self.config.episode_max_steps
+        outcome = judgement.outcome or (Outcome.TIMEOUT if truncated else None)
+        obs = self.task.observe(frame, self._context, action)
+        info = self._info(judgement, frame, outcome)
+        if outcome is not None:
+            self._done = True
+            self._end_bag(outcome)
+        return obs, judgement.reward, terminated, truncated, info
+
+    def _info(self, judgement: Judgement, frame: SensorFrame,
+              outcome: Outcome | None) -> dict[str, Any]:
+        info: dict[str, Any] = {
+            "reward_terms": dict(judgement.terms), "collision": judgement.collision,
+            "warning": judgement.warning, "min_obstacle_m": judgement.min_obstacle_m,
+            "step": self._steps,
+        }
+        if outcome is not None:
+            info["outcome"] = outcome.value
+            info["is_success"] = outcome is Outcome.GOAL  # SB3 logs the success rate from it
+        return info
+
+    def close(self) -> None:
+        self._end_bag(None)
+        transport = getattr(self, "transport", None)
+        if transport is not None:
+            transport.close()
+
+    # -- recording ----------------------------------------------------------------------------
+
+    def _episode_facts(self, frame: SensorFrame, context: EpisodeContext,
+                       seed: int) -> dict[str, Any]:
+        robot, c = self.scenario.robot, self.config
+        fp = robot.footprint
+        footprint = ({"radius_m": fp.radius_m} if fp.radius_m is not None
+                     else {"length_m": fp.length_m, "width_m": fp.width_m})
+        facts: dict[str, Any] = {
+            "agent": c.agent, "task": c.task if c.task != "goToPose" else f"goToPose/{c.sensor}",
+            "world": self.transport.world_name, "robot": robot.name,
+            "run": self.recorder.run_dir.name if self.recorder is not None else "",
+            "episode": self._bag.path.name if self._bag is not None else str(self._episode),
+            "seed": seed, "footprint": footprint, "start": list(context.start),
+            "goal_tolerance_m": c.goal_tolerance_m,
+            "collision_tolerance_m": c.collision_tolerance_m,
+            "safety_margin_m": c.warning_tolerance_m, "max_speed_mps": robot.max_linear_m_s,
+        }
+        if context.goal is not None:
+            facts["goal"] = list(context.goal)
+        facts.update(self.task.facts(context))
+        return facts
+
+    def _end_bag(self, outcome: Outcome | None) -> None:
+        """Close the episode's bag: with its outcome, or, cut short, without one."""
+        bag, self._bag = self._bag, None
+        if bag is None:
+            return
+        self.transport.flush()
+        self.transport.tap = None
+        if outcome is None:
+            bag.abort()
+        else:
+            stamp = self._frame.stamp_ns if self._frame is not None else 0
+            bag.close(outcome.value, stamp, {**self._facts, "outcome": outcome.value})

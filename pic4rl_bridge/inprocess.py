@@ -1,0 +1,163 @@
+"""The in-process transport: the same episodes as through ROS 2, over ``pic4rl_sim``'s engine
+in this process (no DDS), for speed.
+
+It mirrors the sim node step for step: a reset advances sim time one control period and reads
+every sensor once; a step tracks the command for one control period, then reads every sensor
+once. Values pass through the same float32 buffers and quaternions as the node's messages, so
+the frames equal the ROS transport's bit for bit. When recording, it builds the node's own
+messages (``pic4rl_sim.messages``), decodes the frame from them and hands them to the tap
+serialized, so its bags equal the node's too.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from pic4rl_sim.engine import Engine
+from pic4rl_sim.errors import SimError
+from pic4rl_sim.geometry import Pose2D, Twist2D
+
+from . import decode
+from .config import EnvConfig
+from .errors import ConfigError, EpisodeRejected
+from .frame import ScanData, SensorFrame, as_published
+from .robot import Scenario
+from .transport import EpisodeRequest, RawMessage, Tap, Transport
+
+_POSE_SOURCES = ("odom", "ground_truth")
+
+
+def _f32(value: float) -> float:
+    """``value`` as a float32 message field holds it."""
+    return float(np.float32(value))
+
+
+class InProcessTransport(Transport):
+    """An ``Engine`` built from the config's sim section; ``sensors`` lists the frame's
+    optional fields to fill ("scan", "depth", "person")."""
+
+    def __init__(self, config: EnvConfig, scenario: Scenario, sensors: frozenset[str]) -> None:
+        if scenario.sim is None or scenario.world is None:
+            raise ConfigError("transport: 'inprocess' needs the sim's parameters (a 'sim:' "
+                              "section in the config file)")
+        pose = config.topics.pose
+        if pose not in _POSE_SOURCES:
+            raise ConfigError(f"topics.pose: {pose!r} is invalid for the in-process transport; "
+                              f"expected one of {', '.join(_POSE_SOURCES)}")
+        sim = scenario.sim
+        self.engine = Engine(sim.robot, scenario.world, sim.engine, seed=sim.episode.seed)
+        self._exact_pose = pose == "ground_truth"
+        self._sensors = sensors
+        self._lidar_mount = scenario.robot.lidar_mount or Pose2D(0.0, 0.0, 0.0)
+        self._world_name = scenario.world_name
+        self._namespace = "/" + config.ros.namespace.strip("/") if config.ros.namespace else ""
+        self._record_topics = config.record.topics
+        self._control_dt_ns = round(sim.engine.control_dt_s * 1e9)
+        self._stamp_ns = 0
+        self._writer: _MessageWriter | None = None
+
+    @property
+    def world_name(self) -> str:
+        return self._world_name
+
+    def reset(self, request: EpisodeRequest) -> SensorFrame:
+        try:
+            self.engine.reset(seed=request.seed, start=request.start, goal=request.goal)
+        except SimError as err:
+            raise EpisodeRejected(str(err)) from err
+        self._stamp_ns += self._control_dt_ns
+        if self.tap is not None:
+            self._messages().goal(self.engine.goal, self._stamp_ns, self.tap)
+        return self._frame()
+
+    def step(self, command: Twist2D) -> SensorFrame:
+        if self.tap is not None:
+            self._messages().command(command, self._stamp_ns, self.tap)
+        self.engine.step(command)
+        self._stamp_ns += self._control_dt_ns
+        return self._frame()
+
+    def close(self) -> None:
+        self.tap = None
+
+    def _messages(self) -> _MessageWriter:
+        if self._writer is None:
+            self._writer = _MessageWriter(self.engine, self._namespace, self._record_topics)
+        return self._writer
+
+    def _frame(self) -> SensorFrame:
+        if self.tap is not None:
+            return self._messages().state(self._stamp_ns, self._exact_pose, self._sensors,
+                                          self._lidar_mount, self.tap)
+        engine = self.engine
+        pose, twist = ((engine.robot_pose(), engine.robot_twist()) if self._exact_pose
+                       else engine.wheel_odometry())
+        scan = depth = person = None
+        if "scan" in self._sensors and engine.lidar is not None:
+            lidar = engine.lidar
+            scan = ScanData(engine.scan().astype(np.float32), _f32(lidar.angle_min_rad),
+                            _f32(lidar.angle_increment_rad), _f32(lidar.range_min_m),
+                            _f32(lidar.range_max_m), self._lidar_mount)
+        if "depth" in self._sensors and engine.depth is not None:
+            depth = engine.depth_image().astype(np.float32)
+        if "person" in self._sensors:
+            seen = engine.person_pose()
+            person = as_published(seen[0]) if seen is not None else None
+        return SensorFrame(self._stamp_ns, as_published(pose), twist, engine.goal, scan, depth,
+                           person)
+
+
+class _MessageWriter:
+    """The sim node's messages for one engine, serialized to a tap (needs rclpy's message
+    packages, imported here only)."""
+
+    def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
+        from geometry_msgs.msg import Twist
+        from pic4rl_sim.messages import StateMessages, goal_pose
+        from rclpy.serialization import serialize_message
+
+        self._engine = engine
+        self._serialize = serialize_message
+        self._twist_type = Twist
+        self._goal_pose = goal_pose
+        self.state_messages = StateMessages(engine)
+        m = self.state_messages
+        wanted = {"clock": m.clock, "ground_truth": m.ground_truth, "odom": m.odom,
+                  "imu/data": m.imu, "person/pose": m.person,
+                  "camera/depth/camera_info": m.camera_info,
+                  "camera/depth/image_raw": m.depth_image, "scan": m.scan}
+        self._names = {t: f"{namespace}/{t}" for t in (*wanted, "goal_pose", "cmd_vel")}
+        self._outputs = [(t, msg) for t, msg in wanted.items() if msg is not None and t in topics]
+        self._topics = topics
+
+    def _emit(self, topic: str, msg: Any, stamp_ns: int, tap: Tap) -> None:
+        if topic in self._topics:
+            msgtype = type(msg).__module__.split(".")[0] + "/msg/" + type(msg).__name__
+            tap(RawMessage(self._names[topic], msgtype, self._serialize(msg), stamp_ns))
+
+    def goal(self, goal: tuple[float, float], stamp_ns: int, tap: Tap) -> None:
+        self._emit("goal_pose", self._goal_pose(goal, stamp_ns), stamp_ns, tap)
+
+    def command(self, command: Twist2D, stamp_ns: int, tap: Tap) -> None:
+        msg = self._twist_type()
+        msg.linear.x, msg.linear.y, msg.angular.z = command.vx, command.vy, command.wz
+        self._emit("cmd_vel", msg, stamp_ns, tap)
+
+    def state(self, stamp_ns: int, exact_pose: bool, sensors: frozenset[str], mount: Pose2D,
+              tap: Tap) -> SensorFrame:
+        """Fill the node's messages for ``stamp_ns``, hand them to ``tap`` in the node's
+        publishing order and decode the frame from them."""
+        engine, m = self._engine, self.state_messages
+        m.fill(engine, stamp_ns)
+        for topic, msg in self._outputs:
+            self._emit(topic, msg, stamp_ns, tap)
+        pose, twist = decode.odometry(m.ground_truth if exact_pose else m.odom)
+        scan = depth = person = None
+        if "scan" in sensors and m.scan is not None:
+            scan = decode.scan(m.scan, mount)
+        if "depth" in sensors and m.depth_image is not None:
+            depth = decode.depth_image(m.depth_image)
+        if "person" in sensors and m.person is not None:
+            person = decode.planar_pose(m.person.pose)
+        return SensorFrame(stamp_ns, pose, twist, engine.goal, scan, depth, person)

@@ -1,0 +1,357 @@
+"""The ROS 2 transport: drives ``pic4rl_sim``'s node, any ROS 2 simulator or a real robot that
+speaks standard topics.
+
+Subscriptions are raw: each message arrives as the CDR bytes on the wire, goes to the tap
+(the recorder) as it is, and is decoded for the frame. Episodes:
+
+- with a simulator node (``ros.sim_node``): ``seed``, ``start_pose`` and ``goal`` are set
+  through its parameter service (a refused value rejects the episode, with the node's reason),
+  then ``ros.reset_service`` is called; the new episode's first stamp is its new ``goal_pose``
+  stamp, and the frame is the first full sensor set at or after it (the sim node's contract);
+- without a reset service (a real robot): a reset stops the robot and waits for the operator's
+  next goal on ``topics.goal`` (``ros.operator_timeout_s``, 0 = forever).
+
+Steps: ``lockstep`` publishes the command and waits for the sensor set it causes (the sync
+topic, scan or depth image, with a newer stamp, and every other needed topic at that stamp);
+``rate`` publishes, waits one control period of wall time, and takes the latest messages.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from typing import Any
+
+import rclpy
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParameters
+from rclpy.context import Context
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+from rclpy.serialization import deserialize_message, serialize_message
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
+from std_srvs.srv import Empty
+from visualization_msgs.msg import MarkerArray
+
+from pic4rl_sim.geometry import Pose2D, Twist2D
+
+from . import decode
+from .config import EnvConfig, StepMode
+from .errors import ConfigError, EpisodeRejected, TransportError
+from .frame import SensorFrame
+from .robot import Scenario
+from .transport import EpisodeRequest, RawMessage, Transport
+
+log = logging.getLogger(__name__)
+
+_DEPTH = 100  # history kept per subscription: the recorder must see every message
+_RELIABLE = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
+_BEST_EFFORT = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT)
+_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                      history=HistoryPolicy.KEEP_LAST)
+#: Message types of the topics the sim node publishes, by relative name (recording).
+_KNOWN_TYPES: dict[str, type] = {
+    "clock": Clock, "ground_truth": Odometry, "odom": Odometry, "scan": LaserScan,
+    "imu/data": Imu, "camera/depth/image_raw": Image, "camera/depth/camera_info": CameraInfo,
+    "person/pose": PoseStamped, "goal_pose": PoseStamped, "world/markers": MarkerArray,
+}
+_SENSOR_TYPES = (LaserScan, Image, CameraInfo, Imu)
+
+
+def _type_name(kind: type) -> str:
+    return f"{kind.__module__.split('.')[0]}/msg/{kind.__name__}"
+
+
+def _stamp_of(msg: Any) -> int | None:
+    if isinstance(msg, Clock):
+        return decode.stamp_ns(msg.clock)
+    header = getattr(msg, "header", None)
+    return decode.stamp_ns(header) if header is not None else None
+
+
+class _Topic:
+    """One raw subscription: the latest decoded message and its stamp."""
+
+    def __init__(self, name: str, kind: type) -> None:
+        self.name, self.kind = name, kind
+        self.msg: Any = None
+        self.stamp_ns = -1
+        self.count = 0
+
+
+class RosTransport(Transport):
+    """The env's ROS 2 side: one node (its own context unless ``node`` is given) spun by an
+    events executor only while the env waits."""
+
+    def __init__(self, config: EnvConfig, scenario: Scenario, sensors: frozenset[str], *,
+                 node: Node | None = None) -> None:
+        self._config = config
+        self._ros = config.ros
+        self._mode = StepMode(config.ros.step_mode)
+        self._timeout_s = config.ros.timeout_s
+        self._dt_s = scenario.robot.control_dt_s
+        self._lidar_mount = scenario.robot.lidar_mount or Pose2D(0.0, 0.0, 0.0)
+        self._world_name = scenario.world_name
+        self._own_context: Context | None = None
+        if node is None:
+            self._own_context = Context()
+            domain = config.ros.domain_id if config.ros.domain_id >= 0 else None
+            rclpy.init(context=self._own_context, domain_id=domain)
+            node = Node(config.ros.node_name, namespace=config.ros.namespace or None,
+                        context=self._own_context)
+        self.node = node
+        self._executor = EventsExecutor(context=node.context)
+        self._executor.add_node(node)
+        self._topics: dict[str, _Topic] = {}
+        self._roles: dict[str, str] = {}  # frame field -> topic key
+        self._pending: list[RawMessage] = []  # messages held while a reset waits for its t0
+        self._t0_ns: int | None = None
+        self._frame_stamp_ns = -1
+        self._closed = False
+        self._subscribe(config, sensors)
+        self._cmd_stamped = config.ros.cmd_vel_type == "TwistStamped"
+        kind = TwistStamped if self._cmd_stamped else Twist
+        self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel, _RELIABLE)
+        self._cmd_name = self._cmd_pub.topic_name
+        self._cmd_type = _type_name(kind)
+        self._set_params = self._reset_client = None
+        if config.ros.sim_node:
+            self._set_params = node.create_client(
+                SetParameters, f"{config.ros.sim_node}/set_parameters")
+        if config.ros.reset_service:
+            self._reset_client = node.create_client(Empty, config.ros.reset_service)
+        self._last_goal_ns = -1
+
+    # -- wiring ---------------------------------------------------------------------------
+
+    def _subscribe(self, config: EnvConfig, sensors: frozenset[str]) -> None:
+        t = config.topics
+        sensor_qos = _BEST_EFFORT if config.ros.sensor_qos == "best_effort" else _RELIABLE
+        wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (Odometry, _RELIABLE),
+                                                      t.goal: (PoseStamped, _LATCHED)}
+        self._roles = {"pose": t.pose, "goal": t.goal}
+        for role, topic, kind in (("scan", t.scan, LaserScan), ("depth", t.depth, Image),
+                                  ("person", t.person, PoseStamped)):
+            if role in sensors:
+                wanted[topic] = (kind, sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
+                self._roles[role] = topic
+        if config.record.enabled:
+            for topic in config.record.topics:
+                if topic in wanted or topic == t.cmd_vel:
+                    continue
+                kind = _KNOWN_TYPES.get(topic) or _KNOWN_TYPES.get(topic.strip("/"))
+                if kind is None:
+                    raise ConfigError(f"record.topics: {topic!r} has no known message type; "
+                                      f"expected one of {', '.join(_KNOWN_TYPES)}")
+                qos = (_LATCHED if kind in (PoseStamped,) and topic.endswith("goal_pose")
+                       else sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
+                wanted[topic] = (kind, qos)
+        for topic, (kind, qos) in wanted.items():
+            entry = _Topic(topic, kind)
+            sub = self.node.create_subscription(kind, topic, self._callback(entry), qos,
+                                                raw=True)
+            entry.name = sub.topic_name
+            self._topics[topic] = entry
+
+    def _callback(self, entry: _Topic) -> Callable[[bytes], None]:
+        type_name = _type_name(entry.kind)
+
+        def on_message(data: bytes) -> None:
+            msg = deserialize_message(data, entry.kind)
+            stamp = _stamp_of(msg)
+            stamp = time.time_ns() if stamp is None else stamp
+            entry.msg, entry.stamp_ns = msg, stamp
+            entry.count += 1
+            if self.tap is None:
+                return
+            raw = RawMessage(entry.name, type_name, bytes(data), self._bag_time(stamp))
+            if self._t0_ns is None:
+                self._pending.append(raw)
+            elif stamp >= self._t0_ns:
+                self.tap(raw)
+
+        return on_message
+
+    def _bag_time(self, stamp_ns: int) -> int:
+        """Sim time in lockstep (what ``rosbag2 record --use-sim-time`` writes), else the
+        receive time."""
+        return stamp_ns if self._mode is StepMode.LOCKSTEP else time.time_ns()
+
+    # -- waiting --------------------------------------------------------------------------
+
+    def _spin_until(self, done: Callable[[], bool], timeout_s: float | None, what: str) -> None:
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        while not done():
+            if self._closed:
+                raise TransportError(f"{what}: the transport was closed")
+            remaining = 1.0 if deadline is None else deadline - time.monotonic()
+            if remaining <= 0:
+                raise TransportError(f"{what}: nothing within {timeout_s:g} s")
+            self._executor.spin_once(timeout_sec=min(remaining, 1.0))
+
+    def _call(self, client: Any, request: Any, what: str) -> Any:
+        if not client.service_is_ready():
+            self._spin_until(client.service_is_ready, self._timeout_s,
+                             f"service {client.srv_name} ({what}) not available")
+        future = client.call_async(request)
+        self._spin_until(future.done, self._timeout_s, f"service {client.srv_name} ({what})")
+        return future.result()
+
+    # -- episodes -------------------------------------------------------------------------
+
+    @property
+    def world_name(self) -> str:
+        return self._world_name
+
+    def reset(self, request: EpisodeRequest) -> SensorFrame:
+        self._t0_ns, self._pending = None, []
+        goal = self._topics[self._roles["goal"]]
+        if self._set_params is not None or self._reset_client is not None:
+            self._wait_for_graph(goal)
+            if self._set_params is not None:
+                self._set_episode(request)
+            before = goal.stamp_ns
+            if self._reset_client is not None:
+                self._call(self._reset_client, Empty.Request(), "reset")
+            self._spin_until(lambda: goal.stamp_ns > before, self._timeout_s,
+                             f"topic {goal.name}: the new episode's goal")
+        else:
+            self.step_command(Twist2D())
+            before = goal.stamp_ns
+            log.warning("waiting for the operator's next goal on %s", goal.name)
+            self._spin_until(lambda: goal.stamp_ns > before,
+                             self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
+        t0 = goal.stamp_ns if self._mode is StepMode.LOCKSTEP else None
+        frame = self._next_frame(t0 if t0 is not None else -1, inclusive=True)
+        self._t0_ns = t0 if t0 is not None else frame.stamp_ns
+        held, self._pending = self._pending, []
+        if self.tap is not None:
+            for raw in held:
+                if raw.stamp_ns >= self._t0_ns or raw.topic == goal.name:
+                    self.tap(raw)
+        return frame
+
+    def _wait_for_graph(self, goal: _Topic) -> None:
+        """Before the first reset: the sim's latched goal seen and our cmd_vel matched."""
+        if goal.stamp_ns < 0 and self._set_params is not None:
+            self._spin_until(lambda: goal.stamp_ns >= 0, self._timeout_s,
+                             f"topic {goal.name}: the simulator's latched goal")
+        if self._cmd_pub.get_subscription_count() == 0:
+            self._spin_until(lambda: self._cmd_pub.get_subscription_count() > 0,
+                             self._timeout_s, f"topic {self._cmd_name}: a subscriber")
+
+    def _set_episode(self, request: EpisodeRequest) -> None:
+        start = [] if request.start is None else [float(v) for v in request.start]
+        goal = [] if request.goal is None else [float(v) for v in request.goal]
+        params = [
+            ParameterMsg(name="seed", value=ParameterValue(
+                type=ParameterType.PARAMETER_INTEGER, integer_value=int(request.seed))),
+            ParameterMsg(name="start_pose", value=ParameterValue(
+                type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=start)),
+            ParameterMsg(name="goal", value=ParameterValue(
+                type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=goal)),
+        ]
+        result = self._call(self._set_params, SetParameters.Request(parameters=params),
+                            "episode set-up")
+        for p, r in zip(params, result.results):
+            if not r.successful:
+                raise EpisodeRejected(f"{self._ros.sim_node}: {p.name}: {r.reason}")
+
+    # -- stepping -------------------------------------------------------------------------
+
+    def step_command(self, command: Twist2D) -> None:
+        """Publish ``command`` (and hand it to the tap, stamped with the last frame's time)."""
+        twist = Twist()
+        twist.linear.x, twist.linear.y, twist.angular.z = command.vx, command.vy, command.wz
+        msg: Any = twist
+        if self._cmd_stamped:
+            msg = TwistStamped(twist=twist)
+            msg.header.stamp = Time(sec=max(self._frame_stamp_ns, 0) // 1_000_000_000,
+                                    nanosec=max(self._frame_stamp_ns, 0) % 1_000_000_000)
+        self._cmd_pub.publish(msg)
+        if self.tap is not None and self._t0_ns is not None:
+            self.tap(RawMessage(self._cmd_name, self._cmd_type, serialize_message(msg),
+                                self._bag_time(max(self._frame_stamp_ns, 0))))
+
+    def step(self, command: Twist2D) -> SensorFrame:
+        self.step_command(command)
+        if self._mode is StepMode.RATE:
+            deadline = time.monotonic() + self._dt_s
+            self._spin_until(lambda: time.monotonic() >= deadline, None, "control period")
+        return self._next_frame(self._frame_stamp_ns, inclusive=False)
+
+    def _next_frame(self, after_ns: int, *, inclusive: bool) -> SensorFrame:
+        """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
+        it when ``inclusive``); in rate mode, the latest messages."""
+        needed = [self._topics[t] for role, t in self._roles.items() if role != "goal"]
+        sync = self._topics[self._roles.get("scan") or self._roles.get("depth")
+                            or self._roles["pose"]]
+        if self._mode is StepMode.LOCKSTEP:
+            def ready() -> bool:
+                s = sync.stamp_ns
+                fresh = s >= after_ns if inclusive else s > after_ns
+                return fresh and all(t.stamp_ns >= s for t in needed)
+            what = f"topic {sync.name}: a message stamped after {after_ns} ns"
+        else:
+            def ready() -> bool:
+                return all(t.msg is not None for t in needed)
+            what = f"topics {', '.join(t.name for t in needed)}: a first message"
+        self._spin_until(ready, self._timeout_s, what)
+        return self._frame(sync.stamp_ns)
+
+    def _frame(self, stamp_ns: int) -> SensorFrame:
+        topics, roles = self._topics, self._roles
+        pose, twist = decode.odometry(topics[roles["pose"]].msg)
+        goal_msg = topics[roles["goal"]].msg
+        goal = None if goal_msg is None else (float(goal_msg.pose.position.x),
+                                              float(goal_msg.pose.position.y))
+        scan = depth = person = None
+        if "scan" in roles:
+            scan = decode.scan(topics[roles["scan"]].msg, self._lidar_mount)
+        if "depth" in roles:
+            depth = decode.depth_image(topics[roles["depth"]].msg, topic=roles["depth"])
+        if "person" in roles:
+            person = decode.planar_pose(topics[roles["person"]].msg.pose)
+        self._frame_stamp_ns = stamp_ns
+        return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person)
+
+    def flush(self) -> None:
+        """Lockstep: wait (briefly) until every recorded topic has reached the last frame's
+        stamp, so the bag holds the episode's last messages too."""
+        if self.tap is None or self._mode is not StepMode.LOCKSTEP:
+            return
+        goal = self._roles["goal"]
+        last = self._frame_stamp_ns
+        waiting = [t for key, t in self._topics.items() if key != goal and t.count > 0]
+        try:
+            self._spin_until(lambda: all(t.stamp_ns >= last for t in waiting), 1.0,
+                             "recorded topics: the last step's messages")
+        except TransportError as err:
+            log.warning("%s; the bag may miss them", err)
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self.tap = None
+        try:
+            if self.node.context.ok():
+                self._cmd_pub.publish(TwistStamped() if self._cmd_stamped else Twist())
+        finally:
+            self._closed = True
+            self._executor.shutdown()
+            if self._own_context is not None:
+                self.node.destroy_node()
+                rclpy.try_shutdown(context=self._own_context)

@@ -1,0 +1,100 @@
+"""What every task is: spaces, the action → command map, and pure functions of sensor frames.
+
+A task keeps no state between calls: the env passes the episode's context (from ``begin``),
+the previous and current frames and the collision streak, and gets back named reward terms
+(already scaled) and the outcome. So the same frames give the same rewards, whichever
+transport made them, and tasks are tested without a simulator.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from pic4rl_sim.geometry import Pose2D, Twist2D
+
+from ..config import EnvConfig
+from ..frame import SensorFrame
+from ..robot import RobotInfo
+
+
+class Outcome(str, Enum):
+    """How an episode ended (the bag contract's words)."""
+
+    GOAL = "goal"
+    COLLISION = "collision"
+    TIMEOUT = "timeout"
+
+
+@dataclass(frozen=True)
+class EpisodeContext:
+    """Facts of the episode fixed at its start: the start pose, the goal (if any) and, for
+    the vineyard, the row's centre line (n × 2, oriented from the start)."""
+
+    start: Pose2D
+    goal: tuple[float, float] | None = None
+    centerline: np.ndarray | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """One step judged: named reward terms (scaled), the outcome that ends the episode
+    (``GOAL`` or ``COLLISION``; ``None`` goes on), whether the footprint plus
+    ``collision_tolerance_m`` is violated now, the streak of such steps, whether an obstacle is
+    within ``warning_tolerance_m``, and the nearest obstacle to the footprint (m, ``inf`` if
+    none seen)."""
+
+    terms: Mapping[str, float]
+    outcome: Outcome | None
+    collision: bool
+    collision_streak: int
+    warning: bool
+    min_obstacle_m: float
+
+    @property
+    def reward(self) -> float:
+        return float(sum(self.terms.values()))
+
+
+class Task(ABC):
+    """A navigation task over a robot (and, in simulation, a known world)."""
+
+    name: ClassVar[str]
+    #: Which ``SensorFrame`` fields must be present: some of "scan", "depth", "person", "goal".
+    required: frozenset[str]
+    observation_space: gym.Space[Any]
+    #: Normalized to [-1, 1] per axis (SB3's advice); ``command`` maps it to velocities.
+    action_space: gym.spaces.Box
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
+        self.config = config
+        self.robot = robot
+
+    @abstractmethod
+    def command(self, action: np.ndarray) -> Twist2D:
+        """The velocity command (body frame) for a normalized ``action`` (clipped to [-1, 1])."""
+
+    @abstractmethod
+    def begin(self, frame: SensorFrame) -> EpisodeContext:
+        """The episode's context from its first frame."""
+
+    @abstractmethod
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> Any:
+        """The observation (an element of ``observation_space``)."""
+
+    @abstractmethod
+    def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
+              collision_streak: int) -> Judgement:
+        """Reward terms and outcome of the step from ``previous`` to ``frame``;
+        ``collision_streak`` counts the consecutive collision steps before this one."""
+
+    def facts(self, context: EpisodeContext) -> dict[str, Any]:
+        """Bag facts this task adds (e.g. ``row_centerline``)."""
+        return {}

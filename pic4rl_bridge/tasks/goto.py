@@ -1,0 +1,143 @@
+"""goToPose: reach a goal point without colliding (PIC4rl-gym's main task).
+
+The reward is the paper's: a dense ``d_{t-1} - d_t`` toward the goal, +1000 on reaching it,
+-150 on a collision, plus the original code's optional heading and per-step terms. The
+policy sees the goal in polar form in the robot's frame and its last action, beside the LiDAR
+sectors or the depth image. Every term is reported every step (0 when not triggered) so that
+``info["reward_terms"]`` keeps one shape through an episode.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from pic4rl_sim.geometry import Twist2D
+
+from ..config import EnvConfig
+from ..frame import SensorFrame
+from ..robot import RobotInfo
+from .base import EpisodeContext, Judgement, Outcome, Task
+from .collision import assess
+from .observations import (
+    MAX_TARGET_DISTANCE_M,
+    clipped_action,
+    depth_observation,
+    depth_space,
+    lidar_sectors,
+    target_polar,
+)
+
+
+def planar_command(action: np.ndarray, robot: RobotInfo) -> Twist2D:
+    """A 2-D normalized action as (forward, yaw rate): -1..1 spans the robot's
+    [min_linear, max_linear] (m/s) and [-max_angular, max_angular] (rad/s)."""
+    a = clipped_action(action, 2).astype(np.float64)
+    span = robot.max_linear_m_s - robot.min_linear_m_s
+    v = robot.min_linear_m_s + 0.5 * (a[0] + 1.0) * span
+    return Twist2D(vx=float(v), vy=0.0, wz=float(a[1] * robot.max_angular_rad_s))
+
+
+def planar_action_space() -> gym.spaces.Box:
+    """The 2-D normalized action space of the differential-drive tasks."""
+    return gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+class _GoToPose(Task):
+    """What both goToPose variants share: actions, context, reward; not the observation."""
+
+    name = "goToPose"
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
+        super().__init__(config, robot)
+        self.action_space = planar_action_space()
+
+    def command(self, action: np.ndarray) -> Twist2D:
+        return planar_command(action, self.robot)
+
+    def begin(self, frame: SensorFrame) -> EpisodeContext:
+        if frame.goal is None:
+            raise ValueError("goToPose: the episode's first frame has no goal")
+        return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])))
+
+    @staticmethod
+    def _goal_space() -> gym.spaces.Box:
+        """Goal distance (m), goal angle (rad), last action: the vector beside the sensor."""
+        return gym.spaces.Box(np.array([0.0, -math.pi, -1.0, -1.0], np.float32),
+                              np.array([MAX_TARGET_DISTANCE_M, math.pi, 1.0, 1.0], np.float32),
+                              dtype=np.float32)
+
+    def _goal_vector(self, frame: SensorFrame, context: EpisodeContext,
+                     last_action: np.ndarray) -> np.ndarray:
+        distance, angle = target_polar(frame.pose, *_goal(context))
+        distance = min(distance, MAX_TARGET_DISTANCE_M)
+        return np.concatenate((np.array([distance, angle], np.float32),
+                               clipped_action(last_action, 2)))
+
+    def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
+              collision_streak: int) -> Judgement:
+        reward, goal = self.config.reward, _goal(context)
+        d_prev, _ = target_polar(previous.pose, *goal)
+        d, angle = target_polar(frame.pose, *goal)
+        safety = assess(frame, self.robot, self.config, collision_streak)
+        reached = d <= self.config.goal_tolerance_m
+        crashed = safety.ended and not reached
+        terms = {"distance": reward.distance * (d_prev - d),
+                 "heading": reward.heading * (1.0 - 2.0 * math.sqrt(abs(angle) / math.pi)),
+                 "step": reward.step,
+                 "goal": reward.goal if reached else 0.0,
+                 "collision": reward.collision if crashed else 0.0}
+        outcome = Outcome.GOAL if reached else Outcome.COLLISION if crashed else None
+        return Judgement(terms=terms, outcome=outcome, collision=safety.collision,
+                         collision_streak=safety.streak, warning=safety.warning,
+                         min_obstacle_m=safety.min_obstacle_m)
+
+
+def _goal(context: EpisodeContext) -> tuple[float, float]:
+    if context.goal is None:
+        raise ValueError("goToPose: the episode's context has no goal")
+    return context.goal
+
+
+class GoToPoseLidar(_GoToPose):
+    """goToPose from LiDAR: a flat vector [sectors (m), goal distance (m), goal angle (rad),
+    last action (2)]."""
+
+    required = frozenset({"goal", "scan"})
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
+        super().__init__(config, robot)
+        beams, goal = config.lidar.beams, self._goal_space()
+        low = np.concatenate((np.zeros(beams, np.float32), goal.low))
+        high = np.concatenate((np.full(beams, config.lidar.max_range_m, np.float32), goal.high))
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> np.ndarray:
+        if frame.scan is None:
+            raise ValueError("goToPose (lidar): the frame has no scan")
+        lidar = self.config.lidar
+        sectors = lidar_sectors(frame.scan.ranges, lidar.beams, lidar.max_range_m)
+        return np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
+
+
+class GoToPoseDepth(_GoToPose):
+    """goToPose from a depth camera: {"depth": (1, H, W) image, "goal": [distance (m),
+    angle (rad), last action (2)]}. A scan, when present, still serves the collision test."""
+
+    required = frozenset({"goal", "depth"})
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
+        super().__init__(config, robot)
+        self.observation_space = gym.spaces.Dict({"depth": depth_space(config.depth),
+                                                  "goal": self._goal_space()})
+
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> dict[str, Any]:
+        if frame.depth is None:
+            raise ValueError("goToPose (depth): the frame has no depth image")
+        c = self.config.depth
+        image = depth_observation(frame.depth, c.width, c.height, c.max_depth_m, c.encoding)
+        return {"depth": image, "goal": self._goal_vector(frame, context, last_action)}

@@ -1,0 +1,117 @@
+"""vineyard: follow a row between crops from the depth image alone (position-agnostic).
+
+The policy never sees its pose (a row's GNSS-free navigation): its observation is the depth
+image only, a ``Box`` so SB3's ``CnnPolicy`` applies. The reward, computed from the pose the
+env knows, pays the advance along the row's centre line and penalizes the lateral offset from
+it; the episode succeeds at the row's end. The centre line is the world's lane nearest the
+start, oriented from the start, or ``vineyard.centerline`` when the config gives one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from pic4rl_sim.geometry import Twist2D
+
+from ..config import EnvConfig
+from ..errors import ConfigError
+from ..frame import SensorFrame
+from ..robot import RobotInfo
+from .base import EpisodeContext, Judgement, Outcome, Task
+from .collision import assess
+from .goto import planar_action_space, planar_command
+from .observations import depth_observation, depth_space
+
+
+def project(polyline: np.ndarray, xy: Sequence[float]) -> tuple[float, float]:
+    """The point of ``polyline`` (n × 2, m) closest to ``xy``: its arc length from the first
+    point (m) and the signed distance to it (m, positive left of the line's direction)."""
+    line = np.asarray(polyline, dtype=np.float64)
+    a, seg = line[:-1], np.diff(line, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    rel = np.asarray(xy, dtype=np.float64) - a
+    t = np.clip(np.einsum("ij,ij->i", rel, seg) / np.maximum(lengths**2, 1e-18), 0.0, 1.0)
+    gap = rel - t[:, None] * seg
+    dist = np.hypot(gap[:, 0], gap[:, 1])
+    i = int(np.argmin(dist))
+    s = float(lengths[:i].sum() + t[i] * lengths[i])
+    left = seg[i, 0] * rel[i, 1] - seg[i, 1] * rel[i, 0] >= 0.0
+    return s, float(dist[i] if left else -dist[i])
+
+
+def polyline_length(polyline: np.ndarray) -> float:
+    """Length (m) of a polyline (n × 2)."""
+    seg = np.diff(np.asarray(polyline, dtype=np.float64), axis=0)
+    return float(np.hypot(seg[:, 0], seg[:, 1]).sum())
+
+
+class VineyardTask(Task):
+    """Row following from depth: 2-D actions as goToPose, observation = the depth image."""
+
+    name = "vineyard"
+    required = frozenset({"depth"})
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo,
+                 lanes: Sequence[Sequence[Sequence[float]]]) -> None:
+        super().__init__(config, robot)
+        flat = config.vineyard.centerline
+        chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
+        self.lanes = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
+        if not self.lanes:
+            raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
+                              "expected x0, y0, x1, y1, ... or a vineyard world")
+        for lane in self.lanes:
+            if len(lane) < 2 or polyline_length(lane) <= 0:
+                raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
+                                  "or more points spanning a positive length")
+        self.action_space = planar_action_space()
+        self.observation_space = depth_space(config.depth)
+
+    def command(self, action: np.ndarray) -> Twist2D:
+        return planar_command(action, self.robot)
+
+    def begin(self, frame: SensorFrame) -> EpisodeContext:
+        start = np.array([frame.pose.x, frame.pose.y])
+        lane = min(self.lanes, key=lambda line: abs(project(line, start)[1]))
+        if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
+            lane = lane[::-1]
+        lane = np.ascontiguousarray(lane)
+        return EpisodeContext(start=frame.pose, goal=(float(lane[-1, 0]), float(lane[-1, 1])),
+                              centerline=lane)
+
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> np.ndarray:
+        if frame.depth is None:
+            raise ValueError("vineyard: the frame has no depth image")
+        c = self.config.depth
+        return depth_observation(frame.depth, c.width, c.height, c.max_depth_m, c.encoding)
+
+    def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
+              collision_streak: int) -> Judgement:
+        line = _centerline(context)
+        reward = self.config.reward
+        s_prev, _ = project(line, (previous.pose.x, previous.pose.y))
+        s, offset = project(line, (frame.pose.x, frame.pose.y))
+        safety = assess(frame, self.robot, self.config, collision_streak)
+        done = s >= polyline_length(line) - self.config.vineyard.end_tolerance_m
+        crashed = safety.ended and not done
+        terms = {"progress": reward.progress * (s - s_prev),
+                 "centering": -reward.centering * abs(offset),
+                 "row_end": reward.row_end if done else 0.0,
+                 "collision": reward.collision if crashed else 0.0,
+                 "step": reward.step}
+        outcome = Outcome.GOAL if done else Outcome.COLLISION if crashed else None
+        return Judgement(terms=terms, outcome=outcome, collision=safety.collision,
+                         collision_streak=safety.streak, warning=safety.warning,
+                         min_obstacle_m=safety.min_obstacle_m)
+
+    def facts(self, context: EpisodeContext) -> dict[str, Any]:
+        return {"row_centerline": _centerline(context).tolist()}
+
+
+def _centerline(context: EpisodeContext) -> np.ndarray:
+    if context.centerline is None:
+        raise ValueError("vineyard: the episode's context has no centre line")
+    return context.centerline

@@ -1,0 +1,140 @@
+"""goToPose: the action map, observations and the paper's reward on known motions."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from pic4rl_sim.geometry import Footprint, Pose2D, Twist2D
+
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.robot import RobotInfo
+from pic4rl_bridge.tasks import make_task
+from pic4rl_bridge.tasks.base import Outcome
+from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
+
+INC = 2 * math.pi / 360
+TERMS = {"distance", "heading", "step", "goal", "collision"}
+
+
+def robot(min_linear: float = 0.0) -> RobotInfo:
+    return RobotInfo(name="test", footprint=Footprint(radius_m=0.3), omni=False,
+                     min_linear_m_s=min_linear, max_linear_m_s=0.5, max_angular_rad_s=2.0,
+                     max_lateral_m_s=0.0, control_dt_s=0.1)
+
+
+def scan(ahead_m: float = math.inf) -> ScanData:
+    ranges = np.full(360, np.inf, np.float32)
+    ranges[180] = ahead_m  # the beam at 0 rad
+    return ScanData(ranges, -math.pi, INC, 0.1, 30.0)
+
+
+def frame(x: float, y: float = 0.0, yaw: float = 0.0, goal=(3.0, 0.0), ahead_m=math.inf,
+          depth: np.ndarray | None = None) -> SensorFrame:
+    return SensorFrame(0, Pose2D(x, y, yaw), Twist2D(), goal=goal, scan=scan(ahead_m),
+                       depth=depth)
+
+
+@pytest.mark.parametrize("min_linear, a0, v", [(0.0, -1.0, 0.0), (0.0, 0.0, 0.25),
+                                               (0.0, 1.0, 0.5), (-0.2, 0.0, 0.15),
+                                               (-0.2, -1.0, -0.2), (0.0, 3.0, 0.5)])
+def test_action_to_command(min_linear, a0, v):
+    task = GoToPoseLidar(EnvConfig(), robot(min_linear))
+    for a1, w in ((-1.0, -2.0), (0.0, 0.0), (1.0, 2.0), (-7.0, -2.0)):
+        assert task.command(np.array([a0, a1], np.float32)) == pytest.approx(Twist2D(v, 0.0, w))
+
+
+def test_lidar_observation_values_and_space():
+    config = EnvConfig()
+    task = GoToPoseLidar(config, robot())
+    start = frame(0.0, yaw=math.pi / 2, goal=(1.0, 0.0), ahead_m=2.0)
+    context = task.begin(start)
+    assert context.goal == (1.0, 0.0) and context.start == start.pose
+    obs = task.observe(start, context, np.array([0.5, -2.0]))
+    assert obs.shape == (config.lidar.beams + 4,) and task.observation_space.contains(obs)
+    assert obs[config.lidar.beams // 2] == 2.0 and obs[0] == config.lidar.max_range_m
+    np.testing.assert_allclose(obs[-4:], [1.0, -math.pi / 2, 0.5, -1.0], rtol=1e-6)
+    behind = task.observe(frame(4.0, goal=(1.0, 0.0)), context, np.zeros(2))
+    assert task.observation_space.contains(behind) and abs(abs(behind[-3]) - math.pi) < 1e-6
+
+
+@pytest.mark.parametrize("encoding", ["uint8", "float32"])
+def test_depth_observation_is_a_dict_in_its_space(encoding):
+    config = EnvConfig().replace(sensor="depth", **{"depth.encoding": encoding})
+    task = make_task(config, robot())
+    assert isinstance(task, GoToPoseDepth) and task.required == {"goal", "depth"}
+    image = np.full((120, 160), 3.0, np.float32)
+    f = frame(0.0, depth=image)
+    obs = task.observe(f, task.begin(f), np.zeros(2))
+    assert task.observation_space.contains(obs)
+    assert obs["depth"].shape == (1, 60, 80)
+    np.testing.assert_allclose(obs["goal"], [3.0, 0.0, 0.0, 0.0])
+
+
+def test_distance_reward_over_a_known_motion():
+    config = EnvConfig().replace(**{"reward.distance": 2.0, "reward.step": -0.1})
+    task = GoToPoseLidar(config, robot())
+    context = task.begin(frame(0.0))
+    j = task.judge(frame(0.0), frame(0.5, 0.3), context, 0)
+    d = math.hypot(2.5, 0.3)
+    assert set(j.terms) == TERMS and j.outcome is None
+    assert j.terms["distance"] == pytest.approx(2.0 * (3.0 - d))
+    assert j.terms["heading"] == 0.0 and j.terms["step"] == -0.1
+    assert j.reward == pytest.approx(2.0 * (3.0 - d) - 0.1)
+    back = task.judge(frame(0.5), frame(0.0), context, 0)
+    assert back.terms["distance"] == pytest.approx(-1.0)
+
+
+@pytest.mark.parametrize("yaw, expected", [(0.0, 1.0), (math.pi / 4, 0.0), (math.pi, -1.0)])
+def test_heading_term(yaw, expected):
+    task = GoToPoseLidar(EnvConfig().replace(**{"reward.heading": 1.0}), robot())
+    context = task.begin(frame(0.0))
+    j = task.judge(frame(0.0, yaw=yaw), frame(0.0, yaw=yaw), context, 0)
+    assert j.terms["heading"] == pytest.approx(expected)
+
+
+def test_goal_outcome_has_priority_over_collision():
+    task = GoToPoseLidar(EnvConfig(), robot())
+    context = task.begin(frame(0.0))
+    j = task.judge(frame(2.5), frame(2.7, ahead_m=0.31), context, 0)
+    assert j.collision and j.collision_streak == 1
+    assert j.outcome is Outcome.GOAL and set(j.terms) == TERMS
+    assert (j.terms["goal"], j.terms["collision"]) == (1000.0, 0.0)
+    short = task.judge(frame(2.5), frame(2.59), context, 0)  # 0.41 m: not yet
+    assert short.outcome is None and short.terms["goal"] == 0.0
+
+
+def test_collision_streak_ends_the_episode_at_collision_steps():
+    task = GoToPoseLidar(EnvConfig().replace(collision_steps=3), robot())
+    context = task.begin(frame(0.0))
+    streak, outcomes = 0, []
+    for _ in range(3):
+        j = task.judge(frame(0.0), frame(0.0, ahead_m=0.32), context, streak)
+        assert j.collision and j.min_obstacle_m == pytest.approx(0.02, abs=1e-6)
+        streak = j.collision_streak
+        outcomes.append((j.outcome, j.terms["collision"]))
+    assert outcomes == [(None, 0.0), (None, 0.0), (Outcome.COLLISION, -150.0)]
+    clear = task.judge(frame(0.0), frame(0.0, ahead_m=0.38), context, 2)
+    assert (clear.collision, clear.warning, clear.collision_streak) == (False, True, 0)
+    assert clear.outcome is None
+
+
+def test_make_task_and_required_sensors():
+    task = make_task(EnvConfig(), robot())
+    assert isinstance(task, GoToPoseLidar) and task.name == "goToPose"
+    assert task.required == {"goal", "scan"}
+    assert task.action_space.shape == (2,) and task.action_space.dtype == np.float32
+
+
+def test_importing_tasks_pulls_in_neither_ros_nor_mujoco():
+    code = ("import sys, pic4rl_bridge.tasks as t, pic4rl_bridge.tasks.goto, "
+            "pic4rl_bridge.tasks.vineyard, pic4rl_bridge.tasks.person; "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('rclpy', 'mujoco', 'torch')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]"
