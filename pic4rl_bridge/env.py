@@ -130,6 +130,12 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         return {"sim": {"ros__parameters": sim},
                 "nav_env": {"ros__parameters": self.config.to_params()}}
 
+    @property
+    def frame(self) -> SensorFrame | None:
+        """The latest decoded sensor data (``None`` before the first reset): for scripted
+        controllers and baselines that need more than the observation."""
+        return self._frame
+
     # -- Gymnasium API ------------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None,

@@ -117,7 +117,8 @@ class RosTransport(Transport):
         self._executor.add_node(node)
         self._topics: dict[str, _Topic] = {}
         self._roles: dict[str, str] = {}  # frame field -> topic key
-        self._pending: list[RawMessage] = []  # messages held while a reset waits for its t0
+        self._pending: list[tuple[int, RawMessage]] = []  # (header stamp, message) held while
+        # a reset waits for the new episode's first stamp (its goal's)
         self._t0_ns: int | None = None
         self._frame_stamp_ns = -1
         self._closed = False
@@ -133,7 +134,7 @@ class RosTransport(Transport):
                 SetParameters, f"{config.ros.sim_node}/set_parameters")
         if config.ros.reset_service:
             self._reset_client = node.create_client(Empty, config.ros.reset_service)
-        self._last_goal_ns = -1
+        self._used_goal_ns = -1  # the goal stamp of the last episode
 
     # -- wiring ---------------------------------------------------------------------------
 
@@ -179,7 +180,7 @@ class RosTransport(Transport):
                 return
             raw = RawMessage(entry.name, type_name, bytes(data), self._bag_time(stamp))
             if self._t0_ns is None:
-                self._pending.append(raw)
+                self._pending.append((stamp, raw))
             elif stamp >= self._t0_ns:
                 self.tap(raw)
 
@@ -228,19 +229,20 @@ class RosTransport(Transport):
                 self._call(self._reset_client, Empty.Request(), "reset")
             self._spin_until(lambda: goal.stamp_ns > before, self._timeout_s,
                              f"topic {goal.name}: the new episode's goal")
-        else:
+        else:  # a real robot: the next goal not used yet (a latched one counts)
             self.step_command(Twist2D())
-            before = goal.stamp_ns
-            log.warning("waiting for the operator's next goal on %s", goal.name)
-            self._spin_until(lambda: goal.stamp_ns > before,
+            used = self._used_goal_ns
+            if goal.stamp_ns <= used:
+                log.warning("waiting for the operator's next goal on %s", goal.name)
+            self._spin_until(lambda: goal.stamp_ns > used,
                              self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
-        t0 = goal.stamp_ns if self._mode is StepMode.LOCKSTEP else None
-        frame = self._next_frame(t0 if t0 is not None else -1, inclusive=True)
-        self._t0_ns = t0 if t0 is not None else frame.stamp_ns
+        self._used_goal_ns = goal.stamp_ns
+        frame = self._next_frame(goal.stamp_ns, inclusive=True)
+        self._t0_ns = goal.stamp_ns
         held, self._pending = self._pending, []
         if self.tap is not None:
-            for raw in held:
-                if raw.stamp_ns >= self._t0_ns or raw.topic == goal.name:
+            for header_ns, raw in held:
+                if header_ns >= self._t0_ns:
                     self.tap(raw)
         return frame
 
