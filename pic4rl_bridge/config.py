@@ -226,6 +226,10 @@ class EnvConfig:
                         "record.flush_interval_s": self.record.flush_interval_s}
         for key, value in non_negative.items():
             require(math.isfinite(value) and value >= 0, key, value, "a number >= 0")
+        require(math.isfinite(self.min_linear_m_s) and (
+            self.max_linear_m_s == 0 or self.min_linear_m_s <= self.max_linear_m_s),
+            "min_linear_m_s", self.min_linear_m_s,
+            f"a finite speed <= max_linear_m_s={self.max_linear_m_s}")
         line = self.vineyard.centerline
         require(len(line) == 0 or (len(line) >= 4 and len(line) % 2 == 0),
                 "vineyard.centerline", line, "[] or x0, y0, x1, y1, ... (two or more points)")

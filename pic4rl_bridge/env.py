@@ -33,7 +33,7 @@ from .recorder import EpisodeBag, RunRecorder
 from .robot import Scenario
 from .tasks import make_task
 from .tasks.base import EpisodeContext, Judgement, Outcome
-from .transport import EpisodeRequest, Transport
+from .transport import EpisodeRequest, RawMessage, Transport
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +58,32 @@ def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
         merged = dataclasses.replace(merged,
                                      sim_params={**sim_defaults, **merged.sim_params, **sim})
     return merged
+
+
+def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
+    """``reset`` options checked: ``start`` → Pose2D, ``goal`` → (x, y), ``seed`` → int."""
+    unknown = set(options) - {"start", "goal", "seed"}
+    if unknown:
+        raise ConfigError(f"reset options: unknown key {sorted(unknown)[0]!r}; expected "
+                          "start, goal, seed")
+    parsed: dict[str, Any] = {}
+    for key, size, expected in (("start", 3, "[x, y, yaw] (m, m, rad)"), ("goal", 2, "[x, y] (m)")):
+        if options.get(key) is None:
+            continue
+        try:
+            values = [float(v) for v in options[key]]
+        except (TypeError, ValueError):
+            values = []
+        if len(values) != size or not all(math.isfinite(v) for v in values):
+            raise ConfigError(f"reset options: {key}: {options[key]!r} is invalid; "
+                              f"expected {expected}")
+        parsed[key] = Pose2D(*values) if key == "start" else (values[0], values[1])
+    if "seed" in options:
+        seed = options["seed"]
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ConfigError(f"reset options: seed: {seed!r} is invalid; expected an int >= 0")
+        parsed["seed"] = int(seed)
+    return parsed
 
 
 class NavEnv(gym.Env[Any, np.ndarray]):
@@ -147,13 +173,22 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             self._episode = 0
             self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs)
         self._end_bag(None)
+        given = _parse_options(options or {})
         request = self._schedule.next_request(self._episode, self.np_random)
-        pinned = bool(options) and ("start" in options or "goal" in options)
-        request = self._apply_options(request, options or {})
+        request = EpisodeRequest(given.get("seed", request.seed), given.get("start", request.start),
+                                 given.get("goal", request.goal))
+        held: list[RawMessage] = []  # the reset's messages, for a bag opened once it succeeds
+        if self.recorder is not None:
+            self.transport.tap = held.append
+        try:
+            frame = self._start(request, redraw="start" not in given and "goal" not in given)
+        finally:
+            self.transport.tap = None
         if self.recorder is not None:
             self._bag = self.recorder.begin()
+            for raw in held:
+                self._bag.write(raw)
             self.transport.tap = self._bag.write
-        frame = self._start(request, redraw=not pinned)
         self._frame, self._context = frame, self.task.begin(frame)
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = self._steps = 0
@@ -166,25 +201,6 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         info = {"episode": self._episode - 1, "seed": self._seed_used,
                 "start": list(self._context.start), "goal": self._context.goal}
         return obs, info
-
-    def _apply_options(self, request: EpisodeRequest, options: Mapping[str, Any]) -> EpisodeRequest:
-        unknown = set(options) - {"start", "goal", "seed"}
-        if unknown:
-            raise ConfigError(f"reset options: unknown key {sorted(unknown)[0]!r}; expected "
-                              "start, goal, seed")
-        start, goal = options.get("start", request.start), options.get("goal", request.goal)
-        if start is not None and not isinstance(start, Pose2D):
-            ok = len(start) == 3 and all(math.isfinite(float(v)) for v in start)
-            if not ok:
-                raise ConfigError(f"reset options: start: {start!r} is invalid; expected "
-                                  "[x, y, yaw] (m, m, rad)")
-            start = Pose2D(*(float(v) for v in start))
-        if goal is not None:
-            if not (len(goal) == 2 and all(math.isfinite(float(v)) for v in goal)):
-                raise ConfigError(f"reset options: goal: {goal!r} is invalid; expected [x, y] (m)")
-            goal = (float(goal[0]), float(goal[1]))
-        seed = int(options.get("seed", request.seed))
-        return EpisodeRequest(seed, start, goal)
 
     def _start(self, first: EpisodeRequest, *, redraw: bool) -> SensorFrame:
         """The first frame of an episode, redrawing rejected requests (a start or goal given
