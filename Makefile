@@ -32,6 +32,7 @@ test: setup
 bench: setup
 	$(PY) benchmarks/metrics_throughput.py
 	$(PY) benchmarks/sim_throughput.py
+	$(PY) benchmarks/env_throughput.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

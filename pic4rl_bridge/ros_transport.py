@@ -19,6 +19,7 @@ topic, scan or depth image, with a newer stamp, and every other needed topic at 
 from __future__ import annotations
 
 import logging
+import struct
 import time
 from collections.abc import Callable
 from typing import Any
@@ -69,6 +70,17 @@ _KNOWN_TYPES: dict[str, type] = {
     "person/pose": PoseStamped, "goal_pose": PoseStamped, "world/markers": MarkerArray,
 }
 _SENSOR_TYPES = (LaserScan, Image, CameraInfo, Imu)
+
+
+#: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
+_STAMP_FIRST = (Clock, Odometry, LaserScan, Imu, Image, CameraInfo, PoseStamped)
+
+
+def _cdr_stamp(data: bytes) -> int:
+    """The stamp (ns) of a message that starts with one, read from its CDR bytes: 4 bytes of
+    encapsulation (byte 1: 1 = little endian), then ``int32 sec``, ``uint32 nanosec``."""
+    sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
+    return sec * 1_000_000_000 + nanosec
 
 
 def _type_name(kind: type) -> str:
@@ -162,23 +174,30 @@ class RosTransport(Transport):
                 wanted[topic] = (kind, qos)
         for topic, (kind, qos) in wanted.items():
             entry = _Topic(topic, kind)
-            sub = self.node.create_subscription(kind, topic, self._callback(entry), qos,
+            needed = topic in self._roles.values()
+            sub = self.node.create_subscription(kind, topic, self._callback(entry, needed), qos,
                                                 raw=True)
             entry.name = sub.topic_name
             self._topics[topic] = entry
 
-    def _callback(self, entry: _Topic) -> Callable[[bytes], None]:
+    def _callback(self, entry: _Topic, needed: bool) -> Callable[[bytes], None]:
+        """Stores the latest message of a topic frames need (decoded) or of one recorded only
+        (just its stamp), and hands it to the tap once it belongs to the episode."""
         type_name = _type_name(entry.kind)
+        decode_all = needed or entry.kind not in _STAMP_FIRST
 
         def on_message(data: bytes) -> None:
-            msg = deserialize_message(data, entry.kind)
-            stamp = _stamp_of(msg)
+            if decode_all:
+                entry.msg = deserialize_message(data, entry.kind)
+                stamp = _stamp_of(entry.msg)
+            else:  # recorded only: the stamp straight from the CDR bytes, nothing decoded
+                stamp = _cdr_stamp(data)
             stamp = time.time_ns() if stamp is None else stamp
-            entry.msg, entry.stamp_ns = msg, stamp
+            entry.stamp_ns = stamp
             entry.count += 1
             if self.tap is None:
                 return
-            raw = RawMessage(entry.name, type_name, bytes(data), self._bag_time(stamp))
+            raw = RawMessage(entry.name, type_name, data, self._bag_time(stamp))
             if self._t0_ns is None:
                 self._pending.append((stamp, raw))
             elif stamp >= self._t0_ns:
