@@ -19,8 +19,12 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all,test]'
 	touch $(STAMP)
 
-# Until the sim and agents exist: example episode bags of our own making, then their metrics.
+# Until trained agents exist: episodes of the proportional baseline through the env (in-process
+# MuJoCo sim, recorded to bags/demo_proportional, appended on each run), then the metrics of
+# those bags; and example episode bags of our own making with their metrics and plots.
 demo: setup
+	$(PY) -m pic4rl_bridge.demo --episodes 5 --bags bags --run demo_proportional
+	$(VENV)/bin/pic4rl-metrics compute bags/demo_proportional --format table
 	$(PY) -m pic4rl_metrics.examples bags/example
 	$(VENV)/bin/pic4rl-metrics compute bags/example --format table
 	$(VENV)/bin/pic4rl-metrics compare bags/example --format markdown
