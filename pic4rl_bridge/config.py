@@ -116,6 +116,7 @@ class EpisodesConfig:
     starting_episodes: int = 0  # first N episodes: initial_pose and a random goal near it
     starting_goal_range_m: float = 2.9  # ... within ± this of the initial pose in x and y
     max_attempts: int = 20  # goals redrawn when the simulator rejects one
+    ordered: bool = False  # walk the file's pairs in order (PIC4rl-gym's testing mode)
 
 
 @dataclass(frozen=True)
@@ -128,7 +129,6 @@ class TopicsConfig:
     depth: str = "camera/depth/image_raw"
     goal: str = "goal_pose"
     person: str = "person/pose"
-    clock: str = "clock"
 
 
 @dataclass(frozen=True)

@@ -54,6 +54,8 @@ def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
         sim_params = params.pop("sim", {})
         base = env_config_from_params(params, sim_params=sim_params)
     merged = EnvConfig.replace(base, **overrides) if overrides else base
+    if not (merged.sim_params or sim or merged.transport == TransportName.INPROCESS.value):
+        sim_defaults = {}  # a real robot: no simulator for the registered env's defaults
     if sim or sim_defaults:
         merged = dataclasses.replace(merged,
                                      sim_params={**sim_defaults, **merged.sim_params, **sim})
@@ -119,7 +121,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         pairs = (load_goals_and_poses(self.config.episodes.file)
                  if self.config.episodes.file else None)
         self._pairs = pairs
-        self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs)
+        self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs,
+                                         ordered=self.config.episodes.ordered)
         sensors = self.task.required & _FRAME_SENSORS
         if self.scenario.spec.lidar is not None:
             sensors |= {"scan"}
@@ -171,7 +174,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         super().reset(seed=seed)
         if seed is not None:  # a seeded reset restarts the sequence of episodes
             self._episode = 0
-            self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs)
+            self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs,
+                                             ordered=self.config.episodes.ordered)
         self._end_bag(None)
         given = _parse_options(options or {})
         request = self._schedule.next_request(self._episode, self.np_random)

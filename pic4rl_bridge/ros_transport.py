@@ -5,7 +5,8 @@ Subscriptions are raw: each message arrives as the CDR bytes on the wire, goes t
 (the recorder) as it is, and is decoded for the frame. Episodes:
 
 - with a simulator node (``ros.sim_node``): ``seed``, ``start_pose`` and ``goal`` are set
-  through its parameter service (a refused value rejects the episode, with the node's reason),
+  atomically through its parameter service (a refused value rejects the episode, with the
+  node's reason),
   then ``ros.reset_service`` is called; the new episode's first stamp is its new ``goal_pose``
   stamp, and the frame is the first full sensor set at or after it (the sim node's contract);
 - without a reset service (a real robot): a reset stops the robot and waits for the operator's
@@ -30,7 +31,7 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
-from rcl_interfaces.srv import SetParameters
+from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.context import Context
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
@@ -102,6 +103,7 @@ class _Topic:
         self.msg: Any = None
         self.stamp_ns = -1
         self.count = 0
+        self.recorded = False
 
 
 class RosTransport(Transport):
@@ -143,7 +145,7 @@ class RosTransport(Transport):
         self._set_params = self._reset_client = None
         if config.ros.sim_node:
             self._set_params = node.create_client(
-                SetParameters, f"{config.ros.sim_node}/set_parameters")
+                SetParametersAtomically, f"{config.ros.sim_node}/set_parameters_atomically")
         if config.ros.reset_service:
             self._reset_client = node.create_client(Empty, config.ros.reset_service)
         self._used_goal_ns = -1  # the goal stamp of the last episode
@@ -153,18 +155,28 @@ class RosTransport(Transport):
     def _subscribe(self, config: EnvConfig, sensors: frozenset[str]) -> None:
         t = config.topics
         sensor_qos = _BEST_EFFORT if config.ros.sensor_qos == "best_effort" else _RELIABLE
+        # The sim latches its goal; an operator's tool (rviz2's "2D Goal Pose") publishes
+        # volatile, which a transient-local subscription would not match.
+        goal_qos = _LATCHED if config.ros.sim_node else _RELIABLE
         wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (Odometry, _RELIABLE),
-                                                      t.goal: (PoseStamped, _LATCHED)}
+                                                      t.goal: (PoseStamped, goal_qos)}
         self._roles = {"pose": t.pose, "goal": t.goal}
         for role, topic, kind in (("scan", t.scan, LaserScan), ("depth", t.depth, Image),
                                   ("person", t.person, PoseStamped)):
             if role in sensors:
                 wanted[topic] = (kind, sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
                 self._roles[role] = topic
+        resolve = self.node.resolve_topic_name
+        self._record_cmd = False
         if config.record.enabled:
+            taken = {resolve(name) for name in wanted}
             for topic in config.record.topics:
-                if topic in wanted or topic == t.cmd_vel:
+                if resolve(topic) == resolve(t.cmd_vel) or topic == "cmd_vel":
+                    self._record_cmd = True
                     continue
+                if resolve(topic) in taken:
+                    continue
+                taken.add(resolve(topic))
                 kind = _KNOWN_TYPES.get(topic) or _KNOWN_TYPES.get(topic.strip("/"))
                 if kind is None:
                     raise ConfigError(f"record.topics: {topic!r} has no known message type; "
@@ -172,8 +184,11 @@ class RosTransport(Transport):
                 qos = (_LATCHED if kind in (PoseStamped,) and topic.endswith("goal_pose")
                        else sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
                 wanted[topic] = (kind, qos)
+        listed = ({resolve(name) for name in config.record.topics} if config.record.enabled
+                  else set())
         for topic, (kind, qos) in wanted.items():
             entry = _Topic(topic, kind)
+            entry.recorded = resolve(topic) in listed
             needed = topic in self._roles.values()
             sub = self.node.create_subscription(kind, topic, self._callback(entry, needed), qos,
                                                 raw=True)
@@ -195,7 +210,7 @@ class RosTransport(Transport):
             stamp = time.time_ns() if stamp is None else stamp
             entry.stamp_ns = stamp
             entry.count += 1
-            if self.tap is None:
+            if self.tap is None or not entry.recorded:
                 return
             raw = RawMessage(entry.name, type_name, data, self._bag_time(stamp))
             if self._t0_ns is None:
@@ -249,6 +264,10 @@ class RosTransport(Transport):
             self._spin_until(lambda: goal.stamp_ns > before, self._timeout_s,
                              f"topic {goal.name}: the new episode's goal")
         else:  # a real robot: the next goal not used yet (a latched one counts)
+            if request.start is not None or request.goal is not None:
+                log.warning("no sim node: the requested start %s and goal %s are ignored; the "
+                            "operator places the robot and sends the goal", request.start,
+                            request.goal)
             self.step_command(Twist2D())
             used = self._used_goal_ns
             if goal.stamp_ns <= used:
@@ -285,11 +304,10 @@ class RosTransport(Transport):
             ParameterMsg(name="goal", value=ParameterValue(
                 type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=goal)),
         ]
-        result = self._call(self._set_params, SetParameters.Request(parameters=params),
-                            "episode set-up")
-        for p, r in zip(params, result.results):
-            if not r.successful:
-                raise EpisodeRejected(f"{self._ros.sim_node}: {p.name}: {r.reason}")
+        request_msg = SetParametersAtomically.Request(parameters=params)
+        result = self._call(self._set_params, request_msg, "episode set-up").result
+        if not result.successful:
+            raise EpisodeRejected(f"{self._ros.sim_node}: {result.reason}")
 
     # -- stepping -------------------------------------------------------------------------
 
@@ -303,7 +321,7 @@ class RosTransport(Transport):
             msg.header.stamp = Time(sec=max(self._frame_stamp_ns, 0) // 1_000_000_000,
                                     nanosec=max(self._frame_stamp_ns, 0) % 1_000_000_000)
         self._cmd_pub.publish(msg)
-        if self.tap is not None and self._t0_ns is not None:
+        if self.tap is not None and self._t0_ns is not None and self._record_cmd:
             self.tap(RawMessage(self._cmd_name, self._cmd_type, serialize_message(msg),
                                 self._bag_time(max(self._frame_stamp_ns, 0))))
 
@@ -356,7 +374,8 @@ class RosTransport(Transport):
             return
         goal = self._roles["goal"]
         last = self._frame_stamp_ns
-        waiting = [t for key, t in self._topics.items() if key != goal and t.count > 0]
+        waiting = [t for key, t in self._topics.items()
+                   if key != goal and t.recorded and t.count > 0]
         try:
             self._spin_until(lambda: all(t.stamp_ns >= last for t in waiting), 1.0,
                              "recorded topics: the last step's messages")

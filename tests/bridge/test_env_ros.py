@@ -121,9 +121,9 @@ def test_scripted_controller_reaches_the_goal_and_its_bag_says_so(
 def test_without_a_reset_service_a_reset_waits_for_the_operators_goal(
         domain: int, start_sim, arena: Path, ros_client_factory) -> None:
     """A real robot's shape: no sim node, no reset service, rate stepping against a sim
-    running in real time. The first reset takes the goal already latched; the next one waits
-    for the operator's new goal (here the operator calls the sim's reset_world from another
-    node a second later); steps move the robot."""
+    running in real time. Each reset waits for the operator's next goal (here the operator
+    calls the sim's reset_world from another node a second later, which publishes a new goal);
+    steps move the robot."""
     start_sim(domain, "--params-file", str(ROOT / "config/env_goto_lidar.yaml"),
               "-p", f"world:={arena}", "-p", "clock_mode:=realtime",
               "-p", "real_time_factor:=2.0")
@@ -133,17 +133,23 @@ def test_without_a_reset_service_a_reset_waits_for_the_operators_goal(
                    overrides={"ros.domain_id": domain, "ros.sim_node": "",
                               "ros.reset_service": "", "ros.step_mode": "rate",
                               "ros.operator_timeout_s": 20.0, "topics.pose": "ground_truth"})
+
+    def reset_by_operator(**kwargs: object) -> dict:
+        timer = threading.Timer(1.0, operator.call, args=(Empty, "/reset_world"))
+        timer.start()
+        try:
+            return env.reset(**kwargs)[1]
+        finally:
+            timer.join()
+
     try:
-        _, first = env.reset(seed=3)
+        first = reset_by_operator(seed=3)
         start = env.unwrapped.frame.pose
         for _ in range(5):
             env.step(np.array([1.0, 0.0], dtype=np.float32))
         moved = env.unwrapped.frame.pose
         assert math.hypot(moved.x - start.x, moved.y - start.y) > 0.05
-        timer = threading.Timer(1.0, operator.call, args=(Empty, "/reset_world"))
-        timer.start()
-        _, second = env.reset()
-        timer.join()
+        second = reset_by_operator()
         assert second["goal"] != first["goal"]
     finally:
         env.close()
