@@ -15,10 +15,11 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
@@ -167,3 +168,19 @@ class RosClient:
         self.context.try_shutdown()
 
 
+
+
+@pytest.fixture
+def ros_client() -> Iterator[Callable[[int], RosClient]]:
+    """Clients on given domains; all are shut down afterwards."""
+    clients: list[RosClient] = []
+
+    def make(domain: int) -> RosClient:
+        clients.append(RosClient(domain))
+        return clients[-1]
+
+    try:
+        yield make
+    finally:
+        for client in clients:
+            client.close()

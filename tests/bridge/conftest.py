@@ -8,7 +8,14 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from ros_helpers import ARENA_MJCF, LIVE, RosClient, SimProcess, next_domain, sim_command
+from ros_helpers import (  # noqa: F401 - ros_client: a fixture shared with tests/sim
+    ARENA_MJCF,
+    LIVE,
+    SimProcess,
+    next_domain,
+    ros_client,
+    sim_command,
+)
 
 
 @pytest.hookimpl(hookwrapper=True)
@@ -48,19 +55,3 @@ def start_sim(tmp_path: Path) -> Iterator[Callable[..., SimProcess]]:
     finally:
         for sim in started:
             sim.stop()
-
-
-@pytest.fixture
-def ros_client_factory() -> Iterator[Callable[[int], RosClient]]:
-    """Test clients on given domains, all shut down afterwards."""
-    clients: list[RosClient] = []
-
-    def make(domain: int) -> RosClient:
-        clients.append(RosClient(domain))
-        return clients[-1]
-
-    try:
-        yield make
-    finally:
-        for client in clients:
-            client.close()

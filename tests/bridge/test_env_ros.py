@@ -119,7 +119,7 @@ def test_scripted_controller_reaches_the_goal_and_its_bag_says_so(
 
 
 def test_without_a_reset_service_a_reset_waits_for_the_operators_goal(
-        domain: int, start_sim, arena: Path, ros_client_factory) -> None:
+        domain: int, start_sim, arena: Path, ros_client) -> None:
     """A real robot's shape: no sim node, no reset service, rate stepping against a sim
     running in real time. Each reset waits for the operator's next goal (here the operator
     calls the sim's reset_world from another node a second later, which publishes a new goal);
@@ -127,7 +127,7 @@ def test_without_a_reset_service_a_reset_waits_for_the_operators_goal(
     start_sim(domain, "--params-file", str(ROOT / "config/env_goto_lidar.yaml"),
               "-p", f"world:={arena}", "-p", "clock_mode:=realtime",
               "-p", "real_time_factor:=2.0")
-    operator = ros_client_factory(domain)
+    operator = ros_client(domain)
     env = gym.make("pic4rl/GoToPoseLidar-v0", config=ROOT / "config/env_goto_lidar.yaml",
                    transport="ros", sim={"world": str(arena)},
                    overrides={"ros.domain_id": domain, "ros.sim_node": "",
@@ -155,7 +155,7 @@ def test_without_a_reset_service_a_reset_waits_for_the_operators_goal(
         env.close()
 
 
-def test_twist_stamped_commands(domain: int, ros_client_factory) -> None:
+def test_twist_stamped_commands(domain: int, ros_client) -> None:
     """``ros.cmd_vel_type: TwistStamped`` publishes stamped commands on the configured topic
     (for robots whose drivers want them)."""
     from geometry_msgs.msg import TwistStamped
@@ -168,7 +168,7 @@ def test_twist_stamped_commands(domain: int, ros_client_factory) -> None:
     config = load_env_config(ROOT / "config/env_goto_lidar.yaml").replace(
         **{"ros.domain_id": domain, "ros.cmd_vel_type": "TwistStamped",
            "topics.cmd_vel": "base/cmd_vel", "transport": "ros"})
-    client = ros_client_factory(domain)
+    client = ros_client(domain)
     inbox = []
     client.node.create_subscription(TwistStamped, "/base/cmd_vel", inbox.append, 10)
     transport = RosTransport(config, Scenario(config), frozenset({"scan"}))

@@ -10,7 +10,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from ros_helpers import ARENA_MJCF, LIVE, RosClient, SimProcess, next_domain, sim_command
+from ros_helpers import (  # noqa: F401 - ros_client: a fixture shared with tests/bridge
+    ARENA_MJCF,
+    LIVE,
+    RosClient,
+    SimProcess,
+    next_domain,
+    ros_client,
+    sim_command,
+)
 from std_srvs.srv import Empty
 
 
@@ -62,22 +70,6 @@ def start_sim(tmp_path: Path) -> Iterator[Callable[..., SimProcess]]:
     finally:
         for sim in started:
             sim.stop()
-
-
-@pytest.fixture
-def ros_client() -> Iterator[Callable[[int], RosClient]]:
-    """Clients on given domains; all are shut down afterwards."""
-    clients: list[RosClient] = []
-
-    def make(domain: int) -> RosClient:
-        clients.append(RosClient(domain))
-        return clients[-1]
-
-    try:
-        yield make
-    finally:
-        for client in clients:
-            client.close()
 
 
 @pytest.fixture(scope="module")
