@@ -142,6 +142,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = 0
         self._steps = 0
+        self._seed_used = 0  # the simulator seed of the current episode
         self._done = True
 
     def _make_transport(self, sensors: frozenset[str], node: Any) -> Transport:
