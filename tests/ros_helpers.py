@@ -184,3 +184,14 @@ def ros_client() -> Iterator[Callable[[int], RosClient]]:
     finally:
         for client in clients:
             client.close()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Iterator[None]:
+    """Attach the output of every sim still running to a failed test's report (imported by
+    the conftests that start sims)."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.failed:
+        for sim in list(LIVE):
+            report.sections.append((f"sim {' '.join(sim.command[-6:])} output", sim.output))

@@ -10,9 +10,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from ros_helpers import (  # noqa: F401 - ros_client: a fixture shared with tests/bridge
+from ros_helpers import (  # noqa: F401 - the ros_client fixture and the report hook are shared
     ARENA_MJCF,
-    LIVE,
+    pytest_runtest_makereport,
     RosClient,
     SimProcess,
     next_domain,
@@ -30,15 +30,6 @@ class SharedSim:
     sim: SimProcess
     client: RosClient
     domain: int
-
-
-@pytest.hookimpl(hookwrapper=True)
-def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Iterator[None]:
-    outcome = yield
-    report = outcome.get_result()
-    if report.failed:
-        for sim in list(LIVE):
-            report.sections.append((f"sim {' '.join(sim.command[-6:])} output", sim.output))
 
 
 @pytest.fixture(scope="session")
