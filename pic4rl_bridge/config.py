@@ -23,12 +23,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import yaml
 
 from .errors import ConfigError, require, unknown_key
 
+T = TypeVar("T")
 ENV_NODE = "nav_env"
 SIM_NODE = "sim"
 #: Topics recorded to each episode's bag by default (the bag contract; absent ones are skipped).
@@ -328,15 +329,26 @@ def flatten_params(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
+def dataclass_from_params(cls: type[T], params: Mapping[str, Any], *, where: str) -> T:
+    """A frozen config dataclass ``cls`` from dotted (or nested) parameters; an unknown key is
+    an error naming ``where`` ("nav_env parameters") with a "did you mean"."""
+    flat = flatten_params(params)
+    known = param_names(cls)
+    for key in sorted(flat):
+        if key not in known:
+            raise unknown_key(key, known, where=where)
+    return _build(cls, flat, "")  # type: ignore[no-any-return]
+
+
+def dataclass_params(obj: Any) -> dict[str, Any]:
+    """The flat dotted parameters of a config dataclass (lists for tuples)."""
+    return _flatten(obj)
+
+
 def env_config_from_params(params: Mapping[str, Any], *,
                            sim_params: Mapping[str, Any] | None = None) -> EnvConfig:
     """An ``EnvConfig`` from dotted (or nested) parameters; unknown keys are errors."""
-    flat = flatten_params(params)
-    known = param_names()
-    for key in sorted(flat):
-        if key not in known:
-            raise unknown_key(key, known, where=f"{ENV_NODE} parameters")
-    config = _build(EnvConfig, flat, "")
+    config = dataclass_from_params(EnvConfig, params, where=f"{ENV_NODE} parameters")
     return dataclasses.replace(config, sim_params=dict(sim_params or {}))
 
 
@@ -356,9 +368,8 @@ def node_section(data: Mapping[str, Any], node: str, *, source: str) -> dict[str
     return None
 
 
-def load_env_config(path: str | Path, *, node: str = ENV_NODE, **overrides: Any) -> EnvConfig:
-    """Read ``path``: the env's section (``node``) and the sim's (``sim``; a sim-only file's
-    ``/**`` section counts as the sim's), then dotted ``overrides``."""
+def read_params_file(path: str | Path) -> Mapping[str, Any]:
+    """The node sections of a ROS 2 parameter YAML, or ``ConfigError`` naming the file."""
     path = Path(path)
     try:
         data = yaml.safe_load(path.read_text())
@@ -367,7 +378,16 @@ def load_env_config(path: str | Path, *, node: str = ENV_NODE, **overrides: Any)
     except yaml.YAMLError as err:
         raise ConfigError(f"{path}: not valid YAML: {err}") from err
     if not isinstance(data, Mapping):
-        raise ConfigError(f"{path}: expected a mapping of node sections (sim:, {node}:)")
+        raise ConfigError(f"{path}: expected a mapping of node sections "
+                          "(sim:, nav_env:, ...: ros__parameters: ...)")
+    return data
+
+
+def load_env_config(path: str | Path, *, node: str = ENV_NODE, **overrides: Any) -> EnvConfig:
+    """Read ``path``: the env's section (``node``) and the sim's (``sim``; a sim-only file's
+    ``/**`` section counts as the sim's), then dotted ``overrides``."""
+    path = Path(path)
+    data = read_params_file(path)
     env = node_section(data, node, source=str(path))
     sim = node_section(data, SIM_NODE, source=str(path))
     if sim is None and "/**" in data:  # a sim-only file such as config/sim_indoor_jackal.yaml

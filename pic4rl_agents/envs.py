@@ -1,0 +1,63 @@
+"""The training and testing envs: ``NavEnv`` in SB3's ``Monitor``, vectorised.
+
+One env lives in the trainer's process (the paper's training(env(Node)) shape: through ROS it
+uses the trainer's node); ``n_envs > 1`` run in ``SubprocVecEnv`` workers, each with its own
+sim: through ROS the sims sit in namespaces ``env_0``, ``env_1``, ... (``pic4rl-run`` starts
+them), in process each worker builds its own engine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
+
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.env import NavEnv
+
+#: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
+INFO_KEYWORDS = ("is_success", "outcome")
+
+
+def env_namespace(config: EnvConfig, rank: int, n_envs: int) -> str:
+    """The ROS namespace of env ``rank``: the config's alone, or ``<it>/env_<rank>``."""
+    if n_envs == 1:
+        return config.ros.namespace
+    return f"{config.ros.namespace.rstrip('/')}/env_{rank}"
+
+
+def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
+    if config.transport != "ros" or n_envs == 1:
+        return config
+    return config.replace(**{"ros.namespace": env_namespace(config, rank, n_envs)})
+
+
+def _make(config: EnvConfig, monitor_file: str | None, node: Any = None) -> gym.Env:
+    env = NavEnv(config, node=node)
+    return Monitor(env, monitor_file, info_keywords=INFO_KEYWORDS)
+
+
+def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
+                 monitor_dir: Path | None = None, prefix: str = "", node: Any = None) -> VecEnv:
+    """``n_envs`` monitored ``NavEnv``s (seeds ``seed + rank``), each writing
+    ``<monitor_dir>/<prefix><rank>.monitor.csv``; ``node``: the trainer's rclpy node, used by
+    a single ROS env."""
+    def factory(rank: int) -> Callable[[], gym.Env]:
+        cfg = env_for_rank(config, rank, n_envs)
+        file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
+
+        def make() -> gym.Env:
+            return _make(cfg, file, node if n_envs == 1 else None)
+        return make
+
+    if monitor_dir is not None:
+        monitor_dir.mkdir(parents=True, exist_ok=True)
+    fns = [factory(rank) for rank in range(n_envs)]
+    vec: VecEnv = DummyVecEnv(fns) if n_envs == 1 else SubprocVecEnv(fns,
+                                                                      start_method="forkserver")
+    vec.seed(seed)
+    return vec

@@ -1,0 +1,69 @@
+"""The ``--ros-args`` part of a command line: params files and ``-p key:=value``.
+
+There is no ``ros2 launch`` here, and our nodes read three sections of one params file (sim,
+nav_env, trainer), so the agents' commands read ``--params-file`` and ``-p`` themselves, with
+ROS's syntax, and hand everything else (``-r``, ``--log-level``) to ``rclpy.init``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+
+from pic4rl_bridge.errors import ConfigError
+
+
+@dataclass
+class RosArgs:
+    params_files: list[str] = field(default_factory=list)
+    params: dict[str, Any] = field(default_factory=dict)  # -p key:=value, values as YAML
+    rest: list[str] = field(default_factory=list)  # other ROS args, for rclpy.init
+
+    def as_args(self) -> list[str]:
+        """These arguments as a ``--ros-args`` tail again (for a child process)."""
+        out = ["--ros-args"]
+        for path in self.params_files:
+            out += ["--params-file", path]
+        for key, value in self.params.items():
+            out += ["-p", f"{key}:={yaml.safe_dump(value, default_flow_style=True).strip()}"
+                    .replace("\n...", "")]
+        return out + self.rest
+
+
+def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
+    """``argv`` without its ``--ros-args ... [--]`` segments, and what those segments held."""
+    plain: list[str] = []
+    ros = RosArgs()
+    i, inside = 0, False
+    while i < len(argv):
+        arg = argv[i]
+        if arg == "--ros-args":
+            inside = True
+        elif inside and arg == "--":
+            inside = False
+        elif not inside:
+            plain.append(arg)
+        elif arg == "--params-file":
+            if i + 1 >= len(argv):
+                raise ConfigError("--params-file: expected a file name after it")
+            ros.params_files.append(argv[i + 1])
+            i += 1
+        elif arg in ("-p", "--param"):
+            if i + 1 >= len(argv) or ":=" not in argv[i + 1]:
+                raise ConfigError(f"{arg}: expected key:=value after it")
+            key, _, text = argv[i + 1].partition(":=")
+            try:
+                ros.params[key] = yaml.safe_load(text) if text else ""
+            except yaml.YAMLError as err:
+                raise ConfigError(f"{arg} {argv[i + 1]}: the value is not valid YAML") from err
+            i += 1
+        else:
+            ros.rest.append(arg)
+            if arg in ("-r", "--remap", "--log-level", "-e", "--enclave") and i + 1 < len(argv):
+                ros.rest.append(argv[i + 1])
+                i += 1
+        i += 1
+    return plain, ros
