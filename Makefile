@@ -19,16 +19,19 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all,test]'
 	touch $(STAMP)
 
-# Until trained agents exist: episodes of the proportional baseline through the env (in-process
-# MuJoCo sim, recorded to bags/demo_proportional, appended on each run), then the metrics of
-# those bags; and example episode bags of our own making with their metrics and plots.
+# The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar) and the proportional
+# baseline on the paper's 5 indoor test pairs, each through the sim node over ROS 2
+# (pic4rl-run starts and stops it), one bag per episode under bags/demo*/, then the metrics
+# table of those bags. `make demo TRAIN=1` trains TD3-LiDAR from scratch first (in process;
+# see docs/results.md for how long) and tests that run instead.
+DEMO_RUN := demo_$(shell date +%Y%m%d-%H%M%S)
 demo: setup
-	$(PY) -m pic4rl_bridge.demo --episodes 5 --bags bags --run demo_proportional
-	$(VENV)/bin/pic4rl-metrics compute bags/demo_proportional --format table
-	$(PY) -m pic4rl_metrics.examples bags/example
-	$(VENV)/bin/pic4rl-metrics compute bags/example --format table
-	$(VENV)/bin/pic4rl-metrics compare bags/example --format markdown
-	$(VENV)/bin/pic4rl-metrics plot bags/example --out bags/example/plots
+ifdef TRAIN
+	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
+	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --run demo
+else
+	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --baseline proportional --run demo
+endif
 
 test: setup
 	$(PY) -m pytest -q
@@ -37,6 +40,7 @@ bench: setup
 	$(PY) benchmarks/metrics_throughput.py
 	$(PY) benchmarks/sim_throughput.py
 	$(PY) benchmarks/env_throughput.py
+	$(PY) benchmarks/train_throughput.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

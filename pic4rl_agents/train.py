@@ -22,6 +22,7 @@ import re
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,6 +224,8 @@ class Trainer:
                 eval_cfg = env_cfg.replace(**{"transport": "inprocess", "record.enabled": False,
                                               "episodes.starting_episodes": 0})
                 eval_env = make_vec_env(eval_cfg, seed=cfg.eval.seed)
+                # One in-process env evaluates whatever the training envs are (subprocesses).
+                warnings.filterwarnings("ignore", "Training and eval env are not of the same")
                 callbacks.append(SeededEvalCallback(
                     eval_env, eval_seed=cfg.eval.seed, n_eval_episodes=cfg.eval.episodes,
                     eval_freq=max(cfg.eval.interval_steps // cfg.n_envs, 1),
