@@ -18,6 +18,7 @@ Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from collections.abc import Sequence
@@ -225,6 +226,8 @@ def report(run_dir: Path, fmt: str, *, with_std: bool) -> tuple[str, int]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
@@ -244,6 +247,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-test: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("pic4rl-test: interrupted; the finished episodes' bags are kept",
+              file=sys.stderr)
+        return 130
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
     print(f"bags: {run_dir}", file=sys.stderr)
     return 1 if failed else 0

@@ -123,10 +123,14 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGTERM, handler)
+    # A process started in the background by a shell inherits SIGINT ignored; Ctrl-C and
+    # pic4rl-run's SIGINT must still reach us.
+    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGINT, previous_int)
 
 
 def _trainer_node(env: EnvConfig, ros: RosArgs) -> tuple[Any, Any]:
