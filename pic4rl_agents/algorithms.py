@@ -2,7 +2,7 @@
 
 ``build_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
-(depth + goal). ``load_model`` reads a saved zip back with the same classes.
+(depth + goal), ``CnnPolicy`` with it on bare images (vineyard). ``load_model`` reads a saved zip back with the same classes.
 """
 
 from __future__ import annotations
@@ -66,13 +66,14 @@ def _policy(config: TrainConfig, observation_space: gym.Space) -> tuple[str, dic
     critic = "vf" if config.algorithm == "ppo" else "qf"
     kwargs: dict[str, Any] = {"net_arch": {"pi": list(p.net_arch), critic: list(p.critic_arch)},
                               "activation_fn": _ACTIVATIONS[p.activation]}
-    if isinstance(observation_space, gym.spaces.Dict):
+    image = isinstance(observation_space, gym.spaces.Box) and len(observation_space.shape) == 3
+    if isinstance(observation_space, gym.spaces.Dict) or image:
         kwargs["features_extractor_class"] = DepthGoalExtractor
         kwargs["features_extractor_kwargs"] = {"channels": list(p.cnn_channels),
                                                "cnn_features": p.cnn_features}
         if config.off_policy:
             kwargs["share_features_extractor"] = p.share_features_extractor
-        return "MultiInputPolicy", kwargs
+        return ("CnnPolicy" if image else "MultiInputPolicy"), kwargs
     return "MlpPolicy", kwargs
 
 

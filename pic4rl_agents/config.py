@@ -187,6 +187,14 @@ class RunConfig:
         return yaml.safe_dump(doc, sort_keys=False)
 
 
+def run_config_file(folder: Path) -> Path | None:
+    """A run folder's latest params file: ``config.yaml`` or its newest ``config-N.yaml``."""
+    found = [p for p in folder.glob("config*.yaml")
+             if p.stem == "config" or p.stem.removeprefix("config-").isdigit()]
+    return max(found, key=lambda p: int(p.stem.removeprefix("config-") or 1)
+               if p.stem != "config" else 1, default=None)
+
+
 def parse_overrides(items: Sequence[str], *, flag: str) -> dict[str, Any]:
     """RL-Zoo-style ``key:value`` items (values read as YAML: ``0.001``, ``[64, 64]``, ``sac``)
     as a dict of dotted names."""

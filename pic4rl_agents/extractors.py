@@ -17,13 +17,17 @@ IMAGE_KEY = "depth"
 
 class DepthGoalExtractor(BaseFeaturesExtractor):
     """Conv layers (``channels``, stride 2) over the ``depth`` image → ``cnn_features`` units,
-    concatenated with every other (vector) entry of the Dict observation."""
+    concatenated with every other (vector) entry of a Dict observation. A bare image
+    observation (the vineyard task's) goes through the same CNN alone."""
 
-    def __init__(self, observation_space: gym.spaces.Dict,
+    def __init__(self, observation_space: gym.spaces.Dict | gym.spaces.Box,
                  channels: tuple[int, ...] | list[int] = (16, 32, 32),
                  cnn_features: int = 128) -> None:
-        image = observation_space[IMAGE_KEY]
-        vector_keys = sorted(k for k in observation_space.spaces if k != IMAGE_KEY)
+        if isinstance(observation_space, gym.spaces.Dict):
+            image = observation_space[IMAGE_KEY]
+            vector_keys = sorted(k for k in observation_space.spaces if k != IMAGE_KEY)
+        else:
+            image, vector_keys = observation_space, []
         vector_dim = sum(int(observation_space[k].shape[0]) for k in vector_keys)
         super().__init__(observation_space, features_dim=cnn_features + vector_dim)
         layers: list[nn.Module] = []
@@ -39,7 +43,9 @@ class DepthGoalExtractor(BaseFeaturesExtractor):
         self.head = nn.Sequential(nn.Linear(n_flat, cnn_features), nn.ReLU())
         self.vector_keys = vector_keys
 
-    def forward(self, observations: dict[str, torch.Tensor]) -> torch.Tensor:
+    def forward(self, observations: dict[str, torch.Tensor] | torch.Tensor) -> torch.Tensor:
+        if not isinstance(observations, dict):
+            return self.head(self.cnn(observations.float()))
         image = self.head(self.cnn(observations[IMAGE_KEY].float()))
         vectors = [observations[k].float().flatten(1) for k in self.vector_keys]
         return torch.cat([image, *vectors], dim=1)

@@ -128,4 +128,4 @@ def main(argv: Sequence[str] | None = None) -> int:
                 _stop(sim, 10.0)
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
-    return code or (0 if stopping else child_code)
+    return code or child_code

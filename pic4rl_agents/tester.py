@@ -1,16 +1,19 @@
 """``pic4rl-test``: trained agents and classical baselines on the same test episodes, each
 episode recorded to a bag, then one metrics table from the bags (the paper's testing package).
 
-    pic4rl-test --agent checkpoints/td3_lidar --baseline proportional \\
-        --ros-args --params-file config/test_goto_indoor.yaml
+    pic4rl-test --agent checkpoints/td3_lidar --baseline proportional
     pic4rl-test --agent runs/sac_lidar --random 100 --seed 0
+    pic4rl-test --agent td3=runs/td3_lidar/checkpoints/model_50000_steps.zip \
+        --ros-args --params-file my_test_pairs.yaml
 
 An agent is a run or checkpoint directory (``model.zip`` and ``config.yaml``) or a model zip
-(with ``--algorithm`` and a params file). Its env is its training config, then the given
-params files key by key (test pairs, say), then ``--env-kwargs``; a baseline uses the first
-agent's env (or the params files alone). Every agent drives the same episodes: the params
-files' start–goal pairs in order (``episodes.file``; default: the paper's 5 indoor pairs when
-the world is the indoor one), or ``--random N`` pairs drawn by the simulator from ``--seed``.
+(its run's ``config.yaml`` is found above it; else give ``--algorithm`` and a params file).
+Its env is its training config, then the given params files key by key, then
+``--env-kwargs`` and ``-p``; a baseline uses the first agent's env (or the params files
+alone). Every agent drives the same episodes: the start–goal pairs named at test time
+(``episodes.file`` in a params file or the overrides), else the paper's 5 indoor pairs when
+the world is the indoor one (variant 0), else ``--episodes`` pairs drawn by the simulator from
+``--seed``; ``--random N`` always draws N. The training pairs are never reused for testing.
 Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics``'s own
 (``pic4rl-metrics compare`` on those bags prints the same).
 """
@@ -28,9 +31,10 @@ from typing import Any
 
 import numpy as np
 
+from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
-from .config import RunConfig, load_run_config, parse_overrides
+from .config import ENV_NODE, RunConfig, load_run_config, parse_overrides, run_config_file
 from .rosargs import RosArgs, split_ros_args
 
 BASELINES = ("proportional",)
@@ -49,25 +53,35 @@ class AgentSpec:
 
 
 def _agent_files(path: Path) -> tuple[Path, Path | None]:
-    """The model zip and the config beside it, from a directory or a zip."""
+    """The model zip and its run's config, from a directory or a zip (the config is looked
+    for beside the zip and up to two folders above: checkpoints/, best/<session>/)."""
     if path.is_dir():
         model = path / "model.zip"
         if not model.is_file():
             raise ConfigError(f"--agent {path}: no model.zip in it")
-        config = path / "config.yaml"
-        return model, config if config.is_file() else None
+        return model, run_config_file(path)
     if path.is_file() and path.suffix == ".zip":
-        config = path.parent / "config.yaml"
-        if not config.is_file() and path.parent.name == "checkpoints":
-            config = path.parent.parent / "config.yaml"
-        return path, config if config.is_file() else None
+        for folder in (path.parent, path.parent.parent, path.parent.parent.parent):
+            if (config := run_config_file(folder)) is not None:
+                return path, config
+        return path, None
     raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
                       "model.zip and config.yaml, or a model .zip)")
+
+
+def _test_pairs(ros: RosArgs, env_overrides: dict[str, Any]) -> str | None:
+    """The ``episodes.file`` named at test time (params files, then overrides), if any."""
+    pairs = None
+    for path in ros.params_files:
+        section = node_section(read_params_file(path), ENV_NODE, source=path) or {}
+        pairs = section.get("episodes.file", pairs)
+    return env_overrides.get("episodes.file", pairs)
 
 
 def resolve_agents(args: argparse.Namespace, ros: RosArgs) -> list[AgentSpec]:
     """The agents and baselines to test, each with its run config (env recording set up)."""
     env_overrides = {**ros.params, **parse_overrides(args.env_kwargs, flag="--env-kwargs")}
+    args.test_pairs = _test_pairs(ros, env_overrides)
     sim_overrides = parse_overrides(args.sim_kwargs, flag="--sim-kwargs")
     train_overrides = {"algorithm": args.algorithm} if args.algorithm else {}
     specs: list[AgentSpec] = []
@@ -108,15 +122,16 @@ def _test_env(spec: AgentSpec, args: argparse.Namespace) -> RunConfig:
                                  "record.bags_dir": str(Path(args.bags_dir) / args.run_dir_name),
                                  "record.run": spec.name,
                                  "episodes.starting_episodes": 0}
-    if args.random:
+    sim = spec.run.env.sim_params
+    pairs = args.test_pairs
+    if pairs is None and sim.get("world", "indoor") == "indoor" and not sim.get(
+            "world_variant", 0):
+        pairs = str(DEFAULT_PAIRS)
+    if args.random or not pairs:
         overrides.update({"episodes.file": "", "episodes.ordered": False})
     else:
-        pairs = env.episodes.file
-        if not pairs and spec.run.env.sim_params.get("world", "indoor") == "indoor":
-            pairs = str(DEFAULT_PAIRS)
-        if pairs:
-            overrides.update({"episodes.file": pairs, "episodes.ordered": True,
-                              "episodes.change_goal_and_pose": 1})
+        overrides.update({"episodes.file": pairs, "episodes.ordered": True,
+                          "episodes.change_goal_and_pose": 1})
     return replace(spec.run, env=env.replace(**overrides))
 
 
@@ -174,7 +189,7 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="pic4rl-test", description=__doc__.split("\n")[0],
+        prog="pic4rl-test", description=__doc__.split("\n\n")[0],
         epilog="ROS arguments after --ros-args: --params-file FILE (applied over each agent's "
                "config), -p key:=value (env keys).")
     parser.add_argument("--agent", action="append", default=[], metavar="[NAME=]PATH",

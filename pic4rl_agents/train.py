@@ -8,10 +8,11 @@ trains an SB3 agent on it, with checkpoints, resume, evaluation, logs and a rewa
 
 A run lives in ``<runs_dir>/<run>/``: ``config.yaml`` (all three sections, loads back as a
 params file), ``checkpoints/`` (model and replay buffer every ``checkpoint.interval_steps``),
-``model.zip`` and ``replay_buffer.pkl`` at the end (or on Ctrl-C), ``best/`` (best evaluated
-model), ``monitor/`` (one CSV row per episode), ``logs/<session>/`` (SB3's progress.csv and
-TensorBoard events), ``reward_curve.png`` and ``summary.yaml``. Nothing in an existing run is
-overwritten: a new run with a taken name gets ``<run>-2``, a resume writes a new session.
+``model.zip`` and ``replay_buffer.pkl`` at the end (or on Ctrl-C), ``monitor/`` (one CSV row
+per episode), and per session (0, then one more per resume) ``logs/<session>/`` (SB3's
+progress.csv and TensorBoard events), ``eval/<session>/`` and ``best/<session>/`` (the best
+evaluated model); ``reward_curve.png`` and ``summary.yaml``. A new run with a taken name gets
+``<run>-2``; a resume continues the run's model, replay buffer, curriculum and curve.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import yaml
 from pic4rl_bridge.config import EnvConfig, param_names
 from pic4rl_bridge.errors import BridgeError, ConfigError, unknown_key
 
-from .config import RunConfig, TrainConfig, load_run_config, parse_overrides
+from .config import RunConfig, TrainConfig, load_run_config, parse_overrides, run_config_file
 from .rosargs import RosArgs, split_ros_args
 
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
@@ -184,9 +185,23 @@ class Trainer:
 
         from .algorithms import build_model, load_model
         from .callbacks import ProgressCallback, RewardCurveCallback, SeededEvalCallback
+        from .curves import episode_table
         from .envs import make_vec_env
 
         cfg, env_cfg = self.config.train, self.config.env
+        seed = cfg.seed
+        if self.resume is not None:
+            done = _steps_in(self.resume.model)
+            if done >= cfg.max_steps:
+                print(f"pic4rl-train: {self.resume.model} has trained {done} steps already "
+                      f"(max_steps={cfg.max_steps}); nothing to do", file=sys.stderr)
+                return self.run_dir
+            # Go on where the run was: the curriculum's episodes already driven are not
+            # repeated, and the session's seed gives new episodes.
+            driven = len(episode_table(self.monitor_dir))
+            starting = max(0, env_cfg.episodes.starting_episodes - driven)
+            env_cfg = env_cfg.replace(**{"episodes.starting_episodes": starting})
+            seed = cfg.seed + self.session
         if cfg.torch_threads > 0:
             torch.set_num_threads(cfg.torch_threads)
         self._write_config()
@@ -198,7 +213,7 @@ class Trainer:
         start_steps = 0
         model = None
         try:
-            env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=cfg.seed,
+            env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed,
                                monitor_dir=self.monitor_dir, node=node,
                                prefix=f"{self.session}_")
             if self.resume is not None:
@@ -233,16 +248,12 @@ class Trainer:
                 callbacks.append(SeededEvalCallback(
                     eval_env, eval_seed=cfg.eval.seed, n_eval_episodes=cfg.eval.episodes,
                     eval_freq=max(cfg.eval.interval_steps // cfg.n_envs, 1),
-                    best_model_save_path=str(self.run_dir / "best"),
-                    log_path=str(self.run_dir / "eval"), deterministic=True, verbose=0))
+                    best_model_save_path=str(self.run_dir / "best" / str(self.session)),
+                    log_path=str(self.run_dir / "eval" / str(self.session)),
+                    deterministic=True, verbose=0))
             if self.progress:
                 callbacks.append(ProgressCallback(cfg.max_steps, desc=self.config.name))
             remaining = cfg.max_steps - model.num_timesteps
-            if remaining <= 0:
-                print(f"pic4rl-train: {self.resume.model if self.resume else 'the model'} has "
-                      f"{model.num_timesteps} steps already (max_steps={cfg.max_steps}); "
-                      "nothing to do", file=sys.stderr)
-                return self.run_dir
             with _sigterm_as_interrupt():
                 try:
                     model.learn(remaining, callback=callbacks,
@@ -252,7 +263,7 @@ class Trainer:
                     print(f"\npic4rl-train: interrupted at {model.num_timesteps} steps; "
                           "saving", file=sys.stderr)
         finally:
-            if model is not None:
+            if model is not None and model.num_timesteps > start_steps:
                 self._save(model, time.perf_counter() - started, start_steps)
             if env is not None:
                 env.close()
@@ -297,7 +308,7 @@ class Trainer:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="pic4rl-train", description=__doc__.split("\n")[0],
+        prog="pic4rl-train", description=__doc__.split("\n\n")[0],
         epilog="ROS arguments after --ros-args: --params-file FILE (sim:, nav_env:, trainer: "
                "sections), -p key:=value (a trainer or env key).")
     parser.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
@@ -322,7 +333,11 @@ def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, Resume |
     resume = find_resume(args.resume) if args.resume else None
     files = list(ros.params_files)
     if not files and resume is not None:
-        files = [str(resume.run_dir / "config.yaml")]
+        latest = run_config_file(resume.run_dir)
+        if latest is None:
+            raise ConfigError(f"--resume {args.resume}: no config.yaml in {resume.run_dir}; "
+                              "give the params file with --ros-args --params-file FILE")
+        files = [str(latest)]
     if not files:
         raise ConfigError("no --params-file given (e.g. pic4rl-train --ros-args --params-file "
                           "config/train_goto_lidar_td3.yaml)")
