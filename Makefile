@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-# A fresh ROS 2 domain per run keeps DDS traffic of parallel runs apart.
+# DDS discovery stays on this machine (set ROS_DOMAIN_ID to keep parallel runs apart).
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export MPLBACKEND ?= Agg
 

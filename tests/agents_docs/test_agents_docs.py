@@ -1,0 +1,323 @@
+"""docs/agents.md against the code: the trainer's parameter table lists every ``trainer``
+parameter with the code's type and default; every flag of ``pic4rl-train`` and ``pic4rl-test``
+is documented in its command's section; every shipped training file is named with its run,
+algorithm, sensor and steps; the default test pairs match the packaged JSON; the algorithms and
+baselines are the code's; and the run and bag layouts list what the commands really write (a
+training of a few dozen steps, resumed once, and a one-episode test, all in ``tmp_path``).
+
+After changing a trainer parameter, print the table's first three columns and update
+docs/agents.md:
+
+    .venv/bin/python tests/agents_docs/test_agents_docs.py
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import typing
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from pic4rl_agents import tester, train
+from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
+from pic4rl_bridge.config import param_names
+
+ROOT = Path(__file__).resolve().parents[2]
+DOC = ROOT / "docs" / "agents.md"
+TYPE_NAMES = {str: "string", int: "integer", float: "double", bool: "bool"}
+TRAIN_SECTION = "## Training (`pic4rl-train`)"
+TEST_SECTION = "## Testing (`pic4rl-test`)"
+
+
+def literal(value: Any) -> str:
+    """A default as the doc writes it: YAML-like, floats as Python prints them."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(literal(v) for v in value) + "]"
+    if isinstance(value, str):
+        return value if value else '""'
+    return repr(value)
+
+
+def type_name(kind: Any) -> str:
+    """A parameter's type as ROS 2 names it (``integer[]`` for a tuple of ints)."""
+    if typing.get_origin(kind) is tuple:
+        return TYPE_NAMES[typing.get_args(kind)[0]] + "[]"
+    return TYPE_NAMES[kind]
+
+
+def expected_rows() -> dict[str, tuple[str, str]]:
+    """Every dotted trainer parameter → (type, default) as the code has them."""
+    defaults = TrainConfig().to_params()
+    return {name: (type_name(kind), f"`{literal(defaults[name])}`")
+            for name, kind in param_names(TrainConfig).items()}
+
+
+def section(doc: str, heading: str) -> str:
+    """The text under the Markdown heading ``heading``, up to the next heading of the same or a
+    higher level (lines inside code blocks are not headings)."""
+    level = len(heading) - len(heading.lstrip("#"))
+    lines = doc.splitlines()
+    try:
+        start = lines.index(heading)
+    except ValueError:
+        raise AssertionError(f"no heading {heading!r} in docs/agents.md") from None
+    end, fenced = len(lines), False
+    for i in range(start + 1, len(lines)):
+        if lines[i].startswith("```"):
+            fenced = not fenced
+        match = re.match(r"(#+) ", lines[i])
+        if match and not fenced and len(match.group(1)) <= level:
+            end = i
+            break
+    return "\n".join(lines[start + 1:end])
+
+
+def table_rows(text: str) -> dict[str, list[str]]:
+    """Rows of the Markdown tables in ``text`` whose first cell is one backticked name: name →
+    the other cells. A name listed twice is an error."""
+    rows: dict[str, list[str]] = {}
+    for line in text.splitlines():
+        match = re.match(r"\| `([^`]+)` \|(.*)\|\s*$", line)
+        if match is None:
+            continue
+        name = match.group(1)
+        assert name not in rows, f"docs/agents.md lists {name!r} twice in one section"
+        rows[name] = [cell.strip() for cell in re.split(r"(?<!\\)\|", match.group(2))]
+    return rows
+
+
+def code_blocks(text: str) -> str:
+    """The contents of the fenced code blocks in ``text``, joined."""
+    return "\n".join(re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S))
+
+
+def flags(parser: argparse.ArgumentParser) -> list[str]:
+    """Every option string of ``parser`` except ``-h``/``--help``."""
+    return sorted({option for action in parser._actions for option in action.option_strings
+                   if option not in ("-h", "--help")})
+
+
+def documented(text: str, flag: str) -> bool:
+    """Whether ``flag`` opens a code span in ``text`` (`` `--run NAME` ``, `` `-n` ``)."""
+    return re.search(rf"`{re.escape(flag)}(?=[`\s=\[])", text) is not None
+
+
+@pytest.fixture(scope="module")
+def doc() -> str:
+    return DOC.read_text(encoding="utf-8")
+
+
+# -- the trainer's parameters ------------------------------------------------------------------
+
+
+def test_the_parameter_table_lists_every_trainer_parameter_and_nothing_else(doc):
+    rows = table_rows(section(section(doc, TRAIN_SECTION), "### Parameters"))
+    expected = expected_rows()
+    assert len(expected) > 30  # param_names() found the nested sections too
+    missing = sorted(set(expected) - set(rows))
+    stale = sorted(set(rows) - set(expected))
+    assert not missing, f"docs/agents.md's parameter table lacks {missing}"
+    assert not stale, f"docs/agents.md's parameter table lists unknown parameters {stale}"
+
+
+def test_the_parameter_table_has_the_codes_types_and_defaults(doc):
+    rows = table_rows(section(section(doc, TRAIN_SECTION), "### Parameters"))
+    wrong = []
+    for name, (kind, default) in expected_rows().items():
+        cells = rows.get(name)
+        if cells is None:
+            continue  # reported by the test above
+        assert len(cells) == 3, f"{name}: expected type, default and meaning; got {cells}"
+        if (cells[0], cells[1]) != (kind, default):
+            wrong.append(f"{name}: doc has {cells[0]} {cells[1]}, code has {kind} {default}")
+        if not cells[2]:
+            wrong.append(f"{name}: no meaning given")
+    assert not wrong, "docs/agents.md's parameter table differs from the code:\n" + "\n".join(
+        wrong)
+
+
+# -- command lines -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("heading", "module"), [(TRAIN_SECTION, train), (TEST_SECTION, tester)],
+                         ids=["pic4rl-train", "pic4rl-test"])
+def test_every_flag_is_documented_in_its_commands_section(doc, heading, module):
+    text = section(doc, heading)
+    options = flags(module.build_parser())
+    assert len(options) >= 8
+    missing = [flag for flag in options if not documented(text, flag)]
+    assert not missing, f"docs/agents.md's {heading!r} does not document {missing}"
+    for ros_option in ("--params-file", "-p"):
+        assert documented(text, f"--ros-args {ros_option}"), (heading, ros_option)
+
+
+def test_the_documented_test_defaults_are_the_parsers():
+    defaults = tester.build_parser().parse_args([])
+    text = section(DOC.read_text(encoding="utf-8"), TEST_SECTION)
+    rows = table_rows(text)
+    assert f"(default {defaults.episodes}" in rows["--episodes N"][0]
+    assert f"(default {defaults.seed})" in rows["--seed S"][0]
+    assert f"(default `{defaults.bags_dir}`)" in rows["--bags DIR"][0]
+    assert f"(default `{defaults.format}`)" in rows["--format FMT"][0] or (
+        f"`{defaults.format}` (default)" in rows["--format FMT"][0])
+
+
+# -- shipped files, algorithms, baselines, test pairs ------------------------------------------
+
+
+def test_every_training_file_is_named_with_its_run_algorithm_sensor_and_steps(doc):
+    files = sorted(f"config/{p.name}" for p in (ROOT / "config").glob("train_*.yaml"))
+    assert len(files) >= 4
+    rows = table_rows(section(doc, "## Quick start"))
+    missing = [f for f in files if f not in rows]
+    assert not missing, f"docs/agents.md's quick-start table does not name {missing}"
+    for file in files:
+        run = load_run_config([ROOT / file])
+        run_name, algorithm, sensor, steps = (c.strip("`") for c in rows[file][:4])
+        assert (run_name, algorithm, sensor) == (run.name, run.train.algorithm,
+                                                 run.env.sensor), file
+        assert int(steps.replace(",", "")) == run.train.max_steps, file
+    stale = sorted(set(re.findall(r"config/train_[a-z_]+\.yaml", doc)) - set(files))
+    assert not stale, f"docs/agents.md names training files that do not exist: {stale}"
+
+
+def test_every_algorithm_and_baseline_is_documented(doc):
+    rows = table_rows(section(section(doc, TRAIN_SECTION), "### Algorithms and networks"))
+    assert set(rows) == set(ALGORITHM_NAMES), sorted(rows)
+    text = section(doc, TEST_SECTION)
+    for baseline in tester.BASELINES:
+        assert f"`--baseline {baseline}`" in text, baseline
+
+
+def test_the_default_test_pairs_are_the_packaged_ones(doc):
+    text = section(doc, "### The test env and its episodes")
+    path = tester.DEFAULT_PAIRS.relative_to(ROOT).as_posix()
+    assert f"`{path}`" in text
+    data = json.loads(tester.DEFAULT_PAIRS.read_text())
+    rows = [line for line in text.splitlines() if re.match(r"\| \d+ \|", line)]
+    assert len(rows) == len(data["poses"]) == len(data["goals"])
+    for i, (line, pose, goal) in enumerate(zip(rows, data["poses"], data["goals"])):
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        assert int(cells[0]) == i
+        assert json.loads(cells[1]) == pose and json.loads(cells[2]) == goal, line
+        assert float(cells[3]) == pytest.approx(math.dist(pose[:2], goal), abs=0.005), line
+
+
+# -- what the commands write -------------------------------------------------------------------
+
+_GENERIC = [(r"^model_\d+_steps\.zip$", "model_<steps>_steps.zip"),
+            (r"^model_replay_buffer_\d+_steps\.pkl$", "model_replay_buffer_<steps>_steps.pkl"),
+            (r"^\d+_\d+\.monitor\.csv$", "<session>_<rank>.monitor.csv"),
+            (r"^events\.out\.tfevents\..*$", "events.out.tfevents.*"),
+            (r"^\d+$", "<session>"), (r"^episode_\d{4}$", "episode_0000")]
+
+
+def _generic(name: str) -> str:
+    for pattern, placeholder in _GENERIC:
+        if re.match(pattern, name):
+            return placeholder
+    return name
+
+
+def _layout_names(root: Path) -> set[str]:
+    """Every file and folder name under ``root``, with numbers as the doc's placeholders."""
+    return {_generic(p.name) for p in root.rglob("*")
+            if not (p.parent.name.startswith("episode_") and p.is_file())}
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    """A TD3-LiDAR run of 64 steps with a checkpoint and an evaluation, resumed to 96."""
+    runs = tmp_path_factory.mktemp("runs")
+    common = ["--no-progress", "--hyperparams", f"runs_dir:{runs}", "learning_starts:16",
+              "batch_size:8", "policy.net_arch:[8]", "policy.critic_arch:[8]",
+              "checkpoint.interval_steps:32", "eval.interval_steps:32", "eval.episodes:1",
+              "--env-kwargs", "episode_max_steps:20"]
+    params = ["--ros-args", "--params-file", str(ROOT / "config/train_goto_lidar_td3.yaml")]
+    assert train.main(["-n", "64", "--run", "doc", *common, *params]) == 0
+    assert train.main(["-n", "96", "--resume", str(runs / "doc"), *common]) == 0
+    return runs / "doc"
+
+
+@pytest.mark.slow
+def test_the_run_directory_is_as_documented(doc, trained):
+    layout = code_blocks(section(section(doc, TRAIN_SECTION), "### The run directory"))
+    names = _layout_names(trained)
+    assert {"config-2.yaml", "summary-2.yaml", "model_<steps>_steps.zip", "best_model.zip",
+            "progress.csv"} <= names  # the resume wrote a second session
+    assert sorted(p.name for p in (trained / "logs").iterdir()) == ["0", "1"]
+    missing = sorted(n for n in names if n not in layout)
+    assert not missing, f"docs/agents.md's run directory lacks {missing}"
+    summary = yaml.safe_load((trained / "summary-2.yaml").read_text())
+    assert summary["session"] == 1 and summary["total_steps"] == 96
+    keys = section(section(doc, TRAIN_SECTION), "### The run directory")
+    undocumented = [k for k in summary if f"`{k}`" not in keys]
+    assert not undocumented, f"docs/agents.md does not describe summary keys {undocumented}"
+
+
+def test_the_test_run_is_as_documented(doc, tmp_path):
+    bags = tmp_path / "bags"
+    argv = ["--baseline", "proportional", "--random", "1", "--bags", str(bags), "--run", "t",
+            "--no-progress", "--env-kwargs", "episode_max_steps:5",
+            "--ros-args", "--params-file", str(ROOT / "config/env_goto_lidar.yaml")]
+    assert tester.main(argv) == 0
+    layout = code_blocks(section(doc, "### Bags and the table"))
+    names = {n.replace("proportional", "<agent>") for n in _layout_names(bags / "t")}
+    assert {"<agent>", "episode_0000", "episodes.csv", "table.md", "config.yaml"} <= names
+    missing = sorted(n for n in names if n not in layout)
+    assert not missing, f"docs/agents.md's bag layout lacks {missing}"
+    assert tester.main(["--bags", str(bags)]) == 2  # nothing to test: bad arguments
+
+
+# -- links -------------------------------------------------------------------------------------
+
+
+def _anchors(path: Path) -> set[str]:
+    """GitHub's anchors of the headings of ``path`` (outside code blocks)."""
+    out, fenced = set(), False
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+        match = re.match(r"#+ (.+)", line)
+        if match and not fenced:
+            text = re.sub(r"[^\w\- ]", "", match.group(1).lower())
+            out.add(text.replace(" ", "-"))
+    return out
+
+
+def test_links_to_files_and_headings_resolve(doc):
+    links = re.findall(r"\]\(([^)\s]+)\)", doc)
+    assert links
+    broken = []
+    for link in links:
+        if "://" in link:
+            continue
+        target, _, anchor = link.partition("#")
+        file = DOC if not target else DOC.parent / target
+        if not file.exists() or (anchor and anchor not in _anchors(file)):
+            broken.append(link)
+    assert not broken, f"agents.md has broken links: {broken}"
+
+
+def test_the_readme_and_interfaces_point_here():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    interfaces = (ROOT / "docs" / "interfaces.md").read_text(encoding="utf-8")
+    assert "(docs/agents.md)" in readme
+    assert "(agents.md" in interfaces
+    for command in ("pic4rl-train", "pic4rl-test", "pic4rl-run"):
+        assert f"## `{command}`" in interfaces, command
+        assert command in readme, command
+    assert "pic4rl_bridge.demo" not in readme and "demo.py" not in readme
+
+
+if __name__ == "__main__":
+    for name, (kind, default) in expected_rows().items():
+        print(f"| `{name}` | {kind} | {default} | |")
