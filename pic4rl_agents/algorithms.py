@@ -2,7 +2,8 @@
 
 ``build_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
-(depth + goal), ``CnnPolicy`` with it on bare images (vineyard). ``load_model`` reads a saved zip back with the same classes.
+(depth + goal), ``CnnPolicy`` with it on bare images (vineyard). ``load_model`` reads a
+saved zip back with the same classes.
 """
 
 from __future__ import annotations

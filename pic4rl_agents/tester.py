@@ -21,6 +21,7 @@ Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import time
@@ -32,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from pic4rl_bridge.config import node_section, read_params_file
-from pic4rl_bridge.errors import BridgeError, ConfigError
+from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 
 from .config import ENV_NODE, RunConfig, load_run_config, parse_overrides, run_config_file
 from .rosargs import RosArgs, split_ros_args
@@ -259,6 +260,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                   file=sys.stderr)
         run_dir = bags_dir / args.run_dir_name
         text, failed = report(run_dir, args.format, with_std=args.with_std)
+    except TransportError as err:
+        print(f"pic4rl-test: {err}\n  Is a sim answering in ROS domain "
+              f"{os.environ.get('ROS_DOMAIN_ID', '0')}? Start one with the same params file "
+              "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run test, or "
+              "-p transport:=inprocess", file=sys.stderr)
+        return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-test: {err}", file=sys.stderr)
         return 2

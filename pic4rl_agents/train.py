@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import re
 import signal
 import sys
@@ -33,7 +34,7 @@ import numpy as np
 import yaml
 
 from pic4rl_bridge.config import EnvConfig, param_names
-from pic4rl_bridge.errors import BridgeError, ConfigError, unknown_key
+from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
 
 from .config import RunConfig, TrainConfig, load_run_config, parse_overrides, run_config_file
 from .rosargs import RosArgs, split_ros_args
@@ -361,6 +362,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         run, resume = resolve(args, ros)
         trainer = Trainer(run, resume=resume, progress=not args.no_progress, ros=ros)
         trainer.run()
+    except TransportError as err:
+        print(f"pic4rl-train: {err}\n  Is a sim answering in ROS domain "
+              f"{os.environ.get('ROS_DOMAIN_ID', '0')}? Start one with the same params file "
+              "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run train, or "
+              "-p transport:=inprocess", file=sys.stderr)
+        return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-train: {err}", file=sys.stderr)
         return 2
