@@ -16,6 +16,7 @@ import numpy as np
 import stable_baselines3 as sb3
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.noise import NormalActionNoise
+from stable_baselines3.common.save_util import load_from_zip_file
 from torch import nn
 
 from pic4rl_bridge.errors import ConfigError
@@ -113,7 +114,18 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None,
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: no such model file (expected an SB3 .zip)")
+    cls = algorithm_class(algorithm)
     try:
-        return algorithm_class(algorithm).load(path, env=env, device=device)
-    except (ValueError, KeyError, RuntimeError) as err:
+        data, _, _ = load_from_zip_file(path, load_data=True, device="cpu")
+    except (ValueError, KeyError, RuntimeError, OSError) as err:  # not an SB3 zip
+        raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
+    policy = (data or {}).get("policy_class")
+    known = tuple(cls.policy_aliases.values())
+    if isinstance(policy, type) and not issubclass(policy, known):
+        raise ConfigError(f"{path}: cannot load it as a {algorithm} model: it holds a "
+                          f"{policy.__name__}, not one of {', '.join(k.__name__ for k in known)}"
+                          "; pass the algorithm it was trained with")
+    try:
+        return cls.load(path, env=env, device=device)
+    except (ValueError, KeyError, RuntimeError, TypeError, AttributeError) as err:
         raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err

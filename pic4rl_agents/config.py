@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -195,6 +197,25 @@ def run_config_file(folder: Path) -> Path | None:
                if p.stem != "config" else 1, default=None)
 
 
+def ros_domain(env: EnvConfig | None) -> str:
+    """The ROS domain an env talks in: its ``ros.domain_id``, else ``ROS_DOMAIN_ID`` (or 0)."""
+    if env is not None and env.ros.domain_id >= 0:
+        return str(env.ros.domain_id)
+    return os.environ.get("ROS_DOMAIN_ID", "0")
+
+
+_FLOAT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
+
+
+def yaml_value(text: str) -> Any:
+    """A command-line value as ROS reads it: YAML, plus ``1e-3`` as a number (YAML 1.1 wants
+    ``1.0e-3``; RL Zoo users write ``1e-3``)."""
+    value = yaml.safe_load(text) if text.strip() else ""
+    if isinstance(value, str) and _FLOAT.match(value.strip()):
+        return float(value)
+    return value
+
+
 def parse_overrides(items: Sequence[str], *, flag: str) -> dict[str, Any]:
     """RL-Zoo-style ``key:value`` items (values read as YAML: ``0.001``, ``[64, 64]``, ``sac``)
     as a dict of dotted names."""
@@ -204,7 +225,7 @@ def parse_overrides(items: Sequence[str], *, flag: str) -> dict[str, Any]:
         if not sep or not key.strip():
             raise ConfigError(f"{flag} {item!r}: expected key:value (e.g. learning_rate:0.001)")
         try:
-            out[key.strip()] = yaml.safe_load(text) if text.strip() else ""
+            out[key.strip()] = yaml_value(text)
         except yaml.YAMLError as err:
             raise ConfigError(f"{flag} {item!r}: the value is not valid YAML: {err}") from err
     return out
@@ -218,8 +239,16 @@ def load_run_config(paths: Sequence[str | Path], *, train: Mapping[str, Any] | N
     merged: dict[str, dict[str, Any]] = {TRAINER_NODE: {}, ENV_NODE: {}, SIM_NODE: {}}
     for path in paths:
         data = read_params_file(path)
-        for node in merged:
-            section = node_section(data, node, source=str(path))
+        sections = {node: node_section(data, node, source=str(path)) for node in merged}
+        if sections[SIM_NODE] is None and "/**" in data:  # a sim-only file (sim_*.yaml)
+            sections[SIM_NODE] = node_section({"/**": data["/**"]}, "/**", source=str(path))
+        if all(section is None for section in sections.values()):
+            raise ConfigError(f"{path}: no section for {', '.join(merged)} (expected "
+                              f"'{TRAINER_NODE}: ros__parameters: ...' and so on)")
+        pairs = (sections[ENV_NODE] or {}).get("episodes.file")
+        if isinstance(pairs, str) and pairs:
+            sections[ENV_NODE]["episodes.file"] = beside(pairs, Path(path))  # type: ignore[index]
+        for node, section in sections.items():
             merged[node].update(section or {})
     merged[TRAINER_NODE].update(train or {})
     merged[ENV_NODE].update(env or {})
@@ -231,6 +260,16 @@ def load_run_config(paths: Sequence[str | Path], *, train: Mapping[str, Any] | N
     except ConfigError as err:
         raise ConfigError(f"{where}: {err}") from err
     return RunConfig(train_config, env_config, tuple(str(p) for p in paths))
+
+
+def beside(file: str, params_file: Path) -> str:
+    """A relative path named in a params file: as given when it exists from the working
+    directory (ROS's rule), else the file beside the params file, so that a shipped config
+    works from any directory."""
+    if Path(file).is_absolute() or Path(file).exists():
+        return file
+    beside = params_file.parent / file
+    return str(beside.resolve()) if beside.exists() else file
 
 
 def with_env(run: RunConfig, **overrides: Any) -> RunConfig:

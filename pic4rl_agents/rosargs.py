@@ -15,6 +15,8 @@ import yaml
 
 from pic4rl_bridge.errors import ConfigError
 
+from .config import yaml_value
+
 
 @dataclass
 class RosArgs:
@@ -56,7 +58,7 @@ def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
                 raise ConfigError(f"{arg}: expected key:=value after it")
             key, _, text = argv[i + 1].partition(":=")
             try:
-                ros.params[key] = yaml.safe_load(text) if text else ""
+                ros.params[key] = yaml_value(text)
             except yaml.YAMLError as err:
                 raise ConfigError(f"{arg} {argv[i + 1]}: the value is not valid YAML") from err
             i += 1

@@ -129,3 +129,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             for signum, handler in previous.items():
                 signal.signal(signum, handler)
     return code or child_code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

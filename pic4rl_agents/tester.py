@@ -21,7 +21,6 @@ Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import sys
 import time
@@ -35,7 +34,15 @@ import numpy as np
 from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 
-from .config import ENV_NODE, RunConfig, load_run_config, parse_overrides, run_config_file
+from .config import (
+    ENV_NODE,
+    RunConfig,
+    beside,
+    load_run_config,
+    parse_overrides,
+    ros_domain,
+    run_config_file,
+)
 from .rosargs import RosArgs, split_ros_args
 
 BASELINES = ("proportional",)
@@ -75,7 +82,8 @@ def _test_pairs(ros: RosArgs, env_overrides: dict[str, Any]) -> str | None:
     pairs = None
     for path in ros.params_files:
         section = node_section(read_params_file(path), ENV_NODE, source=path) or {}
-        pairs = section.get("episodes.file", pairs)
+        if section.get("episodes.file"):
+            pairs = beside(section["episodes.file"], Path(path))
     return env_overrides.get("episodes.file", pairs)
 
 
@@ -244,6 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
     signal.signal(signal.SIGINT, signal.default_int_handler)
+    specs: list[AgentSpec] = []
     try:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
@@ -261,8 +270,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         run_dir = bags_dir / args.run_dir_name
         text, failed = report(run_dir, args.format, with_std=args.with_std)
     except TransportError as err:
+        domain = ros_domain(specs[0].run.env) if specs else ros_domain(None)
         print(f"pic4rl-test: {err}\n  Is a sim answering in ROS domain "
-              f"{os.environ.get('ROS_DOMAIN_ID', '0')}? Start one with the same params file "
+              f"{domain}? Start one with the same params file "
               "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run test, or "
               "-p transport:=inprocess", file=sys.stderr)
         return 2

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import re
 import signal
 import sys
@@ -36,7 +35,14 @@ import yaml
 from pic4rl_bridge.config import EnvConfig, param_names
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
 
-from .config import RunConfig, TrainConfig, load_run_config, parse_overrides, run_config_file
+from .config import (
+    RunConfig,
+    TrainConfig,
+    load_run_config,
+    parse_overrides,
+    ros_domain,
+    run_config_file,
+)
 from .rosargs import RosArgs, split_ros_args
 
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
@@ -70,10 +76,13 @@ def find_resume(path: str | Path) -> Resume:
                           "run directory)")
     if match := _CHECKPOINT.match(path.name):
         buffer = path.with_name(f"model_replay_buffer_{match.group(1)}_steps.pkl")
-        run_dir = path.parent.parent
+        default = path.parent.parent
     else:
         buffer = path.with_name("replay_buffer.pkl")
-        run_dir = path.parent
+        default = path.parent
+    # The run is the nearest folder with a run config: checkpoints/.., best/<session>/../..
+    run_dir = next((d for d in (path.parent, path.parent.parent, path.parent.parent.parent)
+                    if run_config_file(d) is not None), default)
     return Resume(path, buffer if buffer.is_file() else None, run_dir)
 
 
@@ -356,6 +365,7 @@ def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, Resume |
 def main(argv: Sequence[str] | None = None) -> int:
     """Train; exit 0 when done (or interrupted and saved), 2 for bad arguments or config."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    run: RunConfig | None = None
     try:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
@@ -364,7 +374,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         trainer.run()
     except TransportError as err:
         print(f"pic4rl-train: {err}\n  Is a sim answering in ROS domain "
-              f"{os.environ.get('ROS_DOMAIN_ID', '0')}? Start one with the same params file "
+              f"{ros_domain(run.env if run else None)}? Start one with the same params file "
               "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run train, or "
               "-p transport:=inprocess", file=sys.stderr)
         return 2

@@ -1,0 +1,277 @@
+"""``pic4rl-run`` for real: the launcher starts ``pic4rl-sim`` processes and the trainer or
+tester, which talk ROS 2 on the test's own DDS domain. Each algorithm trains a few hundred
+steps through ROS; two envs train against two sims (``env_0``, ``env_1``); the tester records
+bags the metrics judge; Ctrl-C to the launcher saves the model; a trainer with no sim to talk
+to exits 2 saying how to start one. After every launcher exits, no sim it started is left
+running (each sim carries the test's tag in its environment, so the test finds them in /proc
+even though they run in sessions of their own).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+import yaml
+from agents_helpers import LIDAR_TD3, ROOT, TINY, processes_with
+from ros_helpers import next_domain, sim_env
+
+from pic4rl_agents import train
+from pic4rl_agents.algorithms import ALGORITHMS, load_model
+from pic4rl_metrics.aggregate import aggregate
+from pic4rl_metrics.batch import compute
+
+pytestmark = pytest.mark.integration
+
+#: ``pic4rl-run``, as ``python -m`` (the console script runs the same ``main``).
+LAUNCHER = [sys.executable, "-m", "pic4rl_agents.run"]
+#: Generous ROS waits: sims and trainers start slowly on a loaded machine.
+ROS_ARGS = ["-p", "ros.timeout_s:=60.0"]
+SIM, TRAINER = "pic4rl_sim.node", "pic4rl_agents.train"
+
+
+@dataclass
+class Launcher:
+    """One ``pic4rl-run`` process in a session of its own, its output in ``log``."""
+
+    proc: subprocess.Popen[bytes]
+    log: Path
+    tag: str  # NAME=value in the environment of the launcher and of everything it starts
+
+    @property
+    def output(self) -> str:
+        return self.log.read_text(errors="replace")
+
+    def wait(self, timeout_s: float) -> int:
+        try:
+            return self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"pic4rl-run still running after {timeout_s} s:\n{self.output}")
+
+    def left(self, needle: str = SIM) -> list[int]:
+        """Pids of processes it started that are still alive (``needle`` in the command)."""
+        deadline = time.monotonic() + 2.0  # a sim killed just now may take a moment to go
+        while (pids := processes_with(self.tag, needle)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        return pids
+
+
+@pytest.fixture
+def launch(tmp_path: Path) -> Iterator[Callable[..., Launcher]]:
+    """Start ``pic4rl-run ARGS`` on a fresh domain; afterwards the launcher and anything it
+    left behind (found by the tag) are stopped."""
+    started: list[Launcher] = []
+
+    def start(*args: str, domain: int | None = None) -> Launcher:
+        tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
+        env = sim_env(next_domain() if domain is None else domain, dict([tag.split("=", 1)]))
+        log = tmp_path / f"launcher{len(started)}.log"
+        with log.open("wb") as out:
+            proc = subprocess.Popen([*LAUNCHER, *args], cwd=ROOT, env=env, stdout=out,
+                                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                    start_new_session=True)
+        started.append(Launcher(proc, log, tag))
+        return started[-1]
+
+    try:
+        yield start
+    finally:
+        for launcher in started:
+            if launcher.proc.poll() is None:
+                os.kill(launcher.proc.pid, signal.SIGINT)
+                try:
+                    launcher.proc.wait(timeout=60)
+                except subprocess.TimeoutExpired:
+                    os.killpg(launcher.proc.pid, signal.SIGKILL)
+                    launcher.proc.wait()
+            for pid in processes_with(launcher.tag, "python"):
+                with contextlib.suppress(ProcessLookupError):  # gone meanwhile
+                    os.killpg(os.getpgid(pid), signal.SIGKILL)
+
+
+def train_args(runs: Path, algorithm: str, *extra: str, steps: int = 200) -> list[str]:
+    hyper = [*TINY, f"algorithm:{algorithm}", "checkpoint.interval_steps:0",
+             "eval.interval_steps:0"]
+    if algorithm == "ppo":
+        hyper += ["epsilon.initial:0.0", "ppo.n_steps:64", "ppo.n_epochs:2"]
+    return ["train", "--hyperparams", *hyper, "--env-kwargs", "episode_max_steps:60",
+            "-n", str(steps), "--run", algorithm, "--no-progress", *extra,
+            "--ros-args", "--params-file", str(LIDAR_TD3), "-p", f"runs_dir:={runs}",
+            *ROS_ARGS]
+
+
+@dataclass(frozen=True)
+class RosRun:
+    code: int
+    run_dir: Path
+    output: str
+    sims_left: list[int]
+
+
+@pytest.fixture(scope="module")
+def ros_runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Callable[[str], RosRun]]:
+    """``pic4rl-run train`` of an algorithm through ROS (tiny nets, 200 steps), once per
+    module: the TD3 run is also the agent the tester drives."""
+    runs = tmp_path_factory.mktemp("ros_runs")
+    done: dict[str, RosRun] = {}
+    launchers: list[Launcher] = []
+
+    def get(algorithm: str) -> RosRun:
+        if algorithm not in done:
+            tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
+            log = runs / f"{algorithm}.log"
+            with log.open("wb") as out:
+                proc = subprocess.Popen(
+                    [*LAUNCHER, *train_args(runs, algorithm)], cwd=ROOT,
+                    env=sim_env(next_domain(), dict([tag.split("=", 1)])), stdout=out,
+                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
+            launcher = Launcher(proc, log, tag)
+            launchers.append(launcher)
+            code = launcher.wait(300)
+            done[algorithm] = RosRun(code, runs / algorithm, launcher.output, launcher.left())
+        return done[algorithm]
+
+    try:
+        yield get
+    finally:
+        for launcher in launchers:
+            if launcher.proc.poll() is None:
+                os.killpg(launcher.proc.pid, signal.SIGKILL)
+                launcher.proc.wait()
+            for pid in processes_with(launcher.tag, "python"):
+                with contextlib.suppress(ProcessLookupError):  # gone meanwhile
+                    os.killpg(os.getpgid(pid), signal.SIGKILL)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("algorithm", ["ddpg", "td3", "sac", "ppo"])
+def test_each_algorithm_trains_through_ros(ros_runs: Callable[[str], RosRun],
+                                           algorithm: str) -> None:
+    run = ros_runs(algorithm)
+    assert run.code == 0, run.output
+    assert run.sims_left == [], run.output
+    summary = yaml.safe_load((run.run_dir / "summary.yaml").read_text())
+    assert summary["transport"] == "ros" and summary["algorithm"] == algorithm
+    assert summary["n_envs"] == 1
+    assert summary["total_steps"] >= 200  # PPO rounds up to whole rollouts of 64
+    model = load_model(run.run_dir / "model.zip", algorithm)
+    assert isinstance(model, ALGORITHMS[algorithm])
+    assert model.num_timesteps == summary["total_steps"]
+    config = yaml.safe_load((run.run_dir / "config.yaml").read_text())
+    assert config["nav_env"]["ros__parameters"]["transport"] == "ros"
+
+
+@pytest.mark.slow
+def test_two_envs_train_against_two_sims(launch: Callable[..., Launcher],
+                                         tmp_path: Path) -> None:
+    launcher = launch(*train_args(tmp_path / "runs", "td3", "--n-envs", "2"))
+    code = launcher.wait(300)
+    assert code == 0, launcher.output
+    assert launcher.left() == [], launcher.output
+    run = tmp_path / "runs" / "td3"
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    assert summary["n_envs"] == 2 and summary["transport"] == "ros"
+    assert summary["total_steps"] == 200
+    monitors = sorted(p.name for p in (run / "monitor").iterdir())
+    assert monitors == ["0_0.monitor.csv", "0_1.monitor.csv"]
+    episodes = sum(len(p.read_text().splitlines()) - 2 for p in (run / "monitor").iterdir())
+    assert summary["episodes"] == episodes > 0
+
+
+@pytest.mark.slow
+def test_the_tester_records_bags_through_ros(ros_runs: Callable[[str], RosRun],
+                                             launch: Callable[..., Launcher],
+                                             tmp_path: Path) -> None:
+    trained = ros_runs("td3")
+    assert trained.code == 0, trained.output
+    bags = tmp_path / "bags"
+    launcher = launch("test", "--agent", str(trained.run_dir), "--baseline", "proportional",
+                      "--episodes", "2", "--bags", str(bags), "--run", "ros", "--no-progress",
+                      "--env-kwargs", "episode_max_steps:100", "--ros-args", *ROS_ARGS)
+    code = launcher.wait(300)
+    assert code == 0, launcher.output
+    assert launcher.left() == [], launcher.output
+    result = compute([bags / "ros"])
+    assert len(result.results) == 4 and not result.failed
+    assert "success" in result.frame.columns
+    table = aggregate(result.frame, by="agent")
+    assert sorted(table.index) == ["proportional", "td3"]
+    assert table["n_episodes"].tolist() == [2, 2]
+    assert all(s.endswith("/2") for s in table["success"])
+    config = yaml.safe_load((bags / "ros" / "td3" / "config.yaml").read_text())
+    assert config["nav_env"]["ros__parameters"]["transport"] == "ros"
+
+
+@pytest.mark.slow
+def test_ctrl_c_to_the_launcher_saves_the_model_and_stops_everything(
+        launch: Callable[..., Launcher], tmp_path: Path) -> None:
+    runs = tmp_path / "runs"
+    args = train_args(runs, "td3", steps=1_000_000)
+    args[args.index("checkpoint.interval_steps:0")] = "checkpoint.interval_steps:60"
+    launcher = launch(*args)
+    checkpoint = runs / "td3" / "checkpoints" / "model_60_steps.zip"
+    deadline = time.monotonic() + 240
+    while not checkpoint.exists():  # training is under way
+        assert launcher.proc.poll() is None, launcher.output
+        assert time.monotonic() < deadline, f"no checkpoint after 240 s:\n{launcher.output}"
+        time.sleep(0.2)
+    assert processes_with(launcher.tag, TRAINER) and processes_with(launcher.tag, SIM)
+    os.kill(launcher.proc.pid, signal.SIGINT)  # the launcher alone, as a terminal's Ctrl-C
+    code = launcher.wait(120)
+    assert code == 0, launcher.output
+    assert "pic4rl-run: stopping" in launcher.output
+    assert "interrupted at" in launcher.output
+    assert launcher.left(SIM) == [] and launcher.left(TRAINER) == [], launcher.output
+    model = load_model(runs / "td3" / "model.zip", "td3")
+    assert 60 <= model.num_timesteps < 1_000_000
+    summary = yaml.safe_load((runs / "td3" / "summary.yaml").read_text())
+    assert summary["total_steps"] == model.num_timesteps and summary["transport"] == "ros"
+
+
+# --- no sim ---------------------------------------------------------------------------------------
+
+
+def train_without_a_sim(tmp_path: Path, capfd: pytest.CaptureFixture[str],
+                        *ros_args: str) -> tuple[int, str]:
+    """``pic4rl-train`` in process over ROS with nothing answering (1 s timeouts), and its
+    stderr (captured at the descriptor: rclpy's executor wants a real stderr)."""
+    capfd.readouterr()
+    code = train.main(["--hyperparams", *TINY, "checkpoint.interval_steps:0",
+                       "eval.interval_steps:0", "-n", "50", "--no-progress",
+                       "--ros-args", "--params-file", str(LIDAR_TD3),
+                       "-p", "transport:=ros", "-p", "ros.timeout_s:=1.0",
+                       "-p", f"runs_dir:={tmp_path}", *ros_args])
+    return code, capfd.readouterr().err
+
+
+def test_training_without_a_sim_exits_2_saying_how_to_start_one(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capfd: pytest.CaptureFixture[str]) -> None:
+    domain = next_domain()
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    code, err = train_without_a_sim(tmp_path, capfd)
+    assert code == 2
+    assert err.startswith("pic4rl-train: ") and "nothing within 1 s" in err
+    assert f"Is a sim answering in ROS domain {domain}?" in err
+    assert "pic4rl-run train" in err
+    assert not list(tmp_path.rglob("model.zip"))  # no model after 0 steps
+
+
+def test_the_no_sim_hint_names_the_configured_domain(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capfd: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    domain = next_domain()
+    code, err = train_without_a_sim(tmp_path, capfd, "-p", f"ros.domain_id:={domain}")
+    assert code == 2
+    assert f"Is a sim answering in ROS domain {domain}?" in err
