@@ -33,6 +33,9 @@ STILL_SPEED_MPS = 0.05
 STILL_YAW_RATE_RADPS = 0.05
 #: Positions closer than this are merged before the path's turning is measured (m).
 TURNING_STEP_M = 0.01
+#: A shorter path is no path: its distance/path ratio is undefined, not odometry jitter over a
+#: start-goal distance (m).
+MIN_PATH_M = 0.01
 #: BARN challenge: actual time is clipped to [4, 8] x the optimal time.
 BARN_CLIP = (4.0, 8.0)
 
@@ -156,7 +159,7 @@ def _path_metrics(pose: PoseSeries, start_goal_m: float) -> Metrics:
         "path_length_m": length,
         "net_displacement_m": net,
         "start_goal_distance_m": start_goal_m,
-        "distance_path_ratio": reference / length if length > 0 else NAN,
+        "distance_path_ratio": reference / length if length >= MIN_PATH_M else NAN,
         "path_curvature_mean_radpm": (
             float(np.mean(turning.turn_rad / turning.step_m)) if has_turns else NAN
         ),

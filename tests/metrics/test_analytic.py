@@ -259,6 +259,17 @@ def test_heading_error_of_a_goal_to_the_side(tmp_path: Path) -> None:
     assert math.isnan(left["distance_path_ratio"])  # 0/0: cannot be computed, not 0
 
 
+def test_distance_path_ratio_of_a_robot_that_barely_moved(tmp_path: Path) -> None:
+    # 5 mm of creeping toward a goal 3 m away: no path, so no ratio (not 600).
+    creep = straight_line(0.001, 5.0)
+    row = _row(write_episode_bag(tmp_path / "creep", creep, goal=(3.0, 0.0)))
+    assert row["path_length_m"] == pytest.approx(0.005, abs=1e-6)
+    assert math.isnan(row["distance_path_ratio"])
+    moved = _row(write_episode_bag(tmp_path / "moved", straight_line(0.01, 5.0),
+                                   goal=(3.0, 0.0)))
+    assert moved["distance_path_ratio"] == pytest.approx(3.0 / 0.05, rel=1e-6)
+
+
 # --- circle -----------------------------------------------------------------------------------
 
 R, V, T_CIRCLE, DT = 1.0, 0.5, 10.0, 0.1  # 5 rad of arc: crosses the +-pi yaw wrap
