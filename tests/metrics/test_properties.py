@@ -32,6 +32,7 @@ from pic4rl_metrics import (
     read_episode,
     synthetic,
 )
+from pic4rl_metrics.metrics import MIN_PATH_M
 from pic4rl_metrics.results import METRIC_COLUMNS
 from pic4rl_metrics.series import PointSeries, PoseSeries, ScanSeries
 
@@ -279,7 +280,7 @@ def test_path_length_is_at_least_the_net_displacement(episode: Episode) -> None:
 @given(episodes(goal=False))
 def test_distance_path_ratio_without_goal_is_at_most_one(episode: Episode) -> None:
     m = compute_metrics(episode)
-    if m.path_length_m > 0:
+    if m.path_length_m >= MIN_PATH_M:
         assert m.distance_path_ratio <= 1 + 1e-9
         assert m.distance_path_ratio >= 0
     else:
