@@ -189,6 +189,17 @@ class RunConfig:
         return yaml.safe_dump(doc, sort_keys=False)
 
 
+def free_path(path: Path, *, keep_suffix: bool = False) -> Path:
+    """``path``, or ``<name>-2``, ``<name>-3``, ... (before the suffix with ``keep_suffix``):
+    the first that does not exist, so nothing is overwritten."""
+    stem, suffix = (path.stem, path.suffix) if keep_suffix else (path.name, "")
+    candidate, n = path, 1
+    while candidate.exists():
+        n += 1
+        candidate = path.with_name(f"{stem}-{n}{suffix}")
+    return candidate
+
+
 def run_config_file(folder: Path) -> Path | None:
     """A run folder's latest params file: ``config.yaml`` or its newest ``config-N.yaml``."""
     found = [p for p in folder.glob("config*.yaml")

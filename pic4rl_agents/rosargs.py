@@ -13,9 +13,10 @@ from typing import Any
 
 import yaml
 
+from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 
-from .config import yaml_value
+from .config import ros_domain, yaml_value
 
 
 @dataclass
@@ -69,3 +70,10 @@ def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
                 i += 1
         i += 1
     return plain, ros
+
+
+def no_sim_hint(command: str, env: EnvConfig | None) -> str:
+    """What to tell a user whose ROS env heard no sim (``command``: train or test)."""
+    return (f"  Is a sim answering in ROS domain {ros_domain(env)}? Start one with the same "
+            f"params file (pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run "
+            f"{command}, or -p transport:=inprocess")

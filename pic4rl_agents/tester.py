@@ -38,12 +38,12 @@ from .config import (
     ENV_NODE,
     RunConfig,
     beside,
+    free_path,
     load_run_config,
     parse_overrides,
-    ros_domain,
     run_config_file,
 )
-from .rosargs import RosArgs, split_ros_args
+from .rosargs import RosArgs, no_sim_hint, split_ros_args
 
 BASELINES = ("proportional",)
 #: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
@@ -223,14 +223,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _free_run(bags_dir: Path, run: str) -> str:
-    name, n = run, 1
-    while (bags_dir / name).exists():
-        n += 1
-        name = f"{run}-{n}"
-    return name
-
-
 def report(run_dir: Path, fmt: str, *, with_std: bool) -> tuple[str, int]:
     """The metrics table of every bag under ``run_dir`` (grouped by agent), and how many bags
     failed; the per-episode CSV and the table are also written into ``run_dir``."""
@@ -259,7 +251,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.episodes < 1 or (args.random is not None and args.random < 1):
             raise ConfigError("--episodes/--random: expected a positive number of episodes")
         bags_dir = Path(args.bags_dir)
-        args.run_dir_name = _free_run(bags_dir, args.run or time.strftime("test_%Y%m%d-%H%M%S"))
+        args.run_dir_name = free_path(
+            bags_dir / (args.run or time.strftime("test_%Y%m%d-%H%M%S"))).name
         specs = resolve_agents(args, ros)
         episodes = args.random or args.episodes
         for spec in specs:
@@ -270,11 +263,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         run_dir = bags_dir / args.run_dir_name
         text, failed = report(run_dir, args.format, with_std=args.with_std)
     except TransportError as err:
-        domain = ros_domain(specs[0].run.env) if specs else ros_domain(None)
-        print(f"pic4rl-test: {err}\n  Is a sim answering in ROS domain "
-              f"{domain}? Start one with the same params file "
-              "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run test, or "
-              "-p transport:=inprocess", file=sys.stderr)
+        print(f"pic4rl-test: {err}\n{no_sim_hint('test', specs[0].run.env if specs else None)}",
+              file=sys.stderr)
         return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-test: {err}", file=sys.stderr)

@@ -38,12 +38,12 @@ from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unkno
 from .config import (
     RunConfig,
     TrainConfig,
+    free_path,
     load_run_config,
     parse_overrides,
-    ros_domain,
     run_config_file,
 )
-from .rosargs import RosArgs, split_ros_args
+from .rosargs import RosArgs, no_sim_hint, split_ros_args
 
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
 
@@ -92,23 +92,6 @@ def _steps_in(model_zip: Path) -> int:
 
     data, _, _ = load_from_zip_file(model_zip, load_data=True, device="cpu")
     return int((data or {}).get("num_timesteps", 0))
-
-
-def _free_dir(base: Path) -> Path:
-    """``base``, or ``base-2``, ``base-3``, ... : the first that does not exist."""
-    candidate, n = base, 1
-    while candidate.exists():
-        n += 1
-        candidate = base.with_name(f"{base.name}-{n}")
-    return candidate
-
-
-def _free_file(path: Path) -> Path:
-    candidate, n = path, 1
-    while candidate.exists():
-        n += 1
-        candidate = path.with_name(f"{path.stem}-{n}{path.suffix}")
-    return candidate
 
 
 def route_params(params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -172,7 +155,7 @@ class Trainer:
         if resume is not None:
             self.run_dir = resume.run_dir
         else:
-            self.run_dir = _free_dir(Path(cfg.runs_dir) / run.name)
+            self.run_dir = free_path(Path(cfg.runs_dir) / run.name)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         logs = self.run_dir / "logs"
         self.session = len(list(logs.iterdir())) if logs.is_dir() else 0
@@ -184,7 +167,7 @@ class Trainer:
 
     @staticmethod
     def _write_new(path: Path, text: str) -> Path:
-        path = _free_file(path)
+        path = free_path(path, keep_suffix=True)
         path.write_text(text)
         return path
 
@@ -373,10 +356,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         trainer = Trainer(run, resume=resume, progress=not args.no_progress, ros=ros)
         trainer.run()
     except TransportError as err:
-        print(f"pic4rl-train: {err}\n  Is a sim answering in ROS domain "
-              f"{ros_domain(run.env if run else None)}? Start one with the same params file "
-              "(pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run train, or "
-              "-p transport:=inprocess", file=sys.stderr)
+        print(f"pic4rl-train: {err}\n{no_sim_hint('train', run.env if run else None)}",
+              file=sys.stderr)
         return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-train: {err}", file=sys.stderr)
