@@ -12,7 +12,6 @@ RL-Zoo-style ``key:value`` overrides from the command line land here too.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import os
 import re
@@ -281,8 +280,3 @@ def beside(file: str, params_file: Path) -> str:
         return file
     beside = params_file.parent / file
     return str(beside.resolve()) if beside.exists() else file
-
-
-def with_env(run: RunConfig, **overrides: Any) -> RunConfig:
-    """``run`` with dotted env overrides (``{"record.enabled": True}``)."""
-    return dataclasses.replace(run, env=run.env.replace(**overrides))

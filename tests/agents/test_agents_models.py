@@ -24,13 +24,12 @@ from pic4rl_agents.extractors import DepthGoalExtractor
 from pic4rl_bridge.errors import ConfigError
 
 VINEYARD = CONFIG / "env_vineyard_depth.yaml"  # a bare depth image, no goal vector
-ALL = sorted(ALGORITHMS)  # ddpg, ppo, sac, td3, and tqc when sb3-contrib is installed
+ALL = sorted(ALGORITHMS)  # ddpg, ppo, sac, td3, tqc (sb3-contrib is in the rl extra)
 ACTOR, CRITIC = [16, 8], [24]
 CNN_CHANNELS, CNN_FEATURES = [4, 8], 12
 
 
 def test_every_algorithm_of_the_docs_is_there() -> None:
-    pytest.importorskip("sb3_contrib")
     assert ALL == ["ddpg", "ppo", "sac", "td3", "tqc"]
 
 

@@ -8,7 +8,7 @@ training of a few dozen steps, resumed once, and a one-episode test, all in ``tm
 After changing a trainer parameter, print the table's first three columns and update
 docs/agents.md:
 
-    .venv/bin/python tests/agents_docs/test_agents_docs.py
+    PYTHONPATH=tests .venv/bin/python tests/agents_docs/test_agents_docs.py
 """
 
 from __future__ import annotations
@@ -17,81 +17,19 @@ import argparse
 import json
 import math
 import re
-import typing
 from pathlib import Path
-from typing import Any
 
 import pytest
 import yaml
+from docs_helpers import anchors, parameter_rows, section, table_rows
 
 from pic4rl_agents import tester, train
 from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
-from pic4rl_bridge.config import param_names
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "agents.md"
-TYPE_NAMES = {str: "string", int: "integer", float: "double", bool: "bool"}
 TRAIN_SECTION = "## Training (`pic4rl-train`)"
 TEST_SECTION = "## Testing (`pic4rl-test`)"
-
-
-def literal(value: Any) -> str:
-    """A default as the doc writes it: YAML-like, floats as Python prints them."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(literal(v) for v in value) + "]"
-    if isinstance(value, str):
-        return value if value else '""'
-    return repr(value)
-
-
-def type_name(kind: Any) -> str:
-    """A parameter's type as ROS 2 names it (``integer[]`` for a tuple of ints)."""
-    if typing.get_origin(kind) is tuple:
-        return TYPE_NAMES[typing.get_args(kind)[0]] + "[]"
-    return TYPE_NAMES[kind]
-
-
-def expected_rows() -> dict[str, tuple[str, str]]:
-    """Every dotted trainer parameter → (type, default) as the code has them."""
-    defaults = TrainConfig().to_params()
-    return {name: (type_name(kind), f"`{literal(defaults[name])}`")
-            for name, kind in param_names(TrainConfig).items()}
-
-
-def section(doc: str, heading: str) -> str:
-    """The text under the Markdown heading ``heading``, up to the next heading of the same or a
-    higher level (lines inside code blocks are not headings)."""
-    level = len(heading) - len(heading.lstrip("#"))
-    lines = doc.splitlines()
-    try:
-        start = lines.index(heading)
-    except ValueError:
-        raise AssertionError(f"no heading {heading!r} in docs/agents.md") from None
-    end, fenced = len(lines), False
-    for i in range(start + 1, len(lines)):
-        if lines[i].startswith("```"):
-            fenced = not fenced
-        match = re.match(r"(#+) ", lines[i])
-        if match and not fenced and len(match.group(1)) <= level:
-            end = i
-            break
-    return "\n".join(lines[start + 1:end])
-
-
-def table_rows(text: str) -> dict[str, list[str]]:
-    """Rows of the Markdown tables in ``text`` whose first cell is one backticked name: name →
-    the other cells. A name listed twice is an error."""
-    rows: dict[str, list[str]] = {}
-    for line in text.splitlines():
-        match = re.match(r"\| `([^`]+)` \|(.*)\|\s*$", line)
-        if match is None:
-            continue
-        name = match.group(1)
-        assert name not in rows, f"docs/agents.md lists {name!r} twice in one section"
-        rows[name] = [cell.strip() for cell in re.split(r"(?<!\\)\|", match.group(2))]
-    return rows
 
 
 def code_blocks(text: str) -> str:
@@ -120,7 +58,7 @@ def doc() -> str:
 
 def test_the_parameter_table_lists_every_trainer_parameter_and_nothing_else(doc):
     rows = table_rows(section(section(doc, TRAIN_SECTION), "### Parameters"))
-    expected = expected_rows()
+    expected = parameter_rows(TrainConfig)
     assert len(expected) > 30  # param_names() found the nested sections too
     missing = sorted(set(expected) - set(rows))
     stale = sorted(set(rows) - set(expected))
@@ -131,7 +69,7 @@ def test_the_parameter_table_lists_every_trainer_parameter_and_nothing_else(doc)
 def test_the_parameter_table_has_the_codes_types_and_defaults(doc):
     rows = table_rows(section(section(doc, TRAIN_SECTION), "### Parameters"))
     wrong = []
-    for name, (kind, default) in expected_rows().items():
+    for name, (kind, default) in parameter_rows(TrainConfig).items():
         cells = rows.get(name)
         if cells is None:
             continue  # reported by the test above
@@ -280,19 +218,6 @@ def test_the_test_run_is_as_documented(doc, tmp_path):
 # -- links -------------------------------------------------------------------------------------
 
 
-def _anchors(path: Path) -> set[str]:
-    """GitHub's anchors of the headings of ``path`` (outside code blocks)."""
-    out, fenced = set(), False
-    for line in path.read_text(encoding="utf-8").splitlines():
-        if line.startswith("```"):
-            fenced = not fenced
-        match = re.match(r"#+ (.+)", line)
-        if match and not fenced:
-            text = re.sub(r"[^\w\- ]", "", match.group(1).lower())
-            out.add(text.replace(" ", "-"))
-    return out
-
-
 def test_links_to_files_and_headings_resolve(doc):
     links = re.findall(r"\]\(([^)\s]+)\)", doc)
     assert links
@@ -302,7 +227,7 @@ def test_links_to_files_and_headings_resolve(doc):
             continue
         target, _, anchor = link.partition("#")
         file = DOC if not target else DOC.parent / target
-        if not file.exists() or (anchor and anchor not in _anchors(file)):
+        if not file.exists() or (anchor and anchor not in anchors(file)):
             broken.append(link)
     assert not broken, f"agents.md has broken links: {broken}"
 
@@ -319,5 +244,5 @@ def test_the_readme_and_interfaces_point_here():
 
 
 if __name__ == "__main__":
-    for name, (kind, default) in expected_rows().items():
+    for name, (kind, default) in parameter_rows(TrainConfig).items():
         print(f"| `{name}` | {kind} | {default} | |")

@@ -5,19 +5,19 @@ documented. The envs run in process for two steps each; no ROS graph is started.
 
 After changing a parameter, print the table's first three columns and update docs/bridge.md:
 
-    .venv/bin/python tests/bridge/test_bridge_docs.py
+    PYTHONPATH=tests .venv/bin/python tests/bridge/test_bridge_docs.py
 """
 
 from __future__ import annotations
 
 import re
-import typing
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from docs_helpers import anchors, literal, parameter_rows, section, table_rows
 
 from pic4rl_bridge import ENV_IDS
 from pic4rl_bridge.config import EnvConfig, load_env_config, param_names
@@ -25,66 +25,8 @@ from pic4rl_bridge.config import EnvConfig, load_env_config, param_names
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "bridge.md"
 INTERFACES = ROOT / "docs" / "interfaces.md"
-TYPE_NAMES = {str: "string", int: "integer", float: "double", bool: "bool"}
 TASK_SECTIONS = {"goToPose": "goToPose", "vineyard": "vineyard",
                  "personMonitoring": "personMonitoring"}
-
-
-def literal(value: Any) -> str:
-    """A default as the doc writes it: YAML-like, floats as Python prints them."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(literal(v) for v in value) + "]"
-    if isinstance(value, str):
-        return value if value else '""'
-    return repr(value)
-
-
-def type_name(kind: Any) -> str:
-    """A parameter's type as ROS 2 names it (``double[]`` for a tuple of floats)."""
-    if typing.get_origin(kind) is tuple:
-        return TYPE_NAMES[typing.get_args(kind)[0]] + "[]"
-    return TYPE_NAMES[kind]
-
-
-def expected_rows() -> dict[str, tuple[str, str]]:
-    """Every dotted parameter → (type, default) as the code has them."""
-    defaults = EnvConfig().to_params()
-    return {name: (type_name(kind), f"`{literal(defaults[name])}`")
-            for name, kind in param_names().items()}
-
-
-def section(doc: str, heading: str) -> str:
-    """The text under the Markdown heading ``heading`` (e.g. ``## Parameters``), up to the next
-    heading of the same or a higher level."""
-    level = len(heading) - len(heading.lstrip("#"))
-    lines = doc.splitlines()
-    try:
-        start = lines.index(heading)
-    except ValueError:
-        raise AssertionError(f"no heading {heading!r} in the doc") from None
-    end = len(lines)
-    for i in range(start + 1, len(lines)):
-        match = re.match(r"(#+) ", lines[i])
-        if match and len(match.group(1)) <= level:
-            end = i
-            break
-    return "\n".join(lines[start + 1:end])
-
-
-def table_rows(text: str) -> dict[str, list[str]]:
-    """Rows of the Markdown tables in ``text`` whose first cell is one backticked name: name →
-    the other cells. A name listed twice is an error."""
-    rows: dict[str, list[str]] = {}
-    for line in text.splitlines():
-        match = re.match(r"\| `([^`]+)` \|(.*)\|\s*$", line)
-        if match is None:
-            continue
-        name = match.group(1)
-        assert name not in rows, f"docs/bridge.md lists {name!r} twice in one section"
-        rows[name] = [cell.strip() for cell in re.split(r"(?<!\\)\|", match.group(2))]
-    return rows
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +66,7 @@ def emitted() -> dict[str, Any]:
 
 def test_the_parameter_table_lists_every_parameter_and_nothing_else(doc):
     rows = table_rows(section(doc, "## Parameters"))
-    expected = expected_rows()
+    expected = parameter_rows(EnvConfig)
     assert len(expected) > 50  # param_names() found the nested sections too
     missing = sorted(set(expected) - set(rows))
     stale = sorted(set(rows) - set(expected))
@@ -135,7 +77,7 @@ def test_the_parameter_table_lists_every_parameter_and_nothing_else(doc):
 def test_the_parameter_table_has_the_codes_types_and_defaults(doc):
     rows = table_rows(section(doc, "## Parameters"))
     wrong = []
-    for name, (kind, default) in expected_rows().items():
+    for name, (kind, default) in parameter_rows(EnvConfig).items():
         cells = rows.get(name)
         if cells is None:
             continue  # reported by the test above
@@ -201,17 +143,6 @@ def test_every_reward_term_is_in_its_tasks_table(doc, emitted):
 # -- links -------------------------------------------------------------------------------------
 
 
-def _anchors(path: Path) -> set[str]:
-    """GitHub's anchors of the headings of ``path``."""
-    out = set()
-    for line in path.read_text(encoding="utf-8").splitlines():
-        match = re.match(r"#+ (.+)", line)
-        if match:
-            text = re.sub(r"[^\w\- ]", "", match.group(1).lower())
-            out.add(text.replace(" ", "-"))
-    return out
-
-
 @pytest.mark.parametrize("path", [DOC, INTERFACES, ROOT / "README.md"], ids=lambda p: p.name)
 def test_links_to_files_and_headings_resolve(path):
     text = path.read_text(encoding="utf-8")
@@ -223,7 +154,7 @@ def test_links_to_files_and_headings_resolve(path):
             continue
         target, _, anchor = link.partition("#")
         file = path if not target else path.parent / target
-        if not file.exists() or (anchor and anchor not in _anchors(file)):
+        if not file.exists() or (anchor and anchor not in anchors(file)):
             broken.append(link)
     assert not broken, f"{path.name} has broken links: {broken}"
 
@@ -244,5 +175,5 @@ def test_interfaces_names_the_recorder_and_the_env_node():
 
 
 if __name__ == "__main__":
-    for name, (kind, default) in expected_rows().items():
+    for name, (kind, default) in parameter_rows(EnvConfig).items():
         print(f"| `{name}` | {kind} | {default} | |")

@@ -1,0 +1,86 @@
+"""What the docs-vs-code tests share (tests/bridge, tests/agents_docs): a config dataclass's
+parameter rows as the docs write them, and reading Markdown sections, tables and anchors."""
+
+from __future__ import annotations
+
+import re
+import typing
+from pathlib import Path
+from typing import Any
+
+from pic4rl_bridge.config import param_names
+
+TYPE_NAMES = {str: "string", int: "integer", float: "double", bool: "bool"}
+
+
+def literal(value: Any) -> str:
+    """A default as the doc writes it: YAML-like, floats as Python prints them."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(literal(v) for v in value) + "]"
+    if isinstance(value, str):
+        return value if value else '""'
+    return repr(value)
+
+
+def type_name(kind: Any) -> str:
+    """A parameter's type as ROS 2 names it (``double[]`` for a tuple of floats)."""
+    if typing.get_origin(kind) is tuple:
+        return TYPE_NAMES[typing.get_args(kind)[0]] + "[]"
+    return TYPE_NAMES[kind]
+
+
+def parameter_rows(cls: type) -> dict[str, tuple[str, str]]:
+    """Every dotted parameter of the config dataclass ``cls`` → (type, `default`) as the code
+    has them."""
+    defaults = cls().to_params()
+    return {name: (type_name(kind), f"`{literal(defaults[name])}`")
+            for name, kind in param_names(cls).items()}
+
+
+def section(doc: str, heading: str) -> str:
+    """The text under the Markdown heading ``heading``, up to the next heading of the same or a
+    higher level (lines inside code blocks are not headings)."""
+    level = len(heading) - len(heading.lstrip("#"))
+    lines = doc.splitlines()
+    try:
+        start = lines.index(heading)
+    except ValueError:
+        raise AssertionError(f"no heading {heading!r} in the doc") from None
+    end, fenced = len(lines), False
+    for i in range(start + 1, len(lines)):
+        if lines[i].startswith("```"):
+            fenced = not fenced
+        match = re.match(r"(#+) ", lines[i])
+        if match and not fenced and len(match.group(1)) <= level:
+            end = i
+            break
+    return "\n".join(lines[start + 1:end])
+
+
+def table_rows(text: str) -> dict[str, list[str]]:
+    """Rows of the Markdown tables in ``text`` whose first cell is one backticked name: name →
+    the other cells. A name listed twice is an error."""
+    rows: dict[str, list[str]] = {}
+    for line in text.splitlines():
+        match = re.match(r"\| `([^`]+)` \|(.*)\|\s*$", line)
+        if match is None:
+            continue
+        name = match.group(1)
+        assert name not in rows, f"the doc lists {name!r} twice in one section"
+        rows[name] = [cell.strip() for cell in re.split(r"(?<!\\)\|", match.group(2))]
+    return rows
+
+
+def anchors(path: Path) -> set[str]:
+    """GitHub's anchors of the headings of ``path`` (outside code blocks)."""
+    out, fenced = set(), False
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+        match = re.match(r"#+ (.+)", line)
+        if match and not fenced:
+            text = re.sub(r"[^\w\- ]", "", match.group(1).lower())
+            out.add(text.replace(" ", "-"))
+    return out
