@@ -168,6 +168,7 @@ class EnvConfig:
     agent: str = ""
     robot: str = ""  # empty: the sim section's robot; else a built-in name or robot YAML
     episode_max_steps: int = 500
+    normalize_observations: bool = False  # goToPose: ranges and goal distance in [0, 1], angle / pi
     goal_tolerance_m: float = 0.4
     collision_tolerance_m: float = 0.05
     warning_tolerance_m: float = 0.1

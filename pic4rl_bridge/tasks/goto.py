@@ -23,6 +23,7 @@ from .base import EpisodeContext, Judgement, Outcome, Task
 from .collision import assess
 from .observations import (
     MAX_TARGET_DISTANCE_M,
+    NORMALIZED_GOAL_DISTANCE_M,
     clipped_action,
     depth_observation,
     depth_space,
@@ -62,17 +63,21 @@ class _GoToPose(Task):
             raise ValueError("goToPose: the episode's first frame has no goal")
         return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])))
 
-    @staticmethod
-    def _goal_space() -> gym.spaces.Box:
-        """Goal distance (m), goal angle (rad), last action: the vector beside the sensor."""
-        return gym.spaces.Box(np.array([0.0, -math.pi, -1.0, -1.0], np.float32),
-                              np.array([MAX_TARGET_DISTANCE_M, math.pi, 1.0, 1.0], np.float32),
-                              dtype=np.float32)
+    def _goal_space(self) -> gym.spaces.Box:
+        """Goal distance (m), goal angle (rad), last action: the vector beside the sensor;
+        normalised, distance / ``NORMALIZED_GOAL_DISTANCE_M`` clipped to 1 and angle / pi."""
+        far, turn = ((1.0, 1.0) if self.config.normalize_observations
+                     else (MAX_TARGET_DISTANCE_M, math.pi))
+        return gym.spaces.Box(np.array([0.0, -turn, -1.0, -1.0], np.float32),
+                              np.array([far, turn, 1.0, 1.0], np.float32), dtype=np.float32)
 
     def _goal_vector(self, frame: SensorFrame, context: EpisodeContext,
                      last_action: np.ndarray) -> np.ndarray:
         distance, angle = target_polar(frame.pose, *_goal(context))
-        distance = min(distance, MAX_TARGET_DISTANCE_M)
+        if self.config.normalize_observations:
+            distance, angle = min(distance / NORMALIZED_GOAL_DISTANCE_M, 1.0), angle / math.pi
+        else:
+            distance = min(distance, MAX_TARGET_DISTANCE_M)
         return np.concatenate((np.array([distance, angle], np.float32),
                                clipped_action(last_action, 2)))
 
@@ -103,15 +108,16 @@ def _goal(context: EpisodeContext) -> tuple[float, float]:
 
 class GoToPoseLidar(_GoToPose):
     """goToPose from LiDAR: a flat vector [sectors (m), goal distance (m), goal angle (rad),
-    last action (2)]."""
+    last action (2)]; normalised, sectors / ``lidar.max_range_m`` and the goal as above."""
 
     required = frozenset({"goal", "scan"})
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
         beams, goal = config.lidar.beams, self._goal_space()
+        far = 1.0 if config.normalize_observations else config.lidar.max_range_m
         low = np.concatenate((np.zeros(beams, np.float32), goal.low))
-        high = np.concatenate((np.full(beams, config.lidar.max_range_m, np.float32), goal.high))
+        high = np.concatenate((np.full(beams, far, np.float32), goal.high))
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
@@ -120,6 +126,8 @@ class GoToPoseLidar(_GoToPose):
             raise ValueError("goToPose (lidar): the frame has no scan")
         lidar = self.config.lidar
         sectors = lidar_sectors(frame.scan.ranges, lidar.beams, lidar.max_range_m)
+        if self.config.normalize_observations:
+            sectors /= np.float32(lidar.max_range_m)
         return np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
 
 

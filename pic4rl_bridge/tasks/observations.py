@@ -74,6 +74,9 @@ def depth_space(depth: DepthObsConfig) -> gym.spaces.Box:
 
 #: Observed target distances are clipped here (m): a finite bound for the observation space.
 MAX_TARGET_DISTANCE_M = 1000.0
+#: With ``normalize_observations``, goal distances are divided by this (m) and clipped to 1:
+#: a policy's inputs then share one scale, which speeds up learning (RL-Zoo normalises too).
+NORMALIZED_GOAL_DISTANCE_M = 10.0
 
 
 def target_polar(pose: Pose2D, x: float, y: float) -> tuple[float, float]:

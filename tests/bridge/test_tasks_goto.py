@@ -62,6 +62,30 @@ def test_lidar_observation_values_and_space():
     assert task.observation_space.contains(behind) and abs(abs(behind[-3]) - math.pi) < 1e-6
 
 
+def test_normalized_lidar_observation_is_the_raw_one_scaled():
+    raw_task = GoToPoseLidar(EnvConfig(), robot())
+    task = GoToPoseLidar(EnvConfig(normalize_observations=True), robot())
+    beams, max_range = task.config.lidar.beams, task.config.lidar.max_range_m
+    for goal, ahead in (((1.0, 0.0), 2.0), ((30.0, -4.0), 0.3)):
+        start = frame(0.0, yaw=math.pi / 2, goal=goal, ahead_m=ahead)
+        raw = raw_task.observe(start, raw_task.begin(start), np.array([0.5, -2.0]))
+        obs = task.observe(start, task.begin(start), np.array([0.5, -2.0]))
+        assert task.observation_space.contains(obs)
+        assert task.observation_space.high.max() == 1.0
+        np.testing.assert_allclose(obs[:beams], raw[:beams] / max_range, rtol=1e-6)
+        np.testing.assert_allclose(obs[beams], min(raw[beams] / 10.0, 1.0), rtol=1e-6)
+        np.testing.assert_allclose(obs[beams + 1], raw[beams + 1] / math.pi, rtol=1e-6)
+        np.testing.assert_allclose(obs[-2:], raw[-2:])
+
+
+def test_normalized_depth_goal_vector():
+    task = GoToPoseDepth(EnvConfig(sensor="depth", normalize_observations=True), robot())
+    start = frame(0.0, goal=(0.0, 5.0), depth=np.full((60, 80), 2.0, np.float32))
+    obs = task.observe(start, task.begin(start), np.zeros(2))
+    assert task.observation_space.contains(obs)
+    np.testing.assert_allclose(obs["goal"][:2], [0.5, 0.5], rtol=1e-6)
+
+
 @pytest.mark.parametrize("encoding", ["uint8", "float32"])
 def test_depth_observation_is_a_dict_in_its_space(encoding):
     config = EnvConfig().replace(sensor="depth", **{"depth.encoding": encoding})
