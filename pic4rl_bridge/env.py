@@ -17,16 +17,17 @@ import dataclasses
 import logging
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from pic4rl_sim.geometry import Pose2D
+from pic4rl_sim.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
-from .episodes import EpisodeSchedule, load_goals_and_poses
+from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
@@ -62,12 +63,17 @@ def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
     return merged
 
 
+_PAIR_OPTIONS = ("pair_kind", "min_distance_m", "max_distance_m", "max_detour")
+
+
 def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
-    """``reset`` options checked: ``start`` → Pose2D, ``goal`` → (x, y), ``seed`` → int."""
-    unknown = set(options) - {"start", "goal", "seed"}
+    """``reset`` options checked: ``start`` → Pose2D, ``goal`` → (x, y), ``seed`` → int,
+    the pair filters as ``episodes.*`` takes them."""
+    known = ("start", "goal", "seed", *_PAIR_OPTIONS)
+    unknown = set(options) - set(known)
     if unknown:
         raise ConfigError(f"reset options: unknown key {sorted(unknown)[0]!r}; expected "
-                          "start, goal, seed")
+                          f"{', '.join(known)}")
     parsed: dict[str, Any] = {}
     for key, size, expected in (("start", 3, "[x, y, yaw] (m, m, rad)"), ("goal", 2, "[x, y] (m)")):
         if options.get(key) is None:
@@ -85,6 +91,18 @@ def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ConfigError(f"reset options: seed: {seed!r} is invalid; expected an int >= 0")
         parsed["seed"] = int(seed)
+    pair = {key: options[key] for key in _PAIR_OPTIONS if options.get(key) is not None}
+    if pair and ("start" in parsed or "goal" in parsed):
+        raise ConfigError(f"reset options: {sorted(pair)[0]!r} draws the pair; it cannot go "
+                          "with start or goal")
+    for key in _PAIR_OPTIONS[1:]:
+        value = pair.get(key, 0.0)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                math.isfinite(value) and value >= 0):
+            raise ConfigError(f"reset options: {key}: {value!r} is invalid; expected a "
+                              "number >= 0 (0: the kind's)")
+    if pair:
+        parsed["pairs"] = pair
     return parsed
 
 
@@ -123,6 +141,14 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._pairs = pairs
         self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs,
                                          ordered=self.config.episodes.ordered)
+        e = self.config.episodes
+        self._kind = resolve_pair_kind(e.pair_kind, min_distance_m=e.min_distance_m,
+                                       max_distance_m=e.max_distance_m, max_detour=e.max_detour)
+        self._sampler = PairSampler.for_scenario(self.scenario)
+        if self._kind is not None and self._sampler is None:
+            raise ConfigError(f"episodes.pair_kind: {e.pair_kind!r} with filters needs a "
+                              "simulated world (a 'sim:' section); a real robot's goals come "
+                              "from its operator or episodes.file")
         sensors = self.task.required & _FRAME_SENSORS
         if self.scenario.spec.lidar is not None:
             sensors |= {"scan"}
@@ -171,7 +197,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
         """Start the next episode. ``options``: ``start`` ([x, y, yaw]), ``goal`` ([x, y]),
-        ``seed`` (the simulator's episode seed) override the schedule for this episode."""
+        ``seed`` (the simulator's episode seed) override the schedule for this episode;
+        ``pair_kind``, ``min_distance_m``, ``max_distance_m``, ``max_detour`` draw its pair
+        (``pair_kind`` given: that kind's values, else the config's; then these)."""
         super().reset(seed=seed)
         if seed is not None:  # a seeded reset restarts the sequence of episodes
             self._episode = 0
@@ -182,11 +210,15 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         request = self._schedule.next_request(self._episode, self.np_random)
         request = EpisodeRequest(given.get("seed", request.seed), given.get("start", request.start),
                                  given.get("goal", request.goal))
+        kind = self._kind if "pairs" not in given else self._pair_kind(given["pairs"])
+        if "pairs" in given:  # the drawn pair replaces the schedule's
+            request = EpisodeRequest(request.seed)
         held: list[RawMessage] = []  # the reset's messages, for a bag opened once it succeeds
         if self.recorder is not None:
             self.transport.tap = held.append
         try:
-            frame = self._start(request, redraw="start" not in given and "goal" not in given)
+            frame = self._start(request, kind,
+                                redraw="start" not in given and "goal" not in given)
         finally:
             self.transport.tap = None
         if self.recorder is not None:
@@ -207,11 +239,30 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                 "start": list(self._context.start), "goal": self._context.goal}
         return obs, info
 
-    def _start(self, first: EpisodeRequest, *, redraw: bool) -> SensorFrame:
+    def _pair_kind(self, options: Mapping[str, Any]) -> PairKind | None:
+        """The pair filter of ``reset``'s options (see ``reset``)."""
+        e = self.config.episodes
+        name = options.get("pair_kind", e.pair_kind)
+        base = (0.0, 0.0, 0.0) if "pair_kind" in options else (
+            e.min_distance_m, e.max_distance_m, e.max_detour)
+        values = [float(options.get(key, b)) for key, b in zip(_PAIR_OPTIONS[1:], base)]
+        kind = resolve_pair_kind(str(name), min_distance_m=values[0], max_distance_m=values[1],
+                                 max_detour=values[2])
+        if kind is not None and self._sampler is None:
+            raise ConfigError("reset options: pair filters need a simulated world")
+        return kind
+
+    def _start(self, first: EpisodeRequest, kind: PairKind | None, *,
+               redraw: bool) -> SensorFrame:
         """The first frame of an episode, redrawing rejected requests (a start or goal given
-        to ``reset(options=...)`` is not redrawn)."""
+        to ``reset(options=...)`` is not redrawn). A request the simulator would sample gets
+        a pair of ``kind`` drawn from its seed instead (``None``: the simulator samples)."""
         reasons = []
-        requests = self._schedule.attempts(first, self.np_random) if redraw else [first]
+        requests: Iterable[EpisodeRequest] = (
+            self._schedule.attempts(first, self.np_random) if redraw else [first])
+        if kind is not None and first.start is None and first.goal is None:
+            requests = self._sampler.attempts(  # type: ignore[union-attr]  # checked with kind
+                first.seed, kind, self.np_random, self.config.episodes.max_attempts)
         for request in requests:
             try:
                 frame = self.transport.reset(request)
@@ -281,6 +332,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         }
         if context.goal is not None:
             facts["goal"] = list(context.goal)
+            if self._sampler is not None and self._bag is not None:
+                shortest, straight = self._sampler.path_lengths(context.start, context.goal)
+                facts["shortest_path_m"], facts["straight_line_m"] = shortest, straight
         facts.update(self.task.facts(context))
         return facts
 

@@ -6,24 +6,38 @@ PIC4rl-gym trains from a JSON of start poses and goals, drawing a new pair every
 curriculum, central area first, obstacles after. Without a file the simulator samples a free
 pair from the episode's seed. The schedule draws everything from the caller's rng, so one seed
 gives one sequence of episodes.
+
+Pairs of a kind (``episodes.pair_kind``; ``pic4rl_sim.sampling.PAIR_KINDS``) other than plain
+``any`` are drawn here, by ``PairSampler`` from the episode's seed, and sent to the simulator
+as an explicit start and goal: both transports then run the same pair, and the simulator's own
+sampling stays as it was.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pic4rl_sim.errors import SimError
 from pic4rl_sim.geometry import Pose2D
+from pic4rl_sim.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
 
 from .config import EpisodesConfig
 from .errors import ConfigError
 from .transport import EpisodeRequest
+
+if TYPE_CHECKING:
+    from pic4rl_sim.paths import PathPlanner
+    from pic4rl_sim.world import WorldSpec
+
+    from .robot import Scenario
 
 _SEED_END = 2**31 - 1
 
@@ -164,3 +178,114 @@ class EpisodeSchedule:
         pairs, i = self.pairs, self.index
         assert pairs is not None and i is not None  # set by next_request
         return EpisodeRequest(seed, pairs.poses[i], pairs.goals[i])
+
+
+def save_goals_and_poses(pairs: GoalsAndPoses, path: str | Path, *, comment: str = "",
+                         overwrite: bool = False) -> Path:
+    """Write ``pairs`` as a goals-and-poses JSON (mm, mrad), which ``load_goals_and_poses``
+    reads back; an existing file is kept unless ``overwrite``."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ConfigError(f"{path}: exists; choose another name or pass overwrite=True")
+    doc: dict[str, Any] = {"comment": comment} if comment else {}
+    if pairs.initial_pose is not None:
+        doc["initial_pose"] = [round(v, 3) for v in pairs.initial_pose]
+    doc["goals"] = [[round(x, 3), round(y, 3)] for x, y in pairs.goals]
+    doc["poses"] = [[round(p.x, 3), round(p.y, 3), round(p.yaw, 3)] for p in pairs.poses]
+    path.write_text(json.dumps(doc, separators=(",", ":")))
+    return path
+
+
+def resolve_pair_kind(name: str, *, min_distance_m: float = 0.0, max_distance_m: float = 0.0,
+                      max_detour: float = 0.0) -> PairKind | None:
+    """The kind ``name`` with the non-zero values given instead of its own; ``None`` for plain
+    ``any`` (the simulator samples the pair)."""
+    if name not in PAIR_KINDS:
+        raise ConfigError(f"pair_kind: {name!r} is invalid; expected one of "
+                          f"{', '.join(PAIR_KINDS)}")
+    kind = PAIR_KINDS[name]
+    given = {key: value for key, value in (("min_distance_m", min_distance_m),
+                                           ("max_distance_m", max_distance_m),
+                                           ("max_detour", max_detour)) if value}
+    if name == "any" and not given:
+        return None
+    try:
+        return dataclasses.replace(kind, **given)
+    except SimError as err:  # a range the other way round
+        raise ConfigError(f"pair_kind {name!r}: {err}") from err
+
+
+class PairSampler:
+    """Start-goal pairs of a kind in a simulated world, as the simulator would sample them
+    (its clearance and minimum distance), with a path check; the path planner (the robot's
+    circumscribed radius, 5 cm cells) is built on first use and kept."""
+
+    def __init__(self, world: WorldSpec, *, robot_radius_m: float, clearance_m: float,
+                 min_goal_distance_m: float) -> None:
+        self.world = world
+        self.robot_radius_m = robot_radius_m
+        self.clearance_m = clearance_m
+        self.min_goal_distance_m = min_goal_distance_m
+        self._planner: PathPlanner | None = None
+
+    @classmethod
+    def for_scenario(cls, scenario: Scenario) -> PairSampler | None:
+        """The sampler of a simulated scenario; ``None`` for a real robot (no world)."""
+        if scenario.sim is None or scenario.world is None:
+            return None
+        radius = scenario.robot.footprint.bounding_radius_m
+        engine = scenario.sim.engine
+        return cls(scenario.world, robot_radius_m=radius,
+                   clearance_m=radius + engine.clearance_m,
+                   min_goal_distance_m=engine.min_goal_distance_m)
+
+    @property
+    def planner(self) -> PathPlanner:
+        if self._planner is None:
+            from pic4rl_sim.paths import planner_for
+
+            self._planner = planner_for(self.world, robot_radius_m=self.robot_radius_m)
+        return self._planner
+
+    def draw(self, rng: np.random.Generator, kind: PairKind) -> tuple[Pose2D, tuple[float, float]]:
+        """One pair of ``kind`` from ``rng``; ``ConfigError`` when the world has none."""
+        low = kind.min_distance_m if kind.min_distance_m is not None else self.min_goal_distance_m
+        try:
+            return sample_start_goal(self.world, rng, clearance_m=self.clearance_m,
+                                     min_distance_m=low, max_distance_m=kind.max_distance_m,
+                                     max_detour=kind.max_detour, planner=self.planner)
+        except SimError as err:  # no pair of the kind in this world
+            raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
+
+    def request(self, seed: int, kind: PairKind) -> EpisodeRequest:
+        """The episode of ``seed`` with a pair of ``kind`` drawn from that seed alone."""
+        start, goal = self.draw(np.random.default_rng(seed), kind)
+        return EpisodeRequest(seed, start, goal)
+
+    def attempts(self, seed: int, kind: PairKind, rng: np.random.Generator,
+                 count: int) -> Iterator[EpisodeRequest]:
+        """``count`` requests with pairs of ``kind``: from ``seed``, then, after the simulator
+        refused one, from new seeds of ``rng``."""
+        for attempt in range(count):
+            yield self.request(int(rng.integers(0, _SEED_END)) if attempt else seed, kind)
+
+    def path_lengths(self, start: tuple[float, ...], goal: tuple[float, float]
+                     ) -> tuple[float, float]:
+        """(shortest collision-free path, straight line) from ``start`` to ``goal`` (m);
+        the shortest is ``inf`` when there is no path, and free when the draw just searched
+        it (the planner keeps its last answers)."""
+        straight = math.dist(start[:2], goal)
+        return self.planner.length(start[:2], goal), straight
+
+    def goals_and_poses(self, count: int, *, seed: int, kind: PairKind,
+                        initial_pose: Pose2D | None = None) -> GoalsAndPoses:
+        """``count`` pairs of ``kind`` drawn from ``seed`` (the same on every machine), for
+        ``save_goals_and_poses``: training pairs or a fixed test set."""
+        try:
+            pairs = sample_pairs(self.world, count, np.random.default_rng(seed),
+                                 clearance_m=self.clearance_m, kind=kind, planner=self.planner,
+                                 min_goal_distance_m=self.min_goal_distance_m)
+        except SimError as err:
+            raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
+        return GoalsAndPoses(initial_pose, tuple(g for _, g in pairs),
+                             tuple(Pose2D(*s) for s, _ in pairs))

@@ -2,11 +2,16 @@
 
 Sampling draws candidates in batches and tests each batch with one ``clearance`` call, so an
 episode reset costs about a millisecond. Results depend only on the world and the rng state.
+Pairs of a kind (``PAIR_KINDS``) also bound the straight-line distance and the detour, the
+shortest collision-free path over the straight line (``paths``): a path search per candidate
+pair (tens of milliseconds), run only when a path check is asked for.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,7 +19,40 @@ from .errors import WorldError, require
 from .geometry import Pose2D
 from .world import WorldSpec
 
+if TYPE_CHECKING:
+    from .paths import PathPlanner
+
 BATCH = 256
+MAX_PATH_CHECKS = 400  # path searches per sampled pair before giving up
+
+
+@dataclass(frozen=True)
+class PairKind:
+    """What start-goal pairs of a kind satisfy: straight-line distance in
+    [``min_distance_m``, ``max_distance_m``] (``None``: the sampler's own minimum, the
+    engine's ``min_goal_distance_m``) and shortest path / straight line <= ``max_detour``."""
+
+    min_distance_m: float | None = None
+    max_distance_m: float = math.inf
+    max_detour: float = math.inf
+
+    def __post_init__(self) -> None:
+        low = 0.0 if self.min_distance_m is None else self.min_distance_m
+        require(math.isfinite(low) and low >= 0, "pairs.min_distance_m", self.min_distance_m,
+                "a finite distance >= 0 m")
+        require(self.max_distance_m >= low, "pairs.max_distance_m", self.max_distance_m,
+                f"a distance >= min_distance_m={low} m")
+        require(self.max_detour >= 1.0, "pairs.max_detour", self.max_detour,
+                "a ratio >= 1 (shortest path / straight line)")
+
+
+#: Named kinds: ``any`` is every free pair the simulator samples (at least its
+#: ``min_goal_distance_m`` apart); ``paper`` is PIC4rl-gym's test episodes: 4-8 m apart with a
+#: collision-free path at most 1.3 times the straight line.
+PAIR_KINDS: dict[str, PairKind] = {
+    "any": PairKind(),
+    "paper": PairKind(min_distance_m=4.0, max_distance_m=8.0, max_detour=1.3),
+}
 
 
 def _valid(world: WorldSpec, xy: np.ndarray, clearance_m: float) -> np.ndarray:
@@ -29,10 +67,13 @@ def _valid(world: WorldSpec, xy: np.ndarray, clearance_m: float) -> np.ndarray:
 
 
 def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m: float,
-                      min_distance_m: float = 1.0, max_tries: int = 10_000,
-                      ) -> tuple[Pose2D, tuple[float, float]]:
+                      min_distance_m: float = 1.0, max_distance_m: float = math.inf,
+                      max_detour: float = math.inf, planner: PathPlanner | None = None,
+                      max_tries: int = 10_000) -> tuple[Pose2D, tuple[float, float]]:
     """A start pose and a goal point, both ``clearance_m`` (m) from obstacles and the bounds'
-    edges, at least ``min_distance_m`` apart.
+    edges, ``min_distance_m`` to ``max_distance_m`` apart. With a ``planner`` (a path check)
+    the pair has a collision-free path for the planner's robot, at most ``max_detour`` times
+    the straight line (which needs the planner).
 
     A world's ``spawn_poses`` and ``goal_points`` are the only candidates when present (a
     vineyard's lane ends, a spawn keeping its yaw); with as many goals as spawns the goal of
@@ -42,17 +83,42 @@ def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m
             clearance_m, "a finite distance >= 0 m")
     require(math.isfinite(min_distance_m) and min_distance_m >= 0, "sampling.min_distance_m",
             min_distance_m, "a finite distance >= 0 m")
+    require(max_distance_m >= min_distance_m, "sampling.max_distance_m", max_distance_m,
+            f"a distance >= min_distance_m={min_distance_m} m")
+    require(max_detour >= 1.0 and (planner is not None or max_detour == math.inf),
+            "sampling.max_detour", max_detour, "a ratio >= 1, with a planner when finite")
     require(isinstance(max_tries, int) and max_tries >= 1, "sampling.max_tries", max_tries,
             "an integer >= 1")
+    checks = [0]  # path searches run, shared by every round
+
+    def first_fit(s_xy: np.ndarray, g_xy: np.ndarray, pairs: np.ndarray) -> int | None:
+        """The first candidate (row of ``pairs``: start, goal index) the planner accepts."""
+        for k, (i, j) in enumerate(pairs):
+            if planner is None:
+                return k
+            if checks[0] >= MAX_PATH_CHECKS:
+                return None
+            checks[0] += 1
+            straight = math.dist(s_xy[i], g_xy[j])
+            if planner.length(s_xy[i], g_xy[j], max_length_m=max_detour * straight) < math.inf:
+                return k
+        return None
+
+    def apart(s_xy: np.ndarray, g_xy: np.ndarray) -> np.ndarray:
+        d = np.hypot(s_xy[:, None, 0] - g_xy[None, :, 0], s_xy[:, None, 1] - g_xy[None, :, 1])
+        return (d >= min_distance_m) & (d <= max_distance_m)
+
     spawn_xy = np.array([(p.x, p.y) for p in world.spawn_poses], dtype=float).reshape(-1, 2)
     goal_xy = np.array(world.goal_points, dtype=float).reshape(-1, 2)
     if len(spawn_xy) and len(spawn_xy) == len(goal_xy):
         lanes = rng.permutation(len(spawn_xy))
-        far = np.hypot(*(goal_xy[lanes] - spawn_xy[lanes]).T) >= min_distance_m
-        ok = _valid(world, spawn_xy[lanes], clearance_m) & _valid(world, goal_xy[lanes],
-                                                                   clearance_m) & far
-        if ok.any():
-            lane = int(lanes[np.argmax(ok)])
+        d = np.hypot(*(goal_xy[lanes] - spawn_xy[lanes]).T)
+        ok = (_valid(world, spawn_xy[lanes], clearance_m) & _valid(world, goal_xy[lanes],
+                                                                    clearance_m)
+              & (d >= min_distance_m) & (d <= max_distance_m))
+        found = first_fit(spawn_xy, goal_xy, np.repeat(lanes[ok], 2).reshape(-1, 2))
+        if found is not None:
+            lane = int(lanes[ok][found])
             return world.spawn_poses[lane], (float(goal_xy[lane, 0]), float(goal_xy[lane, 1]))
     # Fixed candidates in a random order; None where points are drawn each round instead.
     starts = _shuffled_valid(world, rng, spawn_xy, clearance_m)
@@ -67,20 +133,41 @@ def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m
         drawn += n * ((starts is None) + (goals is None))
         s_xy, s_index = starts or (_draw(world, rng, low, high, n, clearance_m), None)
         g_xy, _ = goals or (_draw(world, rng, low, high, n, clearance_m), None)
-        far = np.hypot(s_xy[:, None, 0] - g_xy[None, :, 0],
-                       s_xy[:, None, 1] - g_xy[None, :, 1]) >= min_distance_m
-        if far.any():
-            i, j = np.unravel_index(int(np.argmax(far)), far.shape)
+        rows, cols = np.nonzero(apart(s_xy, g_xy))
+        if planner is not None and len(rows):  # each start's first two goals, then the rest
+            rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
+            order = np.lexsort((rows, np.minimum(rank, 2)))
+            rows, cols = rows[order], cols[order]
+        found = first_fit(s_xy, g_xy, np.stack([rows, cols], axis=1))
+        if found is not None:
+            i, j = int(rows[found]), int(cols[found])
             goal = (float(g_xy[j, 0]), float(g_xy[j, 1]))
             if s_index is not None:
                 return world.spawn_poses[int(s_index[i])], goal
             yaw = float(rng.uniform(-math.pi, math.pi))
             return Pose2D(float(s_xy[i, 0]), float(s_xy[i, 1]), yaw), goal
-        if exhausted:
+        if exhausted or checks[0] >= MAX_PATH_CHECKS:
             break  # fixed candidates only, or none of them free: drawing again changes nothing
+    wanted = f"{min_distance_m} m" + (f" to {max_distance_m} m" if max_distance_m < math.inf
+                                      else "")
+    path = ("" if planner is None else f", a collision-free path at most {max_detour} times "
+            f"the straight line ({checks[0]} paths searched)")
     raise WorldError(f"world {world.name!r}: no start and goal with clearance {clearance_m} m "
-                     f"and {min_distance_m} m apart found in {max_tries} tries; lower the "
+                     f"and {wanted} apart{path} found in {max_tries} tries; lower the "
                      "clearance or the distance, or free some space")
+
+
+def sample_pairs(world: WorldSpec, count: int, rng: np.random.Generator, *, clearance_m: float,
+                 kind: PairKind, planner: PathPlanner | None = None,
+                 min_goal_distance_m: float = 1.0) -> list[tuple[Pose2D, tuple[float, float]]]:
+    """``count`` pairs of ``kind`` drawn in turn from ``rng`` (deterministic for one rng
+    state); ``min_goal_distance_m`` stands in for a kind without a minimum. With a
+    ``planner`` every pair has a collision-free path."""
+    require(isinstance(count, int) and count >= 0, "sampling.count", count, "an integer >= 0")
+    low = kind.min_distance_m if kind.min_distance_m is not None else min_goal_distance_m
+    return [sample_start_goal(world, rng, clearance_m=clearance_m, min_distance_m=low,
+                              max_distance_m=kind.max_distance_m, max_detour=kind.max_detour,
+                              planner=planner) for _ in range(count)]
 
 
 def _draw(world: WorldSpec, rng: np.random.Generator, low: tuple[float, float],
