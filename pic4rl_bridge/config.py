@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
+from pic4rl_sim.sampling import PAIR_KINDS
 
 from .errors import ConfigError, require, unknown_key
 
@@ -118,6 +119,22 @@ class EpisodesConfig:
     starting_goal_range_m: float = 2.9  # ... within ± this of the initial pose in x and y
     max_attempts: int = 20  # goals redrawn when the simulator rejects one
     ordered: bool = False  # walk the file's pairs in order (PIC4rl-gym's testing mode)
+    # Sampled pairs (no file): a kind of pic4rl_sim.sampling.PAIR_KINDS, any | paper; 0 below
+    # keeps the kind's value. Other than plain "any", the env draws the pair (with a path check).
+    pair_kind: str = "any"
+    min_distance_m: float = 0.0  # straight start-goal distance at least (m)
+    max_distance_m: float = 0.0  # ... and at most (m)
+    max_detour: float = 0.0  # shortest collision-free path / straight line at most
+
+    def __post_init__(self) -> None:
+        require(self.pair_kind in PAIR_KINDS, "episodes.pair_kind", self.pair_kind,
+                f"one of {', '.join(PAIR_KINDS)}")
+        for key in ("min_distance_m", "max_distance_m"):
+            value = getattr(self, key)
+            require(math.isfinite(value) and value >= 0, f"episodes.{key}", value,
+                    "a distance >= 0 m (0: the kind's)")
+        require(self.max_detour == 0 or self.max_detour >= 1, "episodes.max_detour",
+                self.max_detour, "0 (the kind's) or a ratio >= 1")
 
 
 @dataclass(frozen=True)
