@@ -12,23 +12,27 @@ from __future__ import annotations
 from .batch import BagResult, MetricsResult, compute, judge_bag
 from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
 from .facts import EpisodeFacts, Footprint, Outcome
-from .metrics import compute_metrics
+from .metrics import Derived, compute_metrics
 from .reader import read_episode
-from .results import METRICS, TABLE1_COLUMNS, EpisodeMetrics
+from .registry import METRICS, REGISTRY, Metric, metric
+from .results import TABLE1_COLUMNS, EpisodeMetrics
 from .series import Episode
 from .topics import TopicMap, load_topic_map
 
 __all__ = [
     "METRICS",
+    "REGISTRY",
     "TABLE1_COLUMNS",
     "BagError",
     "BagResult",
+    "Derived",
     "ConfigError",
     "Episode",
     "EpisodeError",
     "EpisodeFacts",
     "EpisodeMetrics",
     "Footprint",
+    "Metric",
     "MetricsError",
     "MetricsResult",
     "Outcome",
@@ -38,5 +42,6 @@ __all__ = [
     "compute_metrics",
     "judge_bag",
     "load_topic_map",
+    "metric",
     "read_episode",
 ]

@@ -1,8 +1,13 @@
 """Per-agent (or per-any-key) statistics of a per-episode result DataFrame.
 
-Input: one row per bag, columns ``ID_COLUMNS + METRIC_COLUMNS + (ERROR_COLUMN,)`` as in
+Input: one row per bag, columns ``ID_COLUMNS + <metric columns> + (ERROR_COLUMN,)`` as in
 ``results.py``. Output: one row per group with ``<metric>_mean`` and ``<metric>_std`` for each
-numeric metric, the episode counts and the paper's ``success`` cell ("n/total").
+numeric metric, the episode counts per outcome and the paper's ``success`` cell ("n/total").
+
+Trajectory-quality columns (time, path, velocities, accelerations, jerk, obstacle distances:
+the metrics registered with ``quality=True``) are averaged over the successful episodes by
+default, as the paper's table does: a crash's short path is no evidence of a good one.
+Success, collisions, SPL and the other columns always cover every judged episode.
 """
 
 from __future__ import annotations
@@ -15,16 +20,26 @@ import numpy as np
 import pandas as pd
 
 from .errors import ConfigError
-from .results import ERROR_COLUMN, METRIC_COLUMNS
+from .facts import Outcome
+from .registry import REGISTRY
+from .results import ERROR_COLUMN
 
 #: Group name of rows whose key is missing (and, for ``agent``, whose run is missing too).
 UNKNOWN_GROUP = "(unknown)"
 #: Cell shown when nothing can be said (no judged episode, NaN).
 DASH = "–"
-#: Count columns of an aggregate, in the order they appear before the statistics.
-COUNT_COLUMNS: tuple[str, ...] = ("n_episodes", "n_failed", "n_judged", "n_success", "success")
-#: Metric columns that are text, hence never averaged.
-_TEXT_METRICS = frozenset({"outcome"})
+#: Outcomes counted in a column of their own (``n_<outcome>``).
+COUNTED_OUTCOMES: tuple[str, ...] = (
+    Outcome.COLLISION.value, Outcome.TIMEOUT.value, Outcome.DIVERGED.value,
+)
+#: Episodes the trajectory-quality columns average over: the successful ones, or all.
+OVER_CHOICES: tuple[str, ...] = ("success", "all")
+#: Count columns of an aggregate, in the order they appear before the statistics:
+#: ``n_averaged`` episodes entered the quality columns' means, as ``over`` says.
+COUNT_COLUMNS: tuple[str, ...] = (
+    "n_episodes", "n_failed", "n_judged", "n_success", "success",
+    *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", "over",
+)
 
 
 def _missing(value: object) -> bool:
@@ -55,19 +70,27 @@ def _group_keys(df: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
 
 
 def numeric_metric_columns(df: pd.DataFrame) -> list[str]:
-    """Metric columns of ``df`` that are averaged, in ``METRIC_COLUMNS`` order."""
-    return [c for c in METRIC_COLUMNS if c in df.columns and c not in _TEXT_METRICS]
+    """Registered numeric metric columns of ``df``, in registry (table) order."""
+    return [n for n, m in REGISTRY.metrics.items() if n in df.columns and not m.text]
 
 
-def aggregate(df: pd.DataFrame, by: str | Sequence[str] = "agent") -> pd.DataFrame:
+def aggregate(
+    df: pd.DataFrame, by: str | Sequence[str] = "agent", *, over: str = "success"
+) -> pd.DataFrame:
     """Mean and sample std (ddof=1, NaN-skipping) of every numeric metric per group.
 
     Error rows are left out of every statistic and counted in ``n_failed``. Columns:
     ``n_episodes`` (good rows), ``n_failed``, ``n_judged`` (success not NaN), ``n_success``
-    (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), then
-    ``<m>_mean`` and ``<m>_std`` per metric. The std of a single value is NaN. Index: the
-    group name(s), in order of first appearance.
+    (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), ``n_collision``,
+    ``n_timeout``, ``n_diverged`` (by outcome), ``n_averaged`` (episodes in the
+    trajectory-quality means: the successful ones for ``over="success"``, every good row for
+    ``"all"``), ``over``, then ``<m>_mean`` and ``<m>_std`` per metric. The std of a single
+    value is NaN; a quality column of a group without a success is NaN. Index: the group
+    name(s), in order of first appearance.
     """
+    if over not in OVER_CHOICES:
+        msg = f"aggregate: over={over!r}; expected one of {', '.join(OVER_CHOICES)}"
+        raise ConfigError(msg)
     by_cols = [by] if isinstance(by, str) else list(by)
     if not by_cols:
         raise ConfigError("aggregate: by=[] names no column; expected at least one, e.g. 'agent'")
@@ -79,10 +102,18 @@ def aggregate(df: pd.DataFrame, by: str | Sequence[str] = "agent") -> pd.DataFra
             raise ConfigError(msg)
 
     metrics = numeric_metric_columns(df)
+    quality = [m for m in metrics if REGISTRY.metrics[m].quality]
+    if over == "success" and quality and "success" not in metrics:
+        msg = "aggregate: over='success' needs a 'success' column; pass over='all'"
+        raise ConfigError(msg)
     stat_cols = [f"{m}_{s}" for m in metrics for s in ("mean", "std")]
     failed = _error_mask(df).to_numpy()
     keys = _group_keys(df, by_cols)
     values = df[metrics].apply(pd.to_numeric, errors="coerce").astype(float).reset_index(drop=True)
+    outcomes = (
+        df["outcome"].reset_index(drop=True) if "outcome" in df.columns
+        else pd.Series([None] * len(df), dtype=object)
+    )
 
     groups: dict[tuple[object, ...], list[int]] = {}
     for pos, key in enumerate(keys.itertuples(index=False, name=None)):
@@ -97,10 +128,17 @@ def aggregate(df: pd.DataFrame, by: str | Sequence[str] = "agent") -> pd.DataFra
         row["n_judged"] = len(judged)
         row["n_success"] = n_success
         row["success"] = f"{n_success}/{len(judged)}" if len(judged) else DASH
+        for word in COUNTED_OUTCOMES:
+            row[f"n_{word}"] = int((outcomes.iloc[good] == word).sum())
+        averaged = group if over == "all" or not quality else group[group["success"] == 1.0]
+        row["n_averaged"] = len(averaged)
+        row["over"] = over
         means, stds = group.mean(skipna=True), group.std(ddof=1, skipna=True)
+        q_means, q_stds = averaged.mean(skipna=True), averaged.std(ddof=1, skipna=True)
         for m in metrics:
-            row[f"{m}_mean"] = float(means[m]) if good else math.nan
-            row[f"{m}_std"] = float(stds[m]) if good else math.nan
+            mean, std = (q_means, q_stds) if m in quality else (means, stds)
+            row[f"{m}_mean"] = float(mean[m]) if good else math.nan
+            row[f"{m}_std"] = float(std[m]) if good else math.nan
         rows.append(row)
 
     columns = list(COUNT_COLUMNS) + stat_cols
@@ -110,5 +148,8 @@ def aggregate(df: pd.DataFrame, by: str | Sequence[str] = "agent") -> pd.DataFra
         arrays = [[key[i] for key in groups] for i in range(len(by_cols))]
         index = pd.MultiIndex.from_arrays(arrays, names=by_cols)
     out = pd.DataFrame(rows, index=index, columns=columns)
-    int_cols = ["n_episodes", "n_failed", "n_judged", "n_success"]
+    int_cols = [
+        "n_episodes", "n_failed", "n_judged", "n_success",
+        *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged",
+    ]
     return out.astype({c: "int64" for c in int_cols})

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable
+import os
+from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property
@@ -16,11 +17,12 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
-from .errors import MetricsError
+from .errors import ConfigError, MetricsError
 from .facts import EpisodeFacts
 from .inputs import discover
 from .metrics import compute_metrics
 from .reader import read_episode
+from .registry import REGISTRY
 from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
 from .series import Episode
 from .topics import TopicMap
@@ -28,7 +30,13 @@ from .topics import TopicMap
 log = logging.getLogger(__name__)
 
 WARNINGS_COLUMN = "warnings"
+#: Columns of a result with pic4rl's own metrics (user metrics go before ``error``).
 COLUMNS: tuple[str, ...] = (*ID_COLUMNS, *METRIC_COLUMNS, ERROR_COLUMN, WARNINGS_COLUMN)
+
+
+def result_columns(metric_names: Sequence[str]) -> tuple[str, ...]:
+    """Ids, the given metric columns, error and warnings."""
+    return (*ID_COLUMNS, *metric_names, ERROR_COLUMN, WARNINGS_COLUMN)
 
 
 @dataclass(frozen=True)
@@ -40,9 +48,15 @@ class BagResult:
     metrics: EpisodeMetrics | None
     error: str = ""
 
-    def row(self) -> dict[str, object]:
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """The reader's warnings, then the metrics'."""
+        read = self.episode.warnings if self.episode is not None else ()
+        return (*read, *(self.metrics.warnings if self.metrics is not None else ()))
+
+    def row(self, columns: Sequence[str] = COLUMNS) -> dict[str, object]:
         """One DataFrame row: ids, metrics (NaN when failed), error and warnings."""
-        row: dict[str, object] = dict.fromkeys(COLUMNS, math.nan)
+        row: dict[str, object] = dict.fromkeys(columns, math.nan)
         row.update(bag=self.bag, error=self.error, warnings="")
         for key in ("agent", "task", "world", "run", "episode", "pose_topic", "outcome"):
             row[key] = None
@@ -51,8 +65,8 @@ class BagResult:
             row.update(
                 agent=facts.agent, task=facts.task, world=facts.world, run=facts.run,
                 episode=facts.episode, pose_topic=self.episode.pose_topic,
-                warnings="; ".join(self.episode.warnings),
             )
+        row[WARNINGS_COLUMN] = "; ".join(self.warnings)
         if self.metrics is not None:
             row.update(self.metrics.as_dict())
         return row
@@ -60,13 +74,15 @@ class BagResult:
 
 @dataclass(frozen=True)
 class MetricsResult:
-    """All bags' results; ``frame`` has one row per bag in ``COLUMNS`` order."""
+    """All bags' results; ``frame`` has one row per bag, in ``columns`` order."""
 
     results: tuple[BagResult, ...]
+    columns: tuple[str, ...] = COLUMNS
 
     @cached_property
     def frame(self) -> pd.DataFrame:
-        return pd.DataFrame([r.row() for r in self.results], columns=list(COLUMNS))
+        columns = list(self.columns)
+        return pd.DataFrame([r.row(columns) for r in self.results], columns=columns)
 
     @property
     def failed(self) -> tuple[BagResult, ...]:
@@ -82,11 +98,15 @@ def judge_bag(
     topic_map: TopicMap | None = None,
     facts: EpisodeFacts | None = None,
     given: frozenset[str] = frozenset(),
+    metrics: Sequence[str] | None = None,
 ) -> BagResult:
-    """Read and judge one bag; every failure is caught and described, never raised."""
+    """Read and judge one bag (all metrics, or the named ones); every failure is caught and
+    described, never raised."""
     try:
+        selected = REGISTRY.select(metrics)
         episode = read_episode(bag, topic_map, facts, given)
-        return BagResult(str(bag), episode, compute_metrics(episode))
+        judged = compute_metrics(episode, selected, explicit=metrics is not None)
+        return BagResult(str(bag), episode, judged)
     except MetricsError as err:
         return BagResult(str(bag), None, None, str(err))
     except Exception as err:  # noqa: BLE001 - one broken bag must not stop a batch
@@ -94,8 +114,18 @@ def judge_bag(
         return BagResult(str(bag), None, None, f"{str(bag)!r}: {type(err).__name__}: {err}")
 
 
-def _judge_args(args: tuple[Path, TopicMap | None, EpisodeFacts | None, frozenset[str]]) -> BagResult:
+def _judge_args(
+    args: tuple[Path, TopicMap | None, EpisodeFacts | None, frozenset[str], Sequence[str] | None],
+) -> BagResult:
     return judge_bag(*args)
+
+
+def resolve_jobs(jobs: int) -> int:
+    """Worker processes for ``jobs``: itself when positive, every core for 0."""
+    if jobs < 0:
+        msg = f"jobs={jobs!r}: expected a positive number of processes, or 0 for every core"
+        raise ConfigError(msg)
+    return jobs or os.cpu_count() or 1
 
 
 def compute(
@@ -106,14 +136,23 @@ def compute(
     given: frozenset[str] = frozenset(),
     jobs: int = 1,
     progress: bool = False,
+    metrics: Sequence[str] | None = None,
 ) -> MetricsResult:
-    """Judge every bag named by ``inputs`` (see ``inputs.discover``), ``jobs`` at a time.
+    """Judge every bag named by ``inputs`` (see ``inputs.discover``), ``jobs`` at a time (0:
+    one per core). ``metrics``: the columns to compute (default: every registered metric;
+    ``outcome`` and ``success`` always), else ``topic_map.metrics``.
 
     Inputs that name no bag become error rows too. ``progress`` shows a bar on stderr.
+    Unknown metric names or a negative ``jobs`` raise ``ConfigError``.
     """
+    jobs = resolve_jobs(jobs)
+    if metrics is None and topic_map is not None:
+        metrics = topic_map.metrics
+    names = tuple(m.name for m in REGISTRY.select(metrics))
     found = discover(inputs)
     unmatched = [BagResult(item, None, None, f"{item!r}: {why}") for item, why in found.unmatched]
-    work = [(bag, topic_map, facts, given) for bag in found.bags]
+    chosen = names if metrics is not None else None
+    work = [(bag, topic_map, facts, given, chosen) for bag in found.bags]
     bar = tqdm(total=len(work), desc="bags", unit="bag", disable=not progress, leave=False)
     results: list[BagResult] = []
     with bar:
@@ -126,5 +165,5 @@ def compute(
             for args in work:
                 results.append(_judge_args(args))
                 bar.update()
-    return MetricsResult(tuple(unmatched + results))
+    return MetricsResult(tuple(unmatched + results), result_columns(names))
 

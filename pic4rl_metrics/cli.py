@@ -15,7 +15,9 @@ from .aggregate import aggregate
 from .batch import MetricsResult, compute
 from .errors import ConfigError, MetricsError
 from .facts import EpisodeFacts, parse_facts
-from .report import FORMATS, render_comparison, render_episodes
+from .registry import METRICS, REGISTRY
+from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
+from .results import METRIC_COLUMNS, TABLE1_COLUMNS
 from .topics import TopicMap, load_topic_map
 
 
@@ -44,9 +46,28 @@ def _add_input_options(parser: argparse.ArgumentParser) -> None:
                        help="scan distance beyond the footprint that counts as unsafe (m)")
     facts.add_argument("--max-speed", type=float, metavar="MPS", help="robot's max speed, for the BARN score")
     run = parser.add_argument_group("running")
-    run.add_argument("--jobs", "-j", type=int, default=1, metavar="N", help="bags judged in parallel")
+    run.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
+                     help="bags judged in parallel (0: one per core)")
+    run.add_argument("--metrics", type=_names, metavar="NAME[,NAME...]",
+                     help="metric columns to compute (default: all; outcome and success always)")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar on stderr (default: when stderr is a terminal)")
+
+
+def _jobs(text: str) -> int:
+    """--jobs: a whole number >= 0 (0: one process per core)."""
+    try:
+        jobs = int(text)
+    except ValueError:
+        jobs = -1
+    if jobs < 0:
+        msg = f"{text!r}: expected a number of processes >= 1, or 0 for one per core"
+        raise argparse.ArgumentTypeError(msg)
+    return jobs
+
+
+def _names(text: str) -> tuple[str, ...]:
+    return tuple(n.strip() for n in text.split(",") if n.strip())
 
 
 def _add_output_options(parser: argparse.ArgumentParser, default_format: str) -> None:
@@ -70,6 +91,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--by", default="agent", choices=("agent", "run", "task", "world"),
                    help="what makes a row")
     p.add_argument("--with-std", action="store_true", help="cells as mean ± std")
+    p.add_argument("--over", choices=("success", "all"), default="success",
+                   help="episodes the trajectory-quality columns average: the successful "
+                        "ones (default, as the paper's table) or all")
     p = sub.add_parser("plot", help="a figure per episode and a comparison figure")
     _add_input_options(p)
     p.add_argument("--out", "-o", type=Path, required=True, help="directory for the PNG files")
@@ -102,7 +126,16 @@ def _run(args: argparse.Namespace) -> MetricsResult:
     topic_map, facts, given = _inputs(args)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
-                   jobs=max(1, args.jobs), progress=progress)
+                   jobs=args.jobs, progress=progress, metrics=args.metrics)
+
+
+def _shown(result: MetricsResult, default: Sequence[str], *, numeric: bool) -> list[str]:
+    """Metric columns a table shows: the ones asked for (``--metrics``, topic map), else the
+    default view plus the columns of plugins; ``numeric`` leaves text columns out."""
+    computed = [c for c in result.columns if c in METRICS]
+    if set(METRIC_COLUMNS) <= set(computed):
+        computed = [*default, *(c for c in computed if c not in METRIC_COLUMNS)]
+    return [c for c in computed if c == "success" or not (numeric and METRICS[c].text)]
 
 
 def _emit(text: str, out: Path | None, force: bool) -> None:
@@ -120,10 +153,11 @@ def _emit(text: str, out: Path | None, force: bool) -> None:
 def _report_failures(result: MetricsResult) -> int:
     for failed in result.failed:
         print(f"error: {failed.error}", file=sys.stderr)
+    for problem in REGISTRY.plugin_errors:
+        print(f"warning: {problem}", file=sys.stderr)
     for ok in result.results:
-        if ok.episode is not None:
-            for warning in ok.episode.warnings:
-                print(f"warning: {ok.bag}: {warning}", file=sys.stderr)
+        for warning in ok.warnings:
+            print(f"warning: {ok.bag}: {warning}", file=sys.stderr)
     n_bad, n_all = len(result.failed), len(result.results)
     if n_bad:
         print(f"{n_bad} of {n_all} bag(s) failed", file=sys.stderr)
@@ -159,10 +193,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         result = _run(args)
         if args.command == "compute":
-            _emit(render_episodes(result.frame, args.format), args.out, args.force)
+            shown = _shown(result, list(EPISODE_VIEW), numeric=False)
+            _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
         elif args.command == "compare":
-            table = aggregate(result.frame, by=args.by)
-            _emit(render_comparison(table, args.format, with_std=args.with_std), args.out, args.force)
+            table = aggregate(result.frame, by=args.by, over=args.over)
+            columns = _shown(result, TABLE1_COLUMNS, numeric=True)
+            text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
+            _emit(text, args.out, args.force)
         else:
             _plot(args, result)
     except MetricsError as err:

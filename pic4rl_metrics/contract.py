@@ -20,13 +20,19 @@ CLOCK_TOPIC = "/clock"
 
 #: ``std_msgs/msg/String`` whose ``data`` is a JSON object with the keys of ``FACT_KEYS``.
 FACTS_TOPIC = "/episode/facts"
-#: ``std_msgs/msg/String``; ``data`` is a JSON object ``{"outcome": "goal"|"collision"|"timeout",
+#: ``std_msgs/msg/String``; ``data`` is a JSON object ``{"outcome": "goal"|"collision"|"timeout"|"diverged",
 #: "stamp_ns": <int, on the pose topic's header time base>}`` or just the outcome word.
 OUTCOME_TOPIC = "/episode/outcome"
+#: ``tf2_msgs/msg/TFMessage``: a real bag's static transforms, where the LiDAR's mount is read
+#: when the facts carry no ``scan_mount``.
+TF_STATIC_TOPIC = "/tf_static"
 
 #: Keys of ``custom_data`` and of the facts JSON. Scalars are strings of numbers; ``start``
 #: is ``[x, y, yaw]``, ``goal`` is ``[x, y]``, ``footprint`` is ``{"radius_m": r}`` or
 #: ``{"length_m": l, "width_m": w}``, ``row_centerline`` is ``[[x, y], ...]`` (JSON).
+#: ``shortest_path_m`` is the shortest collision-free start-goal path of a simulated episode and
+#: ``straight_line_m`` the straight start-goal distance (m); ``scan_mount`` is the LiDAR's pose
+#: in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``.
 FACT_KEYS = (
     "agent",
     "task",
@@ -43,5 +49,8 @@ FACT_KEYS = (
     "safety_margin_m",
     "max_speed_mps",
     "row_centerline",
+    "shortest_path_m",
+    "straight_line_m",
+    "scan_mount",
     "outcome",
 )

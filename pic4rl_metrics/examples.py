@@ -76,11 +76,13 @@ def _weave(
 def _clearance_m(track: Track, footprint: Footprint) -> np.ndarray:
     """Per pose, the smallest gap (m) between the footprint and the scanned obstacles."""
     angles = np.linspace(-math.pi, math.pi - 2 * math.pi / 360, 360)
-    edge = footprint.boundary_distance(angles)
-    return np.array([
-        np.min(cast_scan(x, y, yaw, ROOM) - edge)
-        for x, y, yaw in zip(track.x, track.y, track.yaw)
-    ])  # fmt: skip
+    gaps = []
+    for x, y, yaw in zip(track.x, track.y, track.yaw):
+        ranges = cast_scan(x, y, yaw, ROOM)
+        hit = np.isfinite(ranges)
+        points = np.column_stack([ranges[hit] * np.cos(angles[hit]), ranges[hit] * np.sin(angles[hit])])
+        gaps.append(footprint.signed_distance(points).min() if hit.any() else math.inf)
+    return np.array(gaps)
 
 
 def _episode(agent: str, k: int) -> tuple[Track, str]:

@@ -12,7 +12,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from enum import Enum
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -21,11 +21,13 @@ from .errors import ConfigError
 
 
 class Outcome(str, Enum):
-    """How an episode ended. ``UNKNOWN`` when nothing recorded it and it cannot be inferred."""
+    """How an episode ended. ``DIVERGED``: the physics diverged and the episode was cut (not a
+    success, not a collision). ``UNKNOWN`` when nothing recorded it and it cannot be inferred."""
 
     GOAL = "goal"
     COLLISION = "collision"
     TIMEOUT = "timeout"
+    DIVERGED = "diverged"
     UNKNOWN = "unknown"
 
     @classmethod
@@ -100,17 +102,26 @@ class Footprint:
         )
         raise ConfigError(msg) from cause
 
-    def boundary_distance(self, bearing_rad: np.ndarray) -> np.ndarray:
-        """Distance (m) from the footprint's centre to its edge along each bearing (rad)."""
-        bearing = np.asarray(bearing_rad, dtype=float)
+    def signed_distance(self, points: np.ndarray) -> np.ndarray:
+        """Signed distance (m) of points (..., 2, base frame) from the footprint's boundary:
+        positive outside, negative inside; the env's collision geometry
+        (``pic4rl_bridge.tasks.collision.footprint_clearance``), re-implemented here because
+        the metrics import no other pic4rl package."""
+        p = np.asarray(points, dtype=float)
         if self.radius_m is not None:
-            return np.full(bearing.shape, self.radius_m)
-        half_l = 0.5 * self.length_m  # type: ignore[operator]
-        half_w = 0.5 * self.width_m  # type: ignore[operator]
-        with np.errstate(divide="ignore", over="ignore"):
-            along = half_l / np.abs(np.cos(bearing))
-            across = half_w / np.abs(np.sin(bearing))
-        return np.minimum(along, across)
+            return np.hypot(p[..., 0], p[..., 1]) - self.radius_m
+        qx = np.abs(p[..., 0]) - 0.5 * self.length_m  # type: ignore[operator]
+        qy = np.abs(p[..., 1]) - 0.5 * self.width_m  # type: ignore[operator]
+        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        return outside + np.minimum(np.maximum(qx, qy), 0.0)
+
+
+class Mount(NamedTuple):
+    """A sensor's pose in the robot's base frame (m, rad)."""
+
+    x_m: float = 0.0
+    y_m: float = 0.0
+    yaw_rad: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -132,6 +143,12 @@ class EpisodeFacts:
     safety_margin_m: float = 0.3
     max_speed_mps: float | None = None
     row_centerline: tuple[tuple[float, float], ...] | None = None
+    #: Shortest collision-free start-goal path (m), known for simulated episodes.
+    shortest_path_m: float | None = None
+    #: Straight start-goal distance (m) as the recorder measured it.
+    straight_line_m: float | None = None
+    #: The LiDAR's pose in the base frame; ``None``: not recorded (see ``reader`` for tf).
+    scan_mount: Mount | None = None
     outcome: Outcome | None = None
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
@@ -171,10 +188,67 @@ def _number(value: Any, key: str, source: str, *, positive: bool = False) -> flo
     return number
 
 
-def parse_facts(data: Mapping[str, Any], *, source: str) -> tuple[EpisodeFacts, frozenset[str]]:
+def _mount(raw: Any, source: str) -> Mount:
+    """``{"x_m": x, "y_m": y, "yaw_rad": yaw}`` (or its JSON, or ``[x, y, yaw]``)."""
+    try:
+        value = json.loads(raw) if isinstance(raw, str) else raw
+        if isinstance(value, Mapping):
+            unknown = set(value) - set(Mount._fields)
+            if unknown:
+                raise KeyError(sorted(unknown))
+            value = [value.get(name, 0.0) for name in Mount._fields]
+    except (ValueError, TypeError, KeyError) as err:
+        msg = f"{source}: scan_mount={raw!r} is not {{'x_m': X, 'y_m': Y, 'yaw_rad': YAW}}"
+        raise ConfigError(msg) from err
+    return Mount(*_floats(value, (3,), "scan_mount", source))
+
+
+def _parse_value(key: str, raw: Any, source: str) -> Any:
+    """The validated value of the known fact ``key``."""
+    if key in ("agent", "task", "world", "robot", "run", "episode"):
+        return str(raw)
+    if key == "seed":
+        try:
+            return int(raw)
+        except (ValueError, TypeError) as err:
+            msg = f"{source}: seed={raw!r} is not an integer"
+            raise ConfigError(msg) from err
+    if key == "footprint":
+        return Footprint.parse(raw, source=source)
+    if key == "start":
+        return _floats(raw, (3,), key, source)
+    if key == "goal":
+        # [x, y], or [x, y, yaw] from a pose: the yaw is not used.
+        return _floats(raw, (2, 3), key, source)[:2]
+    if key == "row_centerline":
+        try:
+            points = json.loads(raw) if isinstance(raw, str) else raw
+            line = tuple((float(p[0]), float(p[1])) for p in points)
+        except (ValueError, TypeError, IndexError, KeyError) as err:
+            msg = f"{source}: row_centerline={raw!r} is not a list of [x, y] points"
+            raise ConfigError(msg) from err
+        if len(line) < 2:
+            msg = f"{source}: row_centerline needs at least two points, got {len(line)}"
+            raise ConfigError(msg)
+        return line
+    if key == "scan_mount":
+        return _mount(raw, source)
+    if key == "outcome":
+        return Outcome.parse(str(raw), source=f"{source}: outcome")
+    if key == "shortest_path_m" and str(raw).strip().lower() in ("inf", "infinity"):
+        return math.inf  # no collision-free path: the straight line stands in
+    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m")
+    return _number(raw, key, source, positive=positive)
+
+
+def parse_facts(
+    data: Mapping[str, Any], *, source: str, problems: list[str] | None = None
+) -> tuple[EpisodeFacts, frozenset[str]]:
     """Parse a ``custom_data``-like mapping; return the facts and the names it gave.
 
     Unknown keys are kept in ``extra`` (a recorder may add its own); known keys are validated.
+    A bad value raises ``ConfigError``, unless ``problems`` is given: then the key is left out
+    and the message appended there (a bag's one bad fact must not cost its other metrics).
     """
     values: dict[str, Any] = {}
     extra: dict[str, str] = {}
@@ -184,38 +258,12 @@ def parse_facts(data: Mapping[str, Any], *, source: str) -> tuple[EpisodeFacts, 
         if key not in FACT_KEYS:
             extra[key] = str(raw)
             continue
-        if key in ("agent", "task", "world", "robot", "run", "episode"):
-            values[key] = str(raw)
-        elif key == "seed":
-            try:
-                values[key] = int(raw)
-            except (ValueError, TypeError) as err:
-                msg = f"{source}: seed={raw!r} is not an integer"
-                raise ConfigError(msg) from err
-        elif key == "footprint":
-            values[key] = Footprint.parse(raw, source=source)
-        elif key == "start":
-            values[key] = _floats(raw, (3,), key, source)
-        elif key == "goal":
-            # [x, y], or [x, y, yaw] from a pose: the yaw is not used.
-            values[key] = _floats(raw, (2, 3), key, source)[:2]
-        elif key == "row_centerline":
-            try:
-                points = json.loads(raw) if isinstance(raw, str) else raw
-                line = tuple((float(p[0]), float(p[1])) for p in points)
-            except (ValueError, TypeError, IndexError, KeyError) as err:
-                msg = f"{source}: row_centerline={raw!r} is not a list of [x, y] points"
-                raise ConfigError(msg) from err
-            if len(line) < 2:
-                msg = f"{source}: row_centerline needs at least two points, got {len(line)}"
-                raise ConfigError(msg)
-            values[key] = line
-        elif key == "outcome":
-            values[key] = Outcome.parse(str(raw), source=f"{source}: outcome")
-        elif key == "max_speed_mps":
-            values[key] = _number(raw, key, source, positive=True)
-        else:
-            values[key] = _number(raw, key, source)
+        try:
+            values[key] = _parse_value(key, raw, source)
+        except ConfigError as err:
+            if problems is None:
+                raise
+            problems.append(f"{err}; fact ignored")
     if extra:
         values["extra"] = extra
     return EpisodeFacts(**values), frozenset(values)

@@ -1,18 +1,23 @@
-"""The navigation metrics of one episode, as pure functions of an ``Episode``.
+"""pic4rl's navigation metrics, registered as pure functions of an episode (``registry.py``).
 
 Each definition (formula, time base, frame, sign, differencing) is written in
-``docs/metrics.md``; keep the two in step.
+``docs/metrics.md``; keep the two in step. ``Derived`` computes once what several metrics
+share (velocities, accelerations, the scan's clearance, the outcome, the optimal path).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 
-from .facts import EpisodeFacts, Outcome
+from .facts import EpisodeFacts, Mount, Outcome
 from .kinematics import (
+    Derivative,
+    VelocitySeries,
     bearing_in_body,
     differentiate,
     distance_to_polyline,
@@ -24,8 +29,8 @@ from .kinematics import (
     time_std,
     velocity_series,
 )
-from .results import EpisodeMetrics
-from .series import Episode, PoseSeries, ScanSeries
+from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
+from .series import Episode, ScanSeries
 
 NAN = float("nan")
 #: Below these the robot counts as standing still (m/s, rad/s).
@@ -38,6 +43,10 @@ TURNING_STEP_M = 0.01
 MIN_PATH_M = 0.01
 #: BARN challenge: actual time is clipped to [4, 8] x the optimal time.
 BARN_CLIP = (4.0, 8.0)
+#: Beyond these no ground robot moves: a series that exceeds one is flagged as damaged.
+PLAUSIBLE_SPEED_MPS = 20.0
+PLAUSIBLE_YAW_RATE_RADPS = 50.0
+PLAUSIBLE_ACC_MPS2 = 100.0
 
 
 def _finite(values: np.ndarray) -> np.ndarray:
@@ -55,29 +64,42 @@ def _min(values: np.ndarray) -> float:
     return float(values.min()) if values.size else NAN
 
 
+def _row_min(values: np.ndarray) -> np.ndarray:
+    """Per row, the smallest finite value; NaN for a row without one (also for 0 columns)."""
+    low = np.min(np.where(np.isfinite(values), values, np.inf), axis=1, initial=np.inf)
+    return np.where(np.isinf(low), NAN, low)
+
+
 class ScanClearance(NamedTuple):
     """Per-scan obstacle figures (m); NaN for a scan with no valid beam."""
 
-    nearest_m: np.ndarray  # nearest valid return
+    nearest_m: np.ndarray  # nearest valid return (from the sensor)
     range_mean_m: np.ndarray  # mean of valid returns
-    margin_m: np.ndarray  # nearest return minus the footprint's edge along that beam
+    margin_m: np.ndarray  # signed distance of the nearest return to the footprint
+
+
+def scan_points(scan: ScanSeries, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
+    """Valid returns as points in the base frame: x and y (n_scans, n_beams), NaN elsewhere;
+    the env's geometry (``pic4rl_bridge.tasks.collision.scan_points``)."""
+    ranges = scan.valid_ranges()
+    fx, fy = ranges * np.cos(scan.angles), ranges * np.sin(scan.angles)
+    c, s = math.cos(mount.yaw_rad), math.sin(mount.yaw_rad)
+    return mount.x_m + c * fx - s * fy, mount.y_m + s * fx + c * fy
 
 
 def scan_clearance(scan: ScanSeries, facts: EpisodeFacts) -> ScanClearance:
-    """Nearest obstacle per scan, and its distance beyond the footprint when one is known."""
+    """Nearest obstacle per scan, and its signed distance to the footprint when one is known
+    (scan points placed by ``facts.scan_mount``, the base origin when unknown)."""
     ranges = scan.valid_ranges()
-    has_valid = np.isfinite(ranges).any(axis=1)
+    valid = np.isfinite(ranges)
+    count = valid.sum(axis=1)
     with np.errstate(all="ignore"):
-        nearest = np.where(has_valid, np.nanmin(np.where(has_valid[:, None], ranges, 0), axis=1), NAN)
-        mean = np.where(has_valid, np.nanmean(np.where(has_valid[:, None], ranges, 0), axis=1), NAN)
+        mean = np.where(count > 0, np.where(valid, ranges, 0).sum(axis=1) / count, NAN)
+    nearest = _row_min(ranges)
     if facts.footprint is None:
         return ScanClearance(nearest, mean, np.full(len(scan), NAN))
-    edge = facts.footprint.boundary_distance(np.nan_to_num(scan.angles))
-    margin_beams = ranges - edge
-    with np.errstate(all="ignore"):
-        margin = np.where(
-            has_valid, np.nanmin(np.where(has_valid[:, None], margin_beams, 0), axis=1), NAN
-        )
+    x, y = scan_points(scan, facts.scan_mount or Mount())
+    margin = _row_min(facts.footprint.signed_distance(np.stack([x, y], axis=-1)))
     return ScanClearance(nearest, mean, margin)
 
 
@@ -89,29 +111,6 @@ def _hold_time(t_ns: np.ndarray, flag: np.ndarray) -> float:
     return float(np.sum(dt[flag[:-1]]))
 
 
-def infer_outcome(
-    pose: PoseSeries, facts: EpisodeFacts, clearance: ScanClearance | None, scan: ScanSeries | None
-) -> Outcome:
-    """Recorded outcome if any; else goal (final distance within tolerance, reached before any
-    collision), collision (scan margin within the collision tolerance), timeout (goal known,
-    neither happened) or unknown (no goal known and no collision seen)."""
-    if facts.outcome is not None:
-        return facts.outcome
-    first_collision: int | None = None
-    if clearance is not None and scan is not None:
-        hits = np.flatnonzero(clearance.margin_m <= facts.collision_tolerance_m)
-        first_collision = int(scan.t_ns[hits[0]]) if hits.size else None
-    if facts.goal is not None:
-        dist = np.hypot(pose.x - facts.goal[0], pose.y - facts.goal[1])
-        if dist[-1] <= facts.goal_tolerance_m:
-            reached = int(pose.t_ns[np.flatnonzero(dist <= facts.goal_tolerance_m)[0]])
-            if first_collision is None or reached <= first_collision:
-                return Outcome.GOAL
-    if first_collision is not None:
-        return Outcome.COLLISION
-    return Outcome.TIMEOUT if facts.goal is not None else Outcome.UNKNOWN
-
-
 def _rising_edges(flag: np.ndarray) -> int:
     """Number of False -> True transitions, counting a True first sample as one."""
     flag = np.asarray(flag, dtype=bool)
@@ -120,180 +119,400 @@ def _rising_edges(flag: np.ndarray) -> int:
     return int(flag[0]) + int(np.sum(flag[1:] & ~flag[:-1]))
 
 
-Metrics = dict[str, float]
+class Derived:
+    """One episode and what its metrics share, each computed on first use."""
+
+    def __init__(self, episode: Episode) -> None:
+        self.episode = episode
+        self.facts = episode.facts
+        self.pose = episode.pose
+        self.scan = episode.scan if episode.scan is not None and len(episode.scan) else None
+
+    def missing(self, needs: Iterable[str]) -> set[str]:
+        """The inputs of ``needs`` this episode lacks."""
+        have = {
+            "pose": True,
+            "scan": self.scan is not None,
+            "cmd_vel": self.episode.cmd is not None and len(self.episode.cmd) > 0,
+            "person": self.episode.person is not None and len(self.episode.person) > 0,
+            "goal": self.facts.goal is not None,
+            "footprint": self.facts.footprint is not None,
+            "max_speed": self.facts.max_speed_mps is not None,
+            "row_centerline": self.facts.row_centerline is not None,
+        }
+        return {name for name in needs if not have[name]}
+
+    # -- time and outcome ---------------------------------------------------------------------
+
+    @cached_property
+    def t_s(self) -> np.ndarray:
+        return seconds(self.pose.t_ns)
+
+    @cached_property
+    def clearance(self) -> ScanClearance | None:
+        return scan_clearance(self.scan, self.facts) if self.scan is not None else None
+
+    @cached_property
+    def collision(self) -> np.ndarray | None:
+        """Per scan with a valid beam: the footprint within the collision tolerance (the
+        env's test, ``distance < collision_tolerance_m``); None without scan or footprint."""
+        if self.clearance is None or self.facts.footprint is None:
+            return None
+        margin = self.clearance.margin_m
+        return margin[np.isfinite(margin)] < self.facts.collision_tolerance_m
+
+    @cached_property
+    def outcome(self) -> Outcome:
+        """Recorded outcome if any; else goal (final distance within tolerance, reached before
+        any collision), collision (some scan in collision), timeout (goal known, neither
+        happened) or unknown (no goal known and no collision seen)."""
+        facts, pose = self.facts, self.pose
+        if facts.outcome is not None:
+            return facts.outcome
+        first_collision: int | None = None
+        if self.collision is not None and self.collision.any():
+            seen = np.isfinite(self.clearance.margin_m)  # type: ignore[union-attr]
+            first_collision = int(self.scan.t_ns[seen][np.argmax(self.collision)])  # type: ignore[union-attr]
+        if facts.goal is not None:
+            dist = np.hypot(pose.x - facts.goal[0], pose.y - facts.goal[1])
+            if dist[-1] <= facts.goal_tolerance_m:
+                reached = int(pose.t_ns[np.flatnonzero(dist <= facts.goal_tolerance_m)[0]])
+                if first_collision is None or reached <= first_collision:
+                    return Outcome.GOAL
+        if first_collision is not None:
+            return Outcome.COLLISION
+        return Outcome.TIMEOUT if facts.goal is not None else Outcome.UNKNOWN
+
+    @cached_property
+    def success(self) -> float:
+        return NAN if self.outcome is Outcome.UNKNOWN else float(self.outcome is Outcome.GOAL)
+
+    @cached_property
+    def time_s(self) -> float:
+        """To the recorded outcome event when there is one (clamped), else the last pose."""
+        t = self.pose.t_ns
+        end_ns = int(t[-1])
+        if self.facts.outcome_stamp_ns is not None:
+            end_ns = min(max(self.facts.outcome_stamp_ns, int(t[0])), end_ns)
+        return (end_ns - int(t[0])) * 1e-9
+
+    # -- path and the optimal path ------------------------------------------------------------
+
+    @cached_property
+    def path_m(self) -> float:
+        return path_length(self.pose.x, self.pose.y)
+
+    @cached_property
+    def net_m(self) -> float:
+        p = self.pose
+        return float(np.hypot(p.x[-1] - p.x[0], p.y[-1] - p.y[0]))
+
+    @cached_property
+    def start_goal_m(self) -> float:
+        """Straight start-goal distance (m): start = recorded start or first pose."""
+        if self.facts.goal is None:
+            return NAN
+        start = self.facts.start[:2] if self.facts.start else (self.pose.x[0], self.pose.y[0])
+        return float(np.hypot(self.facts.goal[0] - start[0], self.facts.goal[1] - start[1]))
+
+    @cached_property
+    def straight_m(self) -> float:
+        """The recorder's straight-line distance, else the start-goal distance."""
+        recorded = self.facts.straight_line_m
+        return recorded if recorded is not None else self.start_goal_m
+
+    @cached_property
+    def optimal(self) -> tuple[float, str | None]:
+        """(length m, source): the shortest collision-free path when the bag records a finite
+        one, else the straight line; (NaN, None) when neither is known."""
+        shortest = self.facts.shortest_path_m
+        if shortest is not None and math.isfinite(shortest) and shortest > 0:
+            return shortest, "shortest"
+        if math.isfinite(self.straight_m):
+            return self.straight_m, "straight"
+        return NAN, None
+
+    # -- motion -------------------------------------------------------------------------------
+
+    @cached_property
+    def velocity(self) -> VelocitySeries:
+        return velocity_series(self.pose)
+
+    @cached_property
+    def vel_t_s(self) -> np.ndarray:
+        return seconds(self.velocity.t_ns, self.pose.t_ns[0])
+
+    @cached_property
+    def acc(self) -> Derivative:
+        v = self.velocity
+        return differentiate(v.t_ns, np.column_stack([v.vx, v.vy, v.wz]))
+
+    @cached_property
+    def jerk(self) -> Derivative:
+        return differentiate(self.acc.t_ns, self.acc.value)
+
+    @staticmethod
+    def _linear(d: Derivative) -> np.ndarray:
+        return np.hypot(d.value[:, 0], d.value[:, 1]) if len(d.dt_s) else np.zeros(0)
+
+    @staticmethod
+    def _yaw(d: Derivative) -> np.ndarray:
+        return np.abs(d.value[:, 2]) if len(d.dt_s) else np.zeros(0)
+
+    @cached_property
+    def lin_acc(self) -> np.ndarray:
+        return self._linear(self.acc)
+
+    @cached_property
+    def yaw_acc(self) -> np.ndarray:
+        return self._yaw(self.acc)
+
+    @cached_property
+    def goal_dist(self) -> np.ndarray:
+        gx, gy = self.facts.goal  # type: ignore[misc]
+        return np.hypot(self.pose.x - gx, self.pose.y - gy)
+
+    @cached_property
+    def goal_bearing(self) -> np.ndarray:
+        gx, gy = self.facts.goal  # type: ignore[misc]
+        return bearing_in_body(self.pose.x, self.pose.y, self.pose.yaw, gx, gy)
+
+    @cached_property
+    def spl_weight(self) -> float:
+        """``l / max(p, l)`` with ``l`` the optimal path, ``p`` the path travelled."""
+        optimal = self.optimal[0]
+        longest = max(self.path_m, optimal)
+        return optimal / longest if longest > 0 else NAN
 
 
-def _scan_metrics(episode: Episode, clearance: ScanClearance | None) -> Metrics:
-    """Obstacle distances, collisions (rising edges) and time within the safety margin."""
-    scan, facts = episode.scan, episode.facts
-    if clearance is None or scan is None:
-        return dict.fromkeys(
-            ("obstacle_dist_min_m", "obstacle_dist_mean_m", "scan_range_mean_m",
-             "collision_count", "safety_violation_time_s"), NAN,
-        )
-    valid = _finite(scan.valid_ranges())
-    out = {
-        "obstacle_dist_min_m": _min(clearance.nearest_m),
-        "obstacle_dist_mean_m": time_mean(seconds(scan.t_ns), clearance.nearest_m),
-        "scan_range_mean_m": float(valid.mean()) if valid.size else NAN,
-        "collision_count": NAN,
-        "safety_violation_time_s": NAN,
-    }
-    if facts.footprint is not None:
-        # A scan with no valid beam says nothing: the scan before it holds until the next.
-        seen = np.isfinite(clearance.margin_m)
-        margin, t_ns = clearance.margin_m[seen], scan.t_ns[seen]
-        out["collision_count"] = float(_rising_edges(margin <= facts.collision_tolerance_m))
-        out["safety_violation_time_s"] = _hold_time(t_ns, margin <= facts.safety_margin_m)
+# --- registration: one line per column, in table order ---------------------------------------
+
+
+def _register(name: str, unit: str, label: str, needs: tuple[str, ...] = ("pose",),
+              quality: bool = False, text: bool = False):  # noqa: ANN202
+    return metric(name, unit=unit, label=label, needs=needs, quality=quality, text=text,
+                  _builtin=True)
+
+
+_register("outcome", "-", "outcome", text=True)(lambda d: d.outcome.value)
+_register("success", "n/total", "success")(lambda d: d.success)
+_register("clearance_time_s", "s", "time", quality=True)(lambda d: d.time_s)
+_register("heading_error_mean_rad", "rad", "cum. heading", ("goal",), quality=True)(
+    lambda d: time_mean(d.t_s, np.abs(d.goal_bearing)))
+_register("heading_error_signed_mean_rad", "rad", "signed heading", ("goal",), quality=True)(
+    lambda d: time_mean(d.t_s, d.goal_bearing))
+_register("path_length_m", "m", "path", quality=True)(lambda d: d.path_m)
+_register("net_displacement_m", "m", "net displacement")(lambda d: d.net_m)
+_register("start_goal_distance_m", "m", "start-goal distance", ("goal",))(
+    lambda d: d.start_goal_m)
+
+
+@_register("distance_path_ratio", "m/m", "dist/path", quality=True)
+def _distance_path_ratio(d: Derived) -> float:
+    reference = d.start_goal_m if math.isfinite(d.start_goal_m) else d.net_m
+    return reference / d.path_m if d.path_m >= MIN_PATH_M else NAN
+
+
+_register("optimal_path_m", "m", "optimal path")(lambda d: d.optimal[0])
+_register("optimal_path_source", "-", "optimal path source", text=True)(lambda d: d.optimal[1])
+
+
+@_register("path_optimality", "m/m", "path optimality", quality=True)
+def _path_optimality(d: Derived) -> float:
+    return d.optimal[0] / d.path_m if d.path_m >= MIN_PATH_M else NAN
+
+
+_register("lin_vel_mean_mps", "m/s", "$v_{mean}$", quality=True)(
+    lambda d: time_mean(d.vel_t_s, d.velocity.speed))
+_register("lin_vel_std_mps", "m/s", "$v_{std.dev.}$", quality=True)(
+    lambda d: time_std(d.vel_t_s, d.velocity.speed))
+_register("ang_vel_mean_radps", "rad/s", "$\\omega_{mean}$", quality=True)(
+    lambda d: time_mean(d.vel_t_s, np.abs(d.velocity.wz)))
+_register("ang_vel_std_radps", "rad/s", "$\\omega_{std.dev.}$", quality=True)(
+    lambda d: time_std(d.vel_t_s, d.velocity.wz))
+_register("lin_acc_max_mps2", "m/s$^2$", "max linear acceleration", quality=True)(
+    lambda d: _max(d.lin_acc))
+_register("lin_acc_mean_mps2", "m/s$^2$", "mean linear acceleration", quality=True)(
+    lambda d: interval_mean(d.acc.dt_s, d.lin_acc))
+_register("yaw_acc_max_radps2", "rad/s$^2$", "max yaw acceleration", quality=True)(
+    lambda d: _max(d.yaw_acc))
+_register("yaw_acc_mean_radps2", "rad/s$^2$", "mean yaw acceleration", quality=True)(
+    lambda d: interval_mean(d.acc.dt_s, d.yaw_acc))
+_register("lin_jerk_max_mps3", "m/s$^3$", "max linear jerk", quality=True)(
+    lambda d: _max(d._linear(d.jerk)))
+_register("lin_jerk_mean_mps3", "m/s$^3$", "mean linear jerk", quality=True)(
+    lambda d: interval_mean(d.jerk.dt_s, d._linear(d.jerk)))
+_register("yaw_jerk_max_radps3", "rad/s$^3$", "max yaw jerk", quality=True)(
+    lambda d: _max(d._yaw(d.jerk)))
+_register("yaw_jerk_mean_radps3", "rad/s$^3$", "mean yaw jerk", quality=True)(
+    lambda d: interval_mean(d.jerk.dt_s, d._yaw(d.jerk)))
+_register("obstacle_dist_min_m", "m", "min obstacle distance", ("scan",), quality=True)(
+    lambda d: _min(d.clearance.nearest_m))
+_register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), quality=True)(
+    lambda d: time_mean(seconds(d.scan.t_ns), d.clearance.nearest_m))
+
+
+@_register("scan_range_mean_m", "m", "mean scan range", ("scan",), quality=True)
+def _scan_range_mean(d: Derived) -> float:
+    valid = _finite(d.scan.valid_ranges())  # type: ignore[union-attr]
+    return float(valid.mean()) if valid.size else NAN
+
+
+@_register("collision_count", "count", "collisions", ("scan", "footprint"))
+def _collision_count(d: Derived) -> float:
+    """Rising edges over the scans with a valid beam (one with none says nothing)."""
+    flags = d.collision
+    return float(_rising_edges(flags)) if flags is not None and flags.size else NAN
+
+
+@_register("safety_violation_time_s", "s", "time in safety margin", ("scan", "footprint"))
+def _safety_violation_time(d: Derived) -> float:
+    margin = d.clearance.margin_m  # type: ignore[union-attr]
+    seen = np.isfinite(margin)
+    if not seen.any():
+        return NAN
+    return _hold_time(d.scan.t_ns[seen], margin[seen] <= d.facts.safety_margin_m)  # type: ignore[union-attr]
+
+
+_register("spl", "-", "SPL", ("goal",))(lambda d: d.success * d.spl_weight)
+
+
+@_register("soft_spl", "-", "soft-SPL", ("goal",))
+def _soft_spl(d: Derived) -> float:
+    straight = d.straight_m
+    progress = 1.0 - d.goal_dist[-1] / straight if straight > 0 else NAN
+    return float(np.clip(progress, 0.0, 1.0)) * d.spl_weight
+
+
+@_register("barn_score", "-", "BARN score", ("goal", "max_speed"))
+def _barn_score(d: Derived) -> float:
+    optimal = d.optimal[0]
+    if not optimal > 0:
+        return NAN
+    ot = optimal / d.facts.max_speed_mps  # type: ignore[operator]
+    lo, hi = BARN_CLIP
+    return d.success * ot / float(np.clip(d.time_s, lo * ot, hi * ot))
+
+
+@_register("path_curvature_mean_radpm", "rad/m", "mean curvature", quality=True)
+def _curvature(d: Derived) -> float:
+    turning = path_turning(d.pose.x, d.pose.y, TURNING_STEP_M)
+    return float(np.mean(turning.turn_rad / turning.step_m)) if turning.turn_rad.size else NAN
+
+
+@_register("angle_over_length_radpm", "rad/m", "angle over length", quality=True)
+def _angle_over_length(d: Derived) -> float:
+    turning = path_turning(d.pose.x, d.pose.y, TURNING_STEP_M)
+    if not turning.turn_rad.size or d.path_m <= 0:
+        return NAN
+    return float(turning.turn_rad.sum() / d.path_m)
+
+
+@_register("time_not_moving_s", "s", "time not moving", quality=True)
+def _time_not_moving(d: Derived) -> float:
+    v = d.velocity
+    still = (v.speed < STILL_SPEED_MPS) & (np.abs(v.wz) < STILL_YAW_RATE_RADPS)
+    return float(np.sum(d.acc.dt_s[still[:-1] & still[1:]])) if len(d.acc.dt_s) else NAN
+
+
+_register("goal_dist_min_m", "m", "min goal distance", ("goal",))(
+    lambda d: float(d.goal_dist.min()))
+_register("goal_dist_final_m", "m", "final goal distance", ("goal",))(
+    lambda d: float(d.goal_dist[-1]))
+
+
+def _row_deviation(d: Derived) -> np.ndarray:
+    return distance_to_polyline(d.pose.x, d.pose.y, np.asarray(d.facts.row_centerline))
+
+
+_register("row_path_mae_m", "m", "row path MAE", ("row_centerline",))(
+    lambda d: time_mean(d.t_s, np.abs(_row_deviation(d))))
+_register("row_path_mse_m2", "m$^2$", "row path MSE", ("row_centerline",))(
+    lambda d: time_mean(d.t_s, _row_deviation(d) ** 2))
+
+
+def _person_bearing(d: Derived) -> tuple[np.ndarray, np.ndarray] | None:
+    """Bearing of the person seen from the robot, at pose stamps within the person's recorded
+    time range (person position linearly interpolated), and those stamps (s)."""
+    pose, person = d.pose, d.episode.person
+    inside = (pose.t_ns >= person.t_ns[0]) & (pose.t_ns <= person.t_ns[-1])  # type: ignore[union-attr]
+    if not inside.any():
+        return None
+    t0 = pose.t_ns[0]  # float64 of epoch nanoseconds would round to 256 ns
+    at = (pose.t_ns[inside] - t0).astype(float)
+    person_t = (person.t_ns - t0).astype(float)  # type: ignore[union-attr]
+    px = np.interp(at, person_t, person.x)  # type: ignore[union-attr]
+    py = np.interp(at, person_t, person.y)  # type: ignore[union-attr]
+    bearing = bearing_in_body(pose.x[inside], pose.y[inside], pose.yaw[inside], px, py)
+    return bearing, seconds(pose.t_ns[inside])
+
+
+def _follow(stat):  # noqa: ANN001, ANN202
+    def value(d: Derived) -> float:
+        seen = _person_bearing(d)
+        return NAN if seen is None else float(stat(*seen))
+    return value
+
+
+_register("follow_heading_mean_rad", "rad", "following heading mean", ("person",))(
+    _follow(lambda b, t: time_mean(t, b)))
+_register("follow_heading_mae_rad", "rad", "following heading MAE", ("person",))(
+    _follow(lambda b, t: time_mean(t, np.abs(b))))
+_register("follow_heading_rmse_rad", "rad", "following heading RMSE", ("person",))(
+    _follow(lambda b, t: math.sqrt(time_mean(t, b**2))))
+_register("follow_heading_max_rad", "rad", "following heading max", ("person",))(
+    _follow(lambda b, t: np.abs(b).max()))
+_register("n_poses", "count", "poses")(lambda d: len(d.pose))
+_register("n_scans", "count", "scans")(lambda d: len(d.scan) if d.scan is not None else 0)
+
+#: pic4rl's own columns, in table order (user metrics come after them).
+BUILTIN_COLUMNS: tuple[str, ...] = tuple(REGISTRY.metrics)
+
+
+# --- checks on the data ----------------------------------------------------------------------
+
+
+def data_warnings(d: Derived) -> list[str]:
+    """What makes the numbers suspect: physically impossible motion (a damaged bag judges
+    silently otherwise) and scans that say nothing."""
+    out: list[str] = []
+    name = d.episode.pose_topic
+    v = d.velocity
+    dt = np.diff(d.pose.t_ns).astype(float) * 1e-9
+    moved = np.hypot(np.diff(d.pose.x), np.diff(d.pose.y)) / dt if dt.size else np.zeros(0)
+    for what, values, limit, unit in (
+        ("speed", v.speed, PLAUSIBLE_SPEED_MPS, "m/s"),
+        ("speed from pose differences", moved, PLAUSIBLE_SPEED_MPS, "m/s"),
+        ("yaw rate", np.abs(v.wz), PLAUSIBLE_YAW_RATE_RADPS, "rad/s"),
+        ("linear acceleration", d.lin_acc, PLAUSIBLE_ACC_MPS2, "m/s^2"),
+    ):
+        values = np.asarray(values, dtype=float)
+        bad = ~np.isfinite(values) | (values > limit)
+        if bad.any():
+            worst = float(np.nanmax(np.where(np.isfinite(values), values, np.inf)))
+            out.append(
+                f"{name}: {what} up to {worst:.3g} {unit} in {int(bad.sum())} sample(s), beyond "
+                f"{limit:g} {unit}: physically impossible (damaged bag?); metrics kept as read"
+            )
+    if d.scan is not None:
+        bad_limits = int(np.sum(~(d.scan.range_min <= d.scan.range_max)))
+        if bad_limits:
+            out.append(f"scan: {bad_limits} scan(s) with range_min > range_max (or NaN): "
+                       "no beam of theirs is valid")
+        if not np.isfinite(d.clearance.nearest_m).any():  # type: ignore[union-attr]
+            out.append(f"scan: none of its {len(d.scan)} scans has a valid beam; obstacle "
+                       "distances, collisions and safety time are NaN")
     return out
 
 
-def _path_metrics(pose: PoseSeries, start_goal_m: float) -> Metrics:
-    """Length, displacement, distance/path ratio, curvature and angle over length."""
-    length = path_length(pose.x, pose.y)
-    net = float(np.hypot(pose.x[-1] - pose.x[0], pose.y[-1] - pose.y[0]))
-    reference = start_goal_m if math.isfinite(start_goal_m) else net
-    turning = path_turning(pose.x, pose.y, TURNING_STEP_M)
-    has_turns = turning.turn_rad.size > 0
-    return {
-        "path_length_m": length,
-        "net_displacement_m": net,
-        "start_goal_distance_m": start_goal_m,
-        "distance_path_ratio": reference / length if length >= MIN_PATH_M else NAN,
-        "path_curvature_mean_radpm": (
-            float(np.mean(turning.turn_rad / turning.step_m)) if has_turns else NAN
-        ),
-        "angle_over_length_radpm": (
-            float(turning.turn_rad.sum() / length) if has_turns and length > 0 else NAN
-        ),
-    }
+def compute_metrics(
+    episode: Episode, metrics: Iterable[Metric] | None = None, *, explicit: bool = False
+) -> EpisodeMetrics:
+    """The registered metrics (all, or ``metrics``) of one episode; the warnings ride along.
 
-
-def _motion_metrics(pose: PoseSeries) -> Metrics:
-    """Velocity statistics, accelerations, jerks and time standing still (body frame)."""
-    vel = velocity_series(pose)
-    vel_t = seconds(vel.t_ns, pose.t_ns[0])
-    speed = vel.speed
-    acc = differentiate(vel.t_ns, np.column_stack([vel.vx, vel.vy, vel.wz]))
-    jerk = differentiate(acc.t_ns, acc.value)
-    lin_acc = np.hypot(acc.value[:, 0], acc.value[:, 1]) if len(acc.dt_s) else np.zeros(0)
-    yaw_acc = np.abs(acc.value[:, 2]) if len(acc.dt_s) else np.zeros(0)
-    lin_jerk = np.hypot(jerk.value[:, 0], jerk.value[:, 1]) if len(jerk.dt_s) else np.zeros(0)
-    yaw_jerk = np.abs(jerk.value[:, 2]) if len(jerk.dt_s) else np.zeros(0)
-    still = (speed < STILL_SPEED_MPS) & (np.abs(vel.wz) < STILL_YAW_RATE_RADPS)
-    return {
-        "lin_vel_mean_mps": time_mean(vel_t, speed),
-        "lin_vel_std_mps": time_std(vel_t, speed),
-        "ang_vel_mean_radps": time_mean(vel_t, np.abs(vel.wz)),
-        "ang_vel_std_radps": time_std(vel_t, vel.wz),
-        "lin_acc_max_mps2": _max(lin_acc),
-        "lin_acc_mean_mps2": interval_mean(acc.dt_s, lin_acc),
-        "yaw_acc_max_radps2": _max(yaw_acc),
-        "yaw_acc_mean_radps2": interval_mean(acc.dt_s, yaw_acc),
-        "lin_jerk_max_mps3": _max(lin_jerk),
-        "lin_jerk_mean_mps3": interval_mean(jerk.dt_s, lin_jerk),
-        "yaw_jerk_max_radps3": _max(yaw_jerk),
-        "yaw_jerk_mean_radps3": interval_mean(jerk.dt_s, yaw_jerk),
-        "time_not_moving_s": (
-            float(np.sum(acc.dt_s[still[:-1] & still[1:]])) if len(acc.dt_s) else NAN
-        ),
-    }
-
-
-def _goal_metrics(
-    pose: PoseSeries, facts: EpisodeFacts, success: float, path_m: float, time_s: float,
-    start_goal_m: float,
-) -> Metrics:
-    """Heading error to the goal, goal distances, SPL, soft-SPL and the BARN score."""
-    if facts.goal is None:
-        return dict.fromkeys(
-            ("heading_error_mean_rad", "heading_error_signed_mean_rad", "goal_dist_min_m",
-             "goal_dist_final_m", "spl", "soft_spl", "barn_score"), NAN,
-        )
-    gx, gy = facts.goal
-    t_s = seconds(pose.t_ns)
-    bearing = bearing_in_body(pose.x, pose.y, pose.yaw, gx, gy)
-    goal_dist = np.hypot(pose.x - gx, pose.y - gy)
-    longest = max(path_m, start_goal_m)
-    weight = start_goal_m / longest if longest > 0 else NAN
-    progress = 1.0 - goal_dist[-1] / start_goal_m if start_goal_m > 0 else NAN
-    barn = NAN
-    if facts.max_speed_mps is not None and start_goal_m > 0:
-        optimal = start_goal_m / facts.max_speed_mps
-        lo, hi = BARN_CLIP
-        barn = success * optimal / float(np.clip(time_s, lo * optimal, hi * optimal))
-    return {
-        "heading_error_mean_rad": time_mean(t_s, np.abs(bearing)),
-        "heading_error_signed_mean_rad": time_mean(t_s, bearing),
-        "goal_dist_min_m": float(goal_dist.min()),
-        "goal_dist_final_m": float(goal_dist[-1]),
-        "spl": success * weight,
-        "soft_spl": float(np.clip(progress, 0.0, 1.0)) * weight,
-        "barn_score": barn,
-    }
-
-
-def _row_metrics(pose: PoseSeries, facts: EpisodeFacts) -> Metrics:
-    """Deviation from the row's centre line (vineyard task)."""
-    if facts.row_centerline is None:
-        return {"row_path_mae_m": NAN, "row_path_mse_m2": NAN}
-    dev = distance_to_polyline(pose.x, pose.y, np.asarray(facts.row_centerline))
-    t_s = seconds(pose.t_ns)
-    return {"row_path_mae_m": time_mean(t_s, np.abs(dev)), "row_path_mse_m2": time_mean(t_s, dev**2)}
-
-
-def _follow_metrics(episode: Episode) -> Metrics:
-    """Bearing of the person seen from the robot, at pose stamps within the person's recorded
-    time range (person position linearly interpolated)."""
-    keys = ("follow_heading_mean_rad", "follow_heading_mae_rad", "follow_heading_rmse_rad",
-            "follow_heading_max_rad")
-    pose, person = episode.pose, episode.person
-    if person is None or len(person) == 0:
-        return dict.fromkeys(keys, NAN)
-    inside = (pose.t_ns >= person.t_ns[0]) & (pose.t_ns <= person.t_ns[-1])
-    if not inside.any():
-        return dict.fromkeys(keys, NAN)
-    t0 = pose.t_ns[0]  # float64 of epoch nanoseconds would round to 256 ns
-    at = (pose.t_ns[inside] - t0).astype(float)
-    person_t = (person.t_ns - t0).astype(float)
-    px = np.interp(at, person_t, person.x)
-    py = np.interp(at, person_t, person.y)
-    bearing = bearing_in_body(pose.x[inside], pose.y[inside], pose.yaw[inside], px, py)
-    t_s = seconds(pose.t_ns[inside])
-    return dict(zip(keys, (
-        time_mean(t_s, bearing),
-        time_mean(t_s, np.abs(bearing)),
-        math.sqrt(time_mean(t_s, bearing**2)),
-        float(np.abs(bearing).max()),
-    )))
-
-
-def compute_metrics(episode: Episode) -> EpisodeMetrics:
-    """Every metric of ``docs/metrics.md`` for one episode."""
-    pose, facts, scan = episode.pose, episode.facts, episode.scan
-    clearance = scan_clearance(scan, facts) if scan is not None and len(scan) else None
-    outcome = infer_outcome(pose, facts, clearance, scan)
-    success = {Outcome.GOAL: 1.0, Outcome.COLLISION: 0.0, Outcome.TIMEOUT: 0.0}.get(outcome, NAN)
-
-    # Clearance time: to the recorded outcome event when there is one, else the last pose.
-    end_ns = int(pose.t_ns[-1])
-    if facts.outcome_stamp_ns is not None:
-        end_ns = min(max(facts.outcome_stamp_ns, int(pose.t_ns[0])), end_ns)
-    time_s = (end_ns - int(pose.t_ns[0])) * 1e-9
-
-    start = np.array(facts.start[:2]) if facts.start else np.array([pose.x[0], pose.y[0]])
-    start_goal = float(np.linalg.norm(np.array(facts.goal) - start)) if facts.goal else NAN
-    path = _path_metrics(pose, start_goal)
-    return EpisodeMetrics(
-        outcome=outcome.value,
-        success=success,
-        clearance_time_s=time_s,
-        **path,
-        **_motion_metrics(pose),
-        **_scan_metrics(episode, clearance),
-        **_goal_metrics(pose, facts, success, path["path_length_m"], time_s, start_goal),
-        **_row_metrics(pose, facts),
-        **_follow_metrics(episode),
-        n_poses=len(pose),
-        n_scans=len(scan) if scan is not None else 0,
-    )
+    ``explicit``: the metrics were asked for by name, so a missing input is warned about.
+    """
+    derived = Derived(episode)
+    selected = REGISTRY.select() if metrics is None else tuple(metrics)
+    values, warnings = evaluate(derived, selected, explicit=explicit)
+    return EpisodeMetrics(values, warnings=(*data_warnings(derived), *warnings))

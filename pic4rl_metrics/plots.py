@@ -23,7 +23,8 @@ from matplotlib.patches import Circle
 from .errors import ConfigError
 from .facts import EpisodeFacts, Outcome
 from .kinematics import differentiate, seconds, velocity_series
-from .results import METRICS, EpisodeMetrics
+from .registry import METRICS
+from .results import EpisodeMetrics
 from .series import Episode
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.
@@ -31,6 +32,7 @@ END_STYLE: dict[Outcome, tuple[str, str, str]] = {
     Outcome.GOAL: ("*", "tab:green", "end: goal"),
     Outcome.COLLISION: ("X", "tab:red", "end: collision"),
     Outcome.TIMEOUT: ("s", "tab:orange", "end: timeout"),
+    Outcome.DIVERGED: ("P", "tab:purple", "end: diverged"),
     Outcome.UNKNOWN: ("D", "0.4", "end: unknown"),
 }
 OBSTACLE_COLOR = "0.6"

@@ -2,9 +2,11 @@
 
 Time base: message header stamps. Headerless messages (``Twist``, the outcome ``String``) are
 moved onto it by the median offset between the pose topic's header stamps and its bag
-receive times; a topic whose stamps are all zero falls back to receive times. Samples are
-sorted by stamp, exact repeats dropped (the last received wins), and non-finite poses
-dropped, each noted in ``Episode.warnings``.
+receive times; a topic whose header stamps are all zero falls back to receive times (with a
+warning). Samples are sorted by stamp, exact repeats dropped (the last received wins), and
+non-finite poses dropped, each noted in ``Episode.warnings``. A fact or an outcome that cannot
+be read is left out with a warning: the metrics that do not need it stay. The LiDAR's mount is
+read from ``/tf_static`` when the facts do not give it.
 """
 
 from __future__ import annotations
@@ -32,8 +34,9 @@ from rosbags.typesys import (
 )
 from rosbags.typesys.store import Typestore
 
-from .errors import BagError, EpisodeError, TopicError
-from .facts import EpisodeFacts, Outcome, parse_facts
+from .contract import TF_STATIC_TOPIC
+from .errors import BagError, ConfigError, EpisodeError, TopicError
+from .facts import EpisodeFacts, Mount, Outcome, parse_facts
 from .series import CmdSeries, Episode, PointSeries, PoseSeries, ScanSeries
 from .topics import TopicMap
 
@@ -44,6 +47,7 @@ TWIST = "geometry_msgs/msg/Twist"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
 STRING = "std_msgs/msg/String"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
 
 SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
 SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
@@ -94,6 +98,15 @@ def _yaw(q: Any) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
+def _tf_rows(msg: Any, _msgtype: str) -> list[tuple[str, str, float, float, float]]:
+    """(parent, child, x, y, yaw) of each transform of a ``TFMessage``."""
+    rows = []
+    for tf in msg.transforms:
+        t, q = tf.transform.translation, tf.transform.rotation
+        rows.append((tf.header.frame_id.lstrip("/"), tf.child_frame_id.lstrip("/"), t.x, t.y, _yaw(q)))
+    return rows
+
+
 def _pose_row(msg: Any, msgtype: str) -> tuple[float, ...]:
     """(x, y, yaw, vx, vy, wz) of a pose message; NaN twist when the type has none."""
     pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
@@ -111,6 +124,9 @@ class _Topic:
         self.stamp: list[int] = []
         self.recv: list[int] = []
         self.rows: list[Any] = []
+        #: Frame id of the first message with a header ("" when headerless).
+        self.frame = ""
+        self.has_header = False
 
 
 def _timeline(topic: _Topic, offset_ns: int | None) -> np.ndarray:
@@ -119,6 +135,12 @@ def _timeline(topic: _Topic, offset_ns: int | None) -> np.ndarray:
     if stamps.size and stamps.any():
         return stamps
     return recv + (offset_ns or 0)
+
+
+def _zero_stamps(topic: _Topic, name: str, warnings: list[str]) -> None:
+    """Warn when a topic with headers has only zero stamps (its receive times stand in)."""
+    if topic.has_header and topic.stamp and not any(topic.stamp):
+        warnings.append(f"{name}: header stamps are zero; using bag receive times")
 
 
 def _order(t_ns: np.ndarray, name: str, warnings: list[str]) -> np.ndarray:
@@ -194,6 +216,7 @@ class _BagContents:
             "person": (topic_map.person, SUPPORTED_POSE_MSGS),
             "facts": (topic_map.facts, {STRING}),
             "outcome": (topic_map.outcome, {STRING}),
+            "tf_static": (TF_STATIC_TOPIC if topic_map.scan is not None else None, {TF_MESSAGE}),
         }
         wanted = {self.pose_topic: "pose"}
         for role, (topic, types) in roles.items():
@@ -231,6 +254,7 @@ class _BagContents:
             ),
             "facts": lambda m, _t: m.data,
             "outcome": lambda m, _t: m.data,
+            "tf_static": _tf_rows,
         }
         # Per connection, resolved once: decoder, extractor and the lists to append to.
         plan = {}
@@ -249,6 +273,25 @@ class _BagContents:
             add_stamp(_stamp_ns(header) if header is not None else 0)
             add_recv(recv_ns)
             add_row(extract(msg, msgtype))
+        for role, conn in ((wanted[c.topic], c) for c in conns):
+            if conn.msgtype in (LASER_SCAN, ODOMETRY, POSE_STAMPED, POSE_COV, TWIST_STAMPED):
+                self.topics[role].has_header = True
+        if self.topics["tf_static"].rows and self.topics["scan"].rows:
+            self._frames(reader, conns, wanted)
+
+    def _frames(self, reader: Reader, conns: list[Connection], wanted: dict[str, str]) -> None:
+        """The scan's frame and the robot's base frame (Odometry's child frame), from the
+        first message of each, for placing the LiDAR with ``/tf_static``."""
+        for conn in conns:
+            role = wanted[conn.topic]
+            if role not in ("scan", "pose") or conn.msgtype not in (LASER_SCAN, ODOMETRY):
+                continue
+            for _, _, raw in reader.messages(connections=[conn]):
+                msg = _typestore_for(conn.msgtype, conn.msgdef.format, conn.msgdef.data)\
+                    .deserialize_cdr(raw, conn.msgtype)
+                frame = msg.header.frame_id if role == "scan" else msg.child_frame_id
+                self.topics[role].frame = frame.lstrip("/")
+                break
 
 
 def _pose_series(raw: _Topic, name: str, warnings: list[str]) -> tuple[PoseSeries, int | None]:
@@ -268,13 +311,18 @@ def _pose_series(raw: _Topic, name: str, warnings: list[str]) -> tuple[PoseSerie
     t_ns, rows = t_ns[finite], rows[finite]
     keep = _order(t_ns, name, warnings)
     t_ns, rows = t_ns[keep], rows[keep]
-    has_twist = rows.size > 0 and np.isfinite(rows[:, 3:]).all()
+    twist_known = ~np.isnan(rows[:, 3:]).all(axis=1)  # types without a twist give NaN
+    has_twist = rows.size > 0 and twist_known.all() and np.isfinite(rows[:, 3:]).all()
+    if twist_known.any() and not has_twist:
+        bad = int(np.sum(~np.isfinite(rows[:, 3:]).all(axis=1)))
+        warnings.append(f"{name}: {bad} twist(s) with NaN/inf; velocities from pose differences")
     twist = (rows[:, 3], rows[:, 4], rows[:, 5]) if has_twist else (None, None, None)
     return PoseSeries(t_ns, rows[:, 0], rows[:, 1], rows[:, 2], *twist), offset
 
 
 def _sorted(raw: _Topic, offset: int, name: str, warnings: list[str]) -> tuple[np.ndarray, list[Any]]:
     """Stamps on the pose time base and the payload rows, sorted and de-duplicated."""
+    _zero_stamps(raw, name, warnings)
     t_ns = _timeline(raw, offset)
     keep = _order(t_ns, name, warnings)
     return t_ns[keep], [raw.rows[i] for i in keep]
@@ -285,6 +333,10 @@ def _scan_series(raw: _Topic, offset: int, warnings: list[str]) -> ScanSeries | 
         return None
     t_ns, rows = _sorted(raw, offset, "scan", warnings)
     width = max(len(r[0]) for r in rows)
+    if width == 0:
+        warnings.append(f"scan: all {len(rows)} LaserScan messages have no ranges; "
+                        "scan metrics are NaN")
+        return None
     ranges = np.full((len(rows), width), np.nan, dtype=np.float32)
     angles = np.full((len(rows), width), np.nan)
     for i, (rng, amin, ainc, _, _) in enumerate(rows):
@@ -312,48 +364,95 @@ def _point_series(raw: _Topic, offset: int, warnings: list[str]) -> PointSeries 
 
 
 def _facts(
-    bag: _BagContents, offset: int, cli: EpisodeFacts, cli_given: frozenset[str]
+    bag: _BagContents, offset: int, cli: EpisodeFacts, cli_given: frozenset[str],
+    warnings: list[str],
 ) -> EpisodeFacts:
-    """Merge facts: facts topic < custom_data < goal/outcome topics (if still unknown) < CLI."""
-    source = str(bag.path)
+    """Merge facts: facts topic < custom_data < goal/outcome topics (if still unknown) < CLI.
+
+    A fact that cannot be read is left out and warned about (``warnings``)."""
     facts = EpisodeFacts()
     for payload in bag.topics["facts"].rows[:1]:
         try:
             data = json.loads(payload)
-        except json.JSONDecodeError as err:
-            msg = f"{source!r}: facts topic holds no JSON object: {payload[:80]!r}"
-            raise BagError(msg) from err
-        topic_facts, given = parse_facts(data, source=f"{source}: facts topic")
+            if not isinstance(data, dict):
+                raise TypeError(type(data).__name__)
+        except (json.JSONDecodeError, TypeError):
+            warnings.append(f"facts topic holds no JSON object: {payload[:80]!r}; ignored")
+            continue
+        topic_facts, given = parse_facts(data, source="facts topic", problems=warnings)
         facts = facts.merged(topic_facts, given=given)
-    custom, given = parse_facts(bag.custom, source=f"{source}: custom_data")
+    custom, given = parse_facts(bag.custom, source="custom_data", problems=warnings)
     facts = facts.merged(custom, given=given)
     goals = bag.topics["goal"].rows
     if facts.goal is None and goals:
         facts = facts.merged(EpisodeFacts(goal=goals[-1][:2]), given=frozenset({"goal"}))
     outcome = bag.topics["outcome"]
     if outcome.rows:
-        word, stamp = _outcome(outcome.rows[-1], source)
-        if stamp is None:
-            stamp = int(outcome.recv[-1]) + offset
-        if facts.outcome is None:
-            facts = facts.merged(EpisodeFacts(outcome=word), given=frozenset({"outcome"}))
-        facts = facts.merged(EpisodeFacts(outcome_stamp_ns=stamp), given=frozenset({"outcome_stamp_ns"}))
+        try:
+            word, stamp = _outcome(outcome.rows[-1])
+        except ConfigError as err:
+            warnings.append(f"{err}; outcome ignored")
+        else:
+            if stamp is None:
+                stamp = int(outcome.recv[-1]) + offset
+            if facts.outcome is None:
+                facts = facts.merged(EpisodeFacts(outcome=word), given=frozenset({"outcome"}))
+            facts = facts.merged(
+                EpisodeFacts(outcome_stamp_ns=stamp), given=frozenset({"outcome_stamp_ns"})
+            )
+    if facts.scan_mount is None and bag.topics["tf_static"].rows:
+        mount = _mount_from_tf(bag, warnings)
+        if mount is not None:
+            facts = facts.merged(EpisodeFacts(scan_mount=mount), given=frozenset({"scan_mount"}))
     return facts.merged(cli, given=cli_given)
 
 
-def _outcome(payload: str, source: str) -> tuple[Outcome, int | None]:
+def _outcome(payload: str) -> tuple[Outcome, int | None]:
+    """The outcome word and its stamp (ns, None when not given); ``ConfigError`` if unreadable."""
     text = payload.strip()
+    source = "outcome topic"
     if text.startswith("{"):
         try:
             data = json.loads(text)
             stamp = data.get("stamp_ns")
-            return Outcome.parse(data["outcome"], source=f"{source}: outcome topic"), (
+            return Outcome.parse(data["outcome"], source=source), (
                 None if stamp is None else int(stamp)
             )
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as err:
-            msg = f"{source!r}: outcome topic: cannot read {text[:80]!r}: {err}"
-            raise BagError(msg) from err
-    return Outcome.parse(text, source=f"{source}: outcome topic"), None
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError) as err:
+            msg = f"{source}: cannot read {text[:80]!r}: {type(err).__name__}: {err}"
+            raise ConfigError(msg) from err
+    return Outcome.parse(text, source=source), None
+
+
+#: Frames tried as the robot's base when the pose topic names none (PoseStamped).
+BASE_FRAMES = ("base_link", "base_footprint")
+
+
+def _mount_from_tf(bag: _BagContents, warnings: list[str]) -> Mount | None:
+    """The scan frame's pose in the base frame, chained through ``/tf_static`` (the last
+    transform of each child wins, projected onto the plane); None with a warning when the
+    tree does not join them."""
+    parent: dict[str, tuple[str, float, float, float]] = {}
+    for rows in bag.topics["tf_static"].rows:
+        for up, child, x, y, yaw in rows:
+            parent[child] = (up, x, y, yaw)
+    scan_frame = bag.topics["scan"].frame
+    bases = [bag.topics["pose"].frame] if bag.topics["pose"].frame else list(BASE_FRAMES)
+    x = y = yaw = 0.0
+    frame, seen = scan_frame, set()
+    while frame not in bases:
+        if frame not in parent or frame in seen:
+            warnings.append(
+                f"{TF_STATIC_TOPIC}: no chain of transforms from {' or '.join(bases)!s} to the "
+                f"scan frame {scan_frame!r}; the LiDAR is taken at the base's origin"
+            )
+            return None
+        seen.add(frame)
+        up, tx, ty, tyaw = parent[frame]
+        c, s = math.cos(tyaw), math.sin(tyaw)
+        x, y, yaw = tx + c * x - s * y, ty + s * x + c * y, tyaw + yaw
+        frame = up
+    return Mount(x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
 
 
 def read_episode(
@@ -385,9 +484,10 @@ def read_episode(
             "after dropping NaN and repeated stamps; at least 2 are needed"
         )
         raise EpisodeError(msg)
+    merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
     return Episode(
         bag=path,
-        facts=_facts(bag, offset, facts or EpisodeFacts(), given),
+        facts=merged,
         pose=pose,
         pose_topic=bag.pose_topic,
         scan=_scan_series(bag.topics["scan"], offset, warnings),

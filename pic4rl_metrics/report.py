@@ -21,7 +21,8 @@ import pandas as pd
 
 from .aggregate import DASH
 from .errors import ConfigError
-from .results import ERROR_COLUMN, METRICS, TABLE1_COLUMNS
+from .registry import METRICS
+from .results import ERROR_COLUMN, TABLE1_COLUMNS
 
 FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")
 
@@ -39,7 +40,7 @@ EPISODE_VIEW: dict[str, str] = {
     "obstacle_dist_min_m": "min obst",
     "obstacle_dist_mean_m": "mean obst",
 }
-_TEXT_COLUMNS = frozenset({"bag", "outcome", "success", ERROR_COLUMN})
+_TEXT_COLUMNS = frozenset({"bag", "outcome", "optimal_path_source", "success", ERROR_COLUMN})
 _LATEX_SPECIAL = {c: "\\" + c for c in "&%$#_{}"}
 _LATEX_SPECIAL.update({"\\": r"\textbackslash{}", "~": r"\textasciitilde{}", "^": r"\^{}"})
 _SUPERSCRIPT = {"2": "²", "3": "³"}
@@ -151,19 +152,21 @@ def _episode_cell(col: str, value: object) -> str | None:
         return None
     if col == "success":
         return "yes" if float(value) == 1.0 else "no"  # type: ignore[arg-type]
-    return str(value) if col == "outcome" else _num(value)
+    return str(value) if col in METRICS and METRICS[col].text else _num(value)
 
 
-def render_episodes(df: pd.DataFrame, fmt: str) -> str:
+def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None = None) -> str:
     """One line per episode. csv and json hold every column; table, markdown and latex show
-    the bag (last two path components), the EPISODE_VIEW metrics present and the error."""
+    the bag (last two path components), the metrics ``columns`` (default: the EPISODE_VIEW
+    metrics) present, and the error."""
     _check_format(fmt)
     if fmt == "csv":
         return df.to_csv(index=False)
     if fmt == "json":
         records = [{str(k): _json_value(v) for k, v in r.items()} for r in df.to_dict("records")]
         return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    cols = [c for c in ("bag", *EPISODE_VIEW, ERROR_COLUMN) if c in df.columns]
+    view = EPISODE_VIEW if columns is None else columns
+    cols = [c for c in ("bag", *view, ERROR_COLUMN) if c in df.columns]
     rows = [[_episode_cell(c, v) for c, v in zip(cols, r)] for r in df[cols].itertuples(False)]
     right = [c not in _TEXT_COLUMNS for c in cols]
     units = [plain_text(METRICS[c].unit) if c in METRICS and c != "success" else "" for c in cols]
@@ -213,6 +216,22 @@ def _comparison_cell(row: pd.Series, col: str, with_std: bool, pm: str) -> str |
     return f"{mean}{pm}{_num(row.get(f'{col}_std')) or DASH}"
 
 
+def footnote(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
+    """What the quality columns among ``columns`` average over, or None when ``agg`` does not
+    say (an aggregate from before ``over`` existed) or no column is a quality column."""
+    quality = [c for c in columns if METRICS[c].quality]
+    if "over" not in agg.columns or not quality or agg.empty:
+        return None
+    labels = ", ".join(plain_text(METRICS[c].label) for c in quality)
+    if agg["over"].iloc[0] == "all":
+        return "All columns: mean over every judged episode of the row (--over all)."
+    counts = ", ".join(str(int(n)) for n in agg["n_averaged"])
+    return (
+        f"{labels}: mean over the row's successful episodes only (n = {counts}); the other "
+        "columns over every judged episode. --over all averages every episode."
+    )
+
+
 def render_comparison(
     agg: pd.DataFrame,
     fmt: str,
@@ -228,13 +247,16 @@ def render_comparison(
     table/markdown/csv carry labels and units ("time [s]"); latex is a ``table*`` with a label
     row and a unit row like the paper (``caption`` and ``label`` are inserted as given, LaTeX);
     json is a list of records keyed by metric column with unrounded means (``<m>_std`` too
-    with ``with_std``) and null for NaN.
+    with ``with_std``) and null for NaN. What the trajectory-quality columns average over is
+    said below the table (table, markdown, latex) or in the columns ``over`` and
+    ``n_averaged`` (csv, json).
     """
     _check_format(fmt)
     columns = list(columns)
     _check_columns(agg, columns)
     names = [_row_name(n) for n in agg.index]
     first = " / ".join(str(n) for n in agg.index.names if n is not None) or "agent"
+    note = footnote(agg, columns)
     if fmt == "json":
         records: list[dict[str, object]] = []
         for name, (_, row) in zip(names, agg.iterrows()):
@@ -246,6 +268,8 @@ def render_comparison(
                 rec[col] = _json_value(row[f"{col}_mean"])
                 if with_std:
                     rec[f"{col}_std"] = _json_value(row.get(f"{col}_std"))
+            if note is not None:
+                rec["over"], rec["n_averaged"] = row["over"], int(row["n_averaged"])
             records.append(rec)
         return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
 
@@ -257,12 +281,17 @@ def render_comparison(
     labels = [plain_text(METRICS[c].label) for c in columns]
     units = [f"[{plain_text(METRICS[c].unit)}]" for c in columns]
     right = [False] + [True] * len(columns)
+    below = f"\n{note}\n" if note is not None else ""
     if fmt == "table":
-        return _fixed_width([[first, *labels], ["", *units]], rows, right)
+        return _fixed_width([[first, *labels], ["", *units]], rows, right) + below
     if fmt == "markdown":
-        return _markdown([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows, right)
+        return _markdown([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows, right) + below
     if fmt == "csv":
-        return _csv([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows)
+        header = [first, *(f"{a} {u}" for a, u in zip(labels, units))]
+        if note is not None:
+            header += ["over", "n_averaged"]
+            rows = [[*r, str(o), str(int(n))] for r, o, n in zip(rows, agg["over"], agg["n_averaged"])]
+        return _csv(header, rows)
 
     tex_rows = [[latex_escape(r[0]), *r[1:]] for r in rows]
     headers = [
@@ -274,4 +303,7 @@ def render_comparison(
     lines += [rf"\label{{{label}}}"] if label is not None else []
     lines += [r"\resizebox{\textwidth}{!}{%", *_tabular(headers, tex_rows)]
     lines[-1] += "%"
-    return "\n".join([*lines, "}", r"\end{table*}"]) + "\n"
+    lines.append("}")
+    if note is not None:
+        lines.append(rf"\par\footnotesize {latex_escape(note)}")
+    return "\n".join([*lines, r"\end{table*}"]) + "\n"

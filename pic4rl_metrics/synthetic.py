@@ -22,6 +22,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from . import contract
+from .facts import Outcome
 from .topics import normalize_topic
 
 #: Header stamp of ``t_s = 0`` (ns): 2023-11-14, far from zero so that no code can confuse
@@ -34,7 +35,7 @@ POSE_TYPES = {
     "pose_cov": "geometry_msgs/msg/PoseWithCovarianceStamped",
 }
 STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
-OUTCOMES = ("goal", "collision", "timeout")
+OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
 
 
 @dataclass(frozen=True)

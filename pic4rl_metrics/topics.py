@@ -11,6 +11,7 @@ the episode facts a real-robot bag lacks::
     facts:
       footprint: {length_m: 0.99, width_m: 0.67}
       goal: [12.0, 3.5]
+    metrics: [success, path_length_m, spl]   # columns to compute (default: all)
 """
 
 from __future__ import annotations
@@ -45,6 +46,8 @@ class TopicMap:
     person: str | None = contract.PERSON_TOPIC
     facts: str | None = contract.FACTS_TOPIC
     outcome: str | None = contract.OUTCOME_TOPIC
+    #: Metric columns to compute (``None``: every registered metric).
+    metrics: tuple[str, ...] | None = None
     #: Roles the user named: a missing topic for one of these is an error, not a skip.
     explicit: frozenset[str] = frozenset()
 
@@ -66,7 +69,9 @@ class TopicMap:
         return replace(self, **given, explicit=self.explicit | frozenset(given))  # type: ignore[arg-type]
 
 
-_KEYS = ("pose", "scan", "cmd_vel", "goal", "person", "facts_topic", "outcome_topic", "facts")
+_KEYS = (
+    "pose", "scan", "cmd_vel", "goal", "person", "facts_topic", "outcome_topic", "facts", "metrics",
+)
 
 
 def load_topic_map(path: Path | str) -> tuple[TopicMap, EpisodeFacts, frozenset[str]]:
@@ -112,4 +117,12 @@ def topic_map_from_dict(
             msg = f"{source}: {key}={value!r} must be a topic name (or null to switch it off)"
             raise ConfigError(msg)
     facts, given = parse_facts(data.get("facts") or {}, source=f"{source}: facts")
-    return TopicMap(**kwargs, explicit=frozenset(kwargs)), facts, given
+    explicit = frozenset(kwargs)
+    if data.get("metrics") is not None:
+        names = data["metrics"]
+        names = [names] if isinstance(names, str) else names
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            msg = f"{source}: metrics={data['metrics']!r} must be a list of metric names"
+            raise ConfigError(msg)
+        kwargs["metrics"] = tuple(names)
+    return TopicMap(**kwargs, explicit=explicit), facts, given

@@ -15,7 +15,6 @@ import os
 import random
 import shutil
 from collections.abc import Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +33,7 @@ from pic4rl_metrics import (
     read_episode,
 )
 from pic4rl_metrics.cli import main
+from pic4rl_metrics.facts import parse_facts
 from pic4rl_metrics.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
@@ -354,15 +354,19 @@ def test_a_bag_with_two_odometry_topics_and_no_default_one_lists_the_candidates(
         read_episode(bag)
 
 
-def test_unreadable_facts_are_an_error_row_naming_the_key(tmp_path: Path) -> None:
-    bag = write_episode_bag(tmp_path / "bad_facts", LINE, facts={"footprint": "banana"})
-    with pytest.raises(ConfigError, match=r"footprint.*'banana'"):
-        read_episode(bag)
-    good = write_episode_bag(tmp_path / "good", LINE)
-    result = compute([bag, good])
-    assert "bad_facts" in _row(result, "bad_facts").error
-    assert "'banana'" in _row(result, "bad_facts").error
-    assert _row(result, "good").metrics is not None
+def test_an_unreadable_fact_is_left_out_with_a_warning_naming_the_key(tmp_path: Path) -> None:
+    """One bad fact costs only the metrics that need it: the rest of the row stays."""
+    facts = {"footprint": "banana", "goal": [2.0, 0.0], "agent": "a"}
+    bag = write_episode_bag(tmp_path / "bad_facts", LINE, facts=facts)
+    episode = read_episode(bag)
+    assert episode.facts.footprint is None and episode.facts.goal == (2.0, 0.0)
+    assert any("footprint" in w and "'banana'" in w and "ignored" in w for w in episode.warnings)
+    row = _row(compute([bag]), "bad_facts")
+    assert row.error == "" and row.metrics.path_length_m == pytest.approx(2.0, abs=1e-9)
+    assert row.metrics.goal_dist_final_m == pytest.approx(0.0, abs=1e-9)
+    assert math.isnan(row.metrics.collision_count)  # needs the footprint
+    with pytest.raises(ConfigError, match=r"footprint.*'banana'"):  # typed by a user: refused
+        parse_facts({"footprint": "banana"}, source="command line")
 
 
 # --------------------------------------------------------------------------- odd but readable
@@ -390,11 +394,11 @@ def test_repeated_and_backwards_stamps_are_sorted_with_warnings(tmp_path: Path) 
     assert messy_m is not None and clean_m is not None
     assert messy_m.path_length_m == pytest.approx(0.8, abs=1e-12)
     differ = {
-        k: (v, asdict(clean_m)[k])
-        for k, v in asdict(messy_m).items()
+        k: (v, dict(clean_m)[k])
+        for k, v in dict(messy_m).items()
         if not (
-            v == asdict(clean_m)[k]
-            or (isinstance(v, float) and math.isnan(v) and math.isnan(asdict(clean_m)[k]))
+            v == dict(clean_m)[k]
+            or (isinstance(v, float) and math.isnan(v) and math.isnan(dict(clean_m)[k]))
         )
     }
     assert differ == {}
@@ -449,8 +453,8 @@ def test_nan_poses_are_dropped_with_a_warning(tmp_path: Path) -> None:
     result = compute([bag, reference])
     got, want = _row(result, "holey").metrics, _row(result, "reference").metrics
     assert got is not None and want is not None
-    for key, value in asdict(want).items():
-        other = asdict(got)[key]
+    for key, value in dict(want).items():
+        other = dict(got)[key]
         assert other == value or (
             isinstance(value, float) and math.isnan(value) and math.isnan(other)
         ), key

@@ -52,7 +52,7 @@ def episodes() -> pd.DataFrame:
 
 
 def test_aggregate_means_and_sample_stds(episodes: pd.DataFrame) -> None:
-    agg = aggregate(episodes)
+    agg = aggregate(episodes, over="all")
     td3, sac = agg.loc["td3_lidar"], agg.loc["sac%depth"]
     assert td3["clearance_time_s_mean"] == pytest.approx(20.0)
     assert td3["clearance_time_s_std"] == pytest.approx(10.0)  # ddof=1 of 10, 20, 30
@@ -169,7 +169,7 @@ def test_episodes_markdown_and_latex(episodes: pd.DataFrame) -> None:
 
 
 def test_comparison_latex_like_the_paper(episodes: pd.DataFrame) -> None:
-    tex = render_comparison(aggregate(episodes), "latex", caption="Average metrics.",
+    tex = render_comparison(aggregate(episodes, over="all"), "latex", caption="Average metrics.",
                             label="tab:navigation-metrics")
     lines = tex.splitlines()
     assert lines[0] == r"\begin{table*}[ht]" and lines[-1] == r"\end{table*}"
@@ -183,10 +183,11 @@ def test_comparison_latex_like_the_paper(episodes: pd.DataFrame) -> None:
     assert td3.startswith(r"td3\_lidar & 2/3 & 20.00 & -- & 5.50 & -- & 0.30 & ")
     assert sac.startswith(r"sac\%depth & 1/1 & 13.00 & ")
     assert lines[top + 6] == r"\bottomrule"
+    assert "--over all" in lines[-2] and "every judged episode" in lines[-2]  # the footnote
 
 
 def test_comparison_with_std(episodes: pd.DataFrame) -> None:
-    agg = aggregate(episodes)
+    agg = aggregate(episodes, over="all")
     assert "20.00 ± 10.00" in render_comparison(agg, "table", with_std=True)
     assert r"20.00 $\pm$ 10.00" in render_comparison(agg, "latex", with_std=True)
     rec = json.loads(render_comparison(agg, "json", with_std=True))[0]
@@ -194,34 +195,78 @@ def test_comparison_with_std(episodes: pd.DataFrame) -> None:
 
 
 def test_comparison_markdown_one_line_per_agent(episodes: pd.DataFrame) -> None:
-    lines = render_comparison(aggregate(episodes), "markdown").splitlines()
-    assert len(lines) == 2 + 2
-    assert sum(set(line) <= set("|:-") for line in lines) == 1
+    lines = render_comparison(aggregate(episodes, over="all"), "markdown").splitlines()
+    assert len(lines) == 2 + 2 + 2  # header, rule, two agents, blank, footnote
+    assert lines[-1].startswith("All columns: mean over every judged episode")
+    assert sum(bool(line) and set(line) <= set("|:-") for line in lines) == 1
     assert lines[0].startswith("| agent | success [n/total] | time [s] |")
     assert lines[2].startswith("| td3_lidar | 2/3 | 20.00 | – | 5.50 |")
     assert lines[3].startswith("| sac%depth | 1/1 | 13.00 |")
 
 
 def test_comparison_csv_and_json_parse_back(episodes: pd.DataFrame) -> None:
-    agg = aggregate(episodes)
+    agg = aggregate(episodes, over="all")
     back = pd.read_csv(io.StringIO(render_comparison(agg, "csv")))
     assert list(back["agent"]) == ["td3_lidar", "sac%depth"]
     assert back["time [s]"].tolist() == [20.0, 13.0]
     assert back["success [n/total]"].tolist() == ["2/3", "1/1"]
     assert back["cum. heading [rad]"].isna().all()
+    assert back["over"].tolist() == ["all", "all"] and back["n_averaged"].tolist() == [3, 2]
     records = json.loads(render_comparison(agg, "json"))
     assert [r["agent"] for r in records] == ["td3_lidar", "sac%depth"]
     assert records[0]["path_length_m"] == pytest.approx(5.5)
     assert records[0]["heading_error_mean_rad"] is None
-    assert set(records[0]) == {"agent", *TABLE1_COLUMNS}
+    assert set(records[0]) == {"agent", *TABLE1_COLUMNS, "over", "n_averaged"}
 
 
 def test_comparison_nothing_judged(episodes: pd.DataFrame) -> None:
-    agg = aggregate(episodes[episodes["agent"] == "sac%depth"].assign(success=NAN))
+    agg = aggregate(episodes[episodes["agent"] == "sac%depth"].assign(success=NAN), over="all")
     assert agg.loc["sac%depth", "success"] == "–"
     assert "| sac%depth | – | 13.00 |" in render_comparison(agg, "markdown")
     assert render_comparison(agg, "csv").splitlines()[1].startswith("sac%depth,,13.00,")
     assert json.loads(render_comparison(agg, "json"))[0]["success"] is None
+
+
+def test_aggregate_averages_trajectory_quality_over_successes_by_default(
+    episodes: pd.DataFrame,
+) -> None:
+    """td3_lidar: two successes (10 s, 5 m; 20 s, 6 m) and a collision (30 s, no path): the
+    trajectory columns average the two successes, success, collisions and SPL all three."""
+    mixed = episodes.assign(spl=[0.8, 0.9, 0.6, NAN, NAN, 0.0], collision_count=[0, 0, 0, 0, 0, 1])
+    agg = aggregate(mixed)
+    td3 = agg.loc["td3_lidar"]
+    assert td3["success"] == "2/3" and td3["n_success"] == 2 and td3["n_collision"] == 1
+    assert td3["n_timeout"] == 0 and td3["n_diverged"] == 0
+    assert td3["over"] == "success" and td3["n_averaged"] == 2
+    assert td3["clearance_time_s_mean"] == pytest.approx(15.0)
+    assert td3["clearance_time_s_std"] == pytest.approx(math.sqrt(50.0))
+    assert td3["path_length_m_mean"] == pytest.approx(5.5)
+    assert td3["lin_vel_mean_mps_mean"] == pytest.approx(0.4)
+    assert td3["obstacle_dist_min_m_mean"] == pytest.approx(0.4)
+    assert td3["spl_mean"] == pytest.approx((0.8 + 0.6 + 0.0) / 3)  # over all three
+    assert td3["collision_count_mean"] == pytest.approx(1 / 3)
+    everything = aggregate(mixed, over="all").loc["td3_lidar"]
+    assert everything["clearance_time_s_mean"] == pytest.approx(20.0)
+    assert everything["n_averaged"] == 3 and everything["spl_mean"] == td3["spl_mean"]
+    sac = agg.loc["sac%depth"]  # one success, one unknown: only the success is averaged
+    assert sac["n_averaged"] == 1 and sac["clearance_time_s_mean"] == pytest.approx(12.0)
+    table = render_comparison(agg, "table")
+    assert "time, cum. heading, path, dist/path, v mean" in table
+    assert "successful episodes only (n = 2, 1)" in table and "--over all" in table
+    assert "| td3_lidar | 2/3 | 15.00 |" in render_comparison(agg, "markdown")
+    with pytest.raises(ConfigError, match="over='some'"):
+        aggregate(mixed, over="some")
+
+
+def test_aggregate_counts_diverged_episodes_apart(episodes: pd.DataFrame) -> None:
+    """A diverged episode is no success and no collision: counted in n_diverged, judged."""
+    diverged = episodes.assign(
+        outcome=["goal", "goal", "diverged", "unknown", None, "collision"],
+        success=[1.0, 1.0, 0.0, NAN, NAN, 0.0],
+    )
+    td3 = aggregate(diverged).loc["td3_lidar"]
+    assert td3["success"] == "1/3" and td3["n_diverged"] == 1 and td3["n_collision"] == 1
+    assert td3["n_averaged"] == 1 and td3["clearance_time_s_mean"] == pytest.approx(10.0)
 
 
 @pytest.mark.parametrize("fmt", FORMATS)
