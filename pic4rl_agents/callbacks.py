@@ -1,14 +1,21 @@
 """SB3 callbacks of the trainer: a progress bar with the numbers a user watches, the reward
-curve refreshed as training goes, and evaluation on the same episodes every time."""
+curve refreshed as training goes, evaluation on the same episodes every time (against env
+steps and the clock), and an early stop on an evaluation's success or the clock."""
 
 from __future__ import annotations
 
+import csv
 import sys
+import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+from stable_baselines3.common.vec_env import VecEnv
 from tqdm import tqdm
+
+from pic4rl_bridge.tasks.base import Outcome
 
 from .curves import save_reward_curve
 
@@ -81,14 +88,119 @@ class RewardCurveCallback(BaseCallback):
 
 
 class SeededEvalCallback(EvalCallback):
-    """SB3's ``EvalCallback`` with the eval env reseeded before each evaluation, so every
-    evaluation judges the same start–goal pairs and the curve compares like with like."""
+    """SB3's ``EvalCallback`` on the same episodes every time (the eval env is reseeded before
+    each evaluation), due every ``interval_steps`` env steps or every ``interval_s`` seconds of
+    training, whichever comes first. Each evaluation is a row of ``<log_path>/evaluations.csv``
+    (``CSV_COLUMNS``) and logs ``time/wall_s`` and ``time/train_wall_s`` beside SB3's
+    ``eval/*``, so runs compare against env steps and against the clock.
 
-    def __init__(self, *args: object, eval_seed: int, **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+    Two clocks, both from ``clock_start`` (``time.perf_counter()``; default: the start of
+    training): ``wall_s`` excludes nothing; ``train_wall_s`` excludes the evaluations
+    themselves (the policy rollouts, the best-model save, ``callback_after_eval``), so it does
+    not depend on how often or how long one evaluates. A row's clocks and steps are those at
+    the start of its evaluation, when the evaluated policy was current."""
+
+    def __init__(self, eval_env: VecEnv, *, eval_seed: int, log_path: str,
+                 interval_steps: int = 0, interval_s: float = 0.0, n_envs: int = 1,
+                 clock_start: float | None = None, **kwargs: Any) -> None:
+        if interval_steps <= 0 and interval_s <= 0:
+            raise ValueError("SeededEvalCallback: interval_steps or interval_s must be > 0")
+        # eval_freq 1: SB3's _on_step evaluates whenever it is called; _on_step below decides.
+        super().__init__(eval_env, eval_freq=1, log_path=log_path, **kwargs)
         self.eval_seed = eval_seed
+        self.every_calls = max(interval_steps // n_envs, 1) if interval_steps > 0 else 0
+        self.interval_s = interval_s
+        self.clock_start = clock_start
+        self.csv_path = Path(log_path) / "evaluations.csv"
+        self.eval_s = 0.0  # seconds spent evaluating so far
+        self.last_row: dict[str, float] = {}
+        self._last_due_s = 0.0
+        self._outcomes: list[str] = []
+
+    def _init_callback(self) -> None:
+        super()._init_callback()
+        if self.clock_start is None:
+            self.clock_start = time.perf_counter()
+        self._last_due_s = self.train_wall_s()  # the first one interval_s into training
+
+    @property
+    def last_success_rate(self) -> float:
+        """The success rate of the latest evaluation (0 before the first)."""
+        buffer = self._is_success_buffer
+        return float(np.mean(buffer)) if buffer else 0.0
+
+    def train_wall_s(self, now: float | None = None) -> float:
+        """Seconds since ``clock_start`` minus the time spent evaluating."""
+        assert self.clock_start is not None  # set by _init_callback
+        return (time.perf_counter() if now is None else now) - self.clock_start - self.eval_s
 
     def _on_step(self) -> bool:
-        if self.eval_freq > 0 and self.n_calls % self.eval_freq == 0:
-            self.eval_env.seed(self.eval_seed)
-        return super()._on_step()
+        now = time.perf_counter()
+        train_s = self.train_wall_s(now)
+        by_steps = self.every_calls > 0 and self.n_calls % self.every_calls == 0
+        by_time = self.interval_s > 0 and train_s - self._last_due_s >= self.interval_s
+        if not (by_steps or by_time):
+            return True
+        self._last_due_s = train_s
+        assert self.clock_start is not None
+        wall_s = now - self.clock_start
+        self.logger.record("time/wall_s", wall_s)
+        self.logger.record("time/train_wall_s", train_s)
+        self.eval_env.seed(self.eval_seed)
+        self._outcomes = []
+        self.last_row = {"steps": self.num_timesteps, "wall_s": wall_s, "train_wall_s": train_s}
+        try:
+            keep_going = super()._on_step()
+        finally:
+            took = time.perf_counter() - now
+            self.eval_s += took
+        self._write_row(took)
+        return keep_going
+
+    def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+        super()._log_success_callback(locals_, globals_)
+        if locals_["done"]:
+            self._outcomes.append(str(locals_["info"].get("outcome", "")))
+
+    def _write_row(self, eval_s: float) -> None:
+        rewards, lengths = self.evaluations_results[-1], self.evaluations_length[-1]
+        n = len(rewards)
+        row = {**self.last_row, "eval_s": eval_s, "episodes": n,
+               "success_rate": self.last_success_rate,
+               "mean_reward": float(np.mean(rewards)), "mean_length": float(np.mean(lengths))}
+        for outcome in OUTCOME_COLUMNS:
+            row[f"{outcome}_rate"] = self._outcomes.count(outcome) / n if n else 0.0
+        self.last_row = row
+        new = not self.csv_path.exists()
+        with self.csv_path.open("a", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
+            if new:
+                writer.writeheader()
+            writer.writerow({k: (round(v, 3) if isinstance(v, float) else v)
+                             for k, v in row.items()})
+
+
+#: Outcomes counted in their own column of ``evaluations.csv`` (a goal is ``success_rate``).
+OUTCOME_COLUMNS = tuple(o.value for o in Outcome if o is not Outcome.GOAL)
+#: The columns of ``evaluations.csv``: one row per evaluation.
+CSV_COLUMNS = ("steps", "wall_s", "train_wall_s", "eval_s", "episodes", "success_rate",
+               "mean_reward", "mean_length", *(f"{o}_rate" for o in OUTCOME_COLUMNS))
+
+
+class StopAfterEval(BaseCallback):
+    """``callback_after_eval`` of a ``SeededEvalCallback``: ends training once an evaluation
+    reaches ``success_rate`` or the training clock passes ``budget_s`` (either may be None)."""
+
+    def __init__(self, *, success_rate: float | None = None,
+                 budget_s: float | None = None) -> None:
+        super().__init__()
+        self.success_rate, self.budget_s = success_rate, budget_s
+        self.reached = False
+
+    def _on_step(self) -> bool:
+        parent = self.parent
+        assert isinstance(parent, SeededEvalCallback)
+        self.reached = (self.success_rate is not None
+                        and parent.last_success_rate >= self.success_rate)
+        over = self.budget_s is not None and parent.last_row["train_wall_s"] >= self.budget_s
+        return not (self.reached or over)

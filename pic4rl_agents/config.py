@@ -31,6 +31,7 @@ from pic4rl_bridge.config import (
     read_params_file,
 )
 from pic4rl_bridge.errors import ConfigError, require
+from pic4rl_sim.sampling import PAIR_KINDS
 
 TRAINER_NODE = "trainer"
 ENV_NODE = "nav_env"
@@ -63,11 +64,19 @@ class EpsilonConfig:
 
 @dataclass(frozen=True)
 class EvalConfig:
-    """Periodic evaluation on an in-process copy of the env (never the training sim)."""
+    """Periodic evaluation on an in-process copy of the env (never the training sim), on
+    sampled pairs of ``pair_kind`` (never the training pairs), due after ``interval_steps``
+    env steps or ``interval_s`` seconds of training, whichever comes first."""
 
-    interval_steps: int = 0  # 0: none
+    interval_steps: int = 0  # 0: not by steps
+    interval_s: float = 0.0  # seconds of training (evaluations excluded); 0: not by time
     episodes: int = 5
     seed: int = 1000  # the same episodes at every evaluation
+    pair_kind: str = "paper"  # the eval env's episodes.pair_kind
+
+    @property
+    def enabled(self) -> bool:
+        return self.interval_steps > 0 or self.interval_s > 0
 
 
 @dataclass(frozen=True)
@@ -134,11 +143,14 @@ class TrainConfig:
                         "torch_threads": self.torch_threads,
                         "action_noise_std": self.action_noise_std,
                         "eval.interval_steps": self.eval.interval_steps,
+                        "eval.interval_s": self.eval.interval_s,
                         "checkpoint.interval_steps": self.checkpoint.interval_steps}
         for key, value in non_negative.items():
             require(math.isfinite(value) and value >= 0, key, value, "a number >= 0")
         for key, value in {"gamma": self.gamma, "tau": self.tau}.items():
             require(0 < value <= 1, key, value, "a number in (0, 1]")
+        require(self.eval.pair_kind in PAIR_KINDS, "eval.pair_kind", self.eval.pair_kind,
+                f"one of {', '.join(PAIR_KINDS)}")
         eps = self.epsilon
         require(0 <= eps.initial <= 1, "epsilon.initial", eps.initial, "a probability in [0, 1]")
         require(0 < eps.decay <= 1, "epsilon.decay", eps.decay, "a factor in (0, 1]")

@@ -1,12 +1,23 @@
-"""The reward curve of a training run, like the paper's Figure 4: each episode's reward and its
-moving average, from the runs' Monitor CSVs (one per env)."""
+"""Training curves: the reward curve of a run, like the paper's Figure 4 (each episode's reward
+and its moving average, from the run's Monitor CSVs, one per env), and the evaluation curves of
+several runs in one figure (eval success against the clock and against env steps, from their
+``evaluations.csv``), so that two recipes compare on one plot::
+
+    python -m pic4rl_agents.curves runs/td3_lidar sac=runs/sac_lidar -o curves.png
+"""
 
 from __future__ import annotations
 
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 from stable_baselines3.common.monitor import LoadMonitorResultsError, load_results
+
+from pic4rl_bridge.errors import ConfigError
 
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:
@@ -44,3 +55,121 @@ def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
     fig.savefig(out, dpi=120)
     plt.close(fig)
     return out
+
+
+# -- evaluation curves: success against the clock and against env steps ------------------------
+
+#: x-axes of the evaluation curves: ``evaluations.csv`` columns and their axis labels.
+EVAL_AXES = {"train_wall_s": "training wall-clock (min, evaluations excluded)",
+             "wall_s": "wall-clock (min, evaluations included)", "steps": "env steps"}
+EVAL_METRICS = ("success_rate", "mean_reward", "mean_length")
+
+
+def eval_table(path: str | Path) -> pd.DataFrame:
+    """One ``evaluations.csv`` (``pic4rl_agents.callbacks.CSV_COLUMNS``)."""
+    path = Path(path)
+    try:
+        df = pd.read_csv(path)
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as err:
+        raise ConfigError(f"{path}: cannot read the evaluations: {err}") from err
+    missing = [c for c in ("steps", "wall_s", "train_wall_s", *EVAL_METRICS) if c not in df]
+    if missing:
+        raise ConfigError(f"{path}: not an evaluations.csv (no column {missing[0]!r})")
+    return df
+
+
+def eval_curves(source: str | Path, label: str | None = None) -> dict[str, pd.DataFrame]:
+    """The evaluations of ``source``: an ``evaluations.csv``, or a run directory (each
+    session's ``eval/<session>/evaluations.csv``: one curve per session, since each session's
+    clock starts at 0), by label (``label``, else the run's name)."""
+    path = Path(source)
+    if path.is_file():
+        run = path.parents[2].name if path.parent.parent.name == "eval" else path.parent.name
+        return {label or run: eval_table(path)}
+    files = sorted((path / "eval").glob("*/evaluations.csv"),
+                   key=lambda f: int(f.parent.name) if f.parent.name.isdigit() else -1)
+    if not files:
+        raise ConfigError(f"{path}: no evaluations (expected a run directory with "
+                          "eval/<session>/evaluations.csv, or such a file)")
+    name = label or path.resolve().name
+    if len(files) == 1:
+        return {name: eval_table(files[0])}
+    return {f"{name} (session {f.parent.name})": eval_table(f) for f in files}
+
+
+def plot_eval_curves(ax: Any, curves: Mapping[str, pd.DataFrame], *, x: str = "train_wall_s",
+                     metric: str = "success_rate") -> None:
+    """Draw ``metric`` against ``x`` (an ``EVAL_AXES`` key; clocks in minutes), one line per
+    curve, on ``ax``."""
+    for label, df in curves.items():
+        xs = df[x] / 60.0 if x != "steps" else df[x]
+        ys = df[metric] * 100.0 if metric == "success_rate" else df[metric]
+        ax.plot(xs, ys, marker="o", ms=3, lw=1.5, label=label)
+    ax.set_xlabel(EVAL_AXES[x])
+    ax.set_ylabel("eval success (%)" if metric == "success_rate" else f"eval {metric}")
+    if metric == "success_rate":
+        ax.set_ylim(-2, 102)
+    ax.grid(alpha=0.3)
+
+
+def save_eval_curves(curves: Mapping[str, pd.DataFrame], out: Path, *,
+                     clock: str = "train_wall_s", metric: str = "success_rate",
+                     title: str = "") -> Path:
+    """One PNG, two panels: ``metric`` against ``clock`` and against env steps."""
+    if clock not in ("train_wall_s", "wall_s"):
+        raise ConfigError(f"clock: {clock!r} is invalid; expected train_wall_s or wall_s")
+    if metric not in EVAL_METRICS:
+        raise ConfigError(f"metric: {metric!r} is invalid; expected one of "
+                          f"{', '.join(EVAL_METRICS)}")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
+    plot_eval_curves(left, curves, x=clock, metric=metric)
+    plot_eval_curves(right, curves, x="steps", metric=metric)
+    right.set_ylabel("")
+    left.legend(loc="best", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m pic4rl_agents.curves",
+        description="Evaluation curves of several runs in one PNG: eval success against the "
+                    "training wall-clock and against env steps.")
+    parser.add_argument("runs", nargs="+", metavar="[LABEL=]PATH",
+                        help="a run directory or an evaluations.csv")
+    parser.add_argument("-o", "--out", default="eval_curves.png", help="the PNG to write")
+    parser.add_argument("--clock", choices=("train_wall_s", "wall_s"), default="train_wall_s",
+                        help="the time axis: training time (evaluations excluded) or all")
+    parser.add_argument("--metric", choices=EVAL_METRICS, default="success_rate")
+    parser.add_argument("--title", default="")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write the PNG; exit 2 with one line for a missing or malformed input."""
+    args = build_parser().parse_args(argv)
+    curves: dict[str, pd.DataFrame] = {}
+    try:
+        for item in args.runs:
+            label, sep, path = item.rpartition("=")
+            curves.update(eval_curves(path, label if sep else None))
+        out = save_eval_curves(curves, Path(args.out), clock=args.clock, metric=args.metric,
+                               title=args.title)
+    except ConfigError as err:
+        print(f"curves: {err}", file=sys.stderr)
+        return 2
+    print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -32,10 +32,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from pic4rl_bridge.config import EnvConfig, param_names
+from pic4rl_bridge.config import EnvConfig, EpisodesConfig, dataclass_params, param_names
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
 
 from .config import (
+    EvalConfig,
     RunConfig,
     TrainConfig,
     free_path,
@@ -141,16 +142,29 @@ def _trainer_node(env: EnvConfig, ros: RosArgs) -> tuple[Any, Any]:
     return node, context
 
 
+def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
+    """The evaluation env of a run whose env is ``env``: in process, not recording, and every
+    ``episodes.*`` key back at its default (no training pairs, no curriculum) but
+    ``episodes.pair_kind``, the evaluation's: pairs sampled from the seed, like a test's."""
+    defaults = {f"episodes.{k}": v for k, v in dataclass_params(EpisodesConfig()).items()}
+    return env.replace(**{**defaults, "episodes.pair_kind": evaluation.pair_kind,
+                          "transport": "inprocess", "record.enabled": False})
+
+
 class Trainer:
     """One training run: envs, model, callbacks; ``run()`` trains and saves, and returns the
     run directory."""
 
     def __init__(self, run: RunConfig, *, resume: Resume | None = None, progress: bool = True,
-                 ros: RosArgs | None = None) -> None:
+                 ros: RosArgs | None = None, after_eval: Any = None) -> None:
+        """``after_eval``: an SB3 callback run after each evaluation (its ``parent`` is the
+        ``SeededEvalCallback``); returning False ends the training, which is then saved."""
         self.config = run
         self.resume = resume
         self.progress = progress
         self.ros = ros or RosArgs()
+        self.after_eval = after_eval
+        self.interrupted = False  # Ctrl-C or SIGTERM ended the last run()
         cfg = run.train
         if resume is not None:
             self.run_dir = resume.run_dir
@@ -232,18 +246,17 @@ class Trainer:
                 callbacks.append(CheckpointCallback(
                     every, str(self.run_dir / "checkpoints"), name_prefix="model",
                     save_replay_buffer=cfg.checkpoint.replay_buffer and cfg.off_policy))
-            if cfg.eval.interval_steps:
-                eval_cfg = env_cfg.replace(**{"transport": "inprocess", "record.enabled": False,
-                                              "episodes.starting_episodes": 0})
-                eval_env = make_vec_env(eval_cfg, seed=cfg.eval.seed)
+            if cfg.eval.enabled:
+                eval_env = make_vec_env(eval_env_config(env_cfg, cfg.eval), seed=cfg.eval.seed)
                 # One in-process env evaluates whatever the training envs are (subprocesses).
                 warnings.filterwarnings("ignore", "Training and eval env are not of the same")
                 callbacks.append(SeededEvalCallback(
                     eval_env, eval_seed=cfg.eval.seed, n_eval_episodes=cfg.eval.episodes,
-                    eval_freq=max(cfg.eval.interval_steps // cfg.n_envs, 1),
+                    interval_steps=cfg.eval.interval_steps, interval_s=cfg.eval.interval_s,
+                    n_envs=cfg.n_envs, clock_start=started,
                     best_model_save_path=str(self.run_dir / "best" / str(self.session)),
                     log_path=str(self.run_dir / "eval" / str(self.session)),
-                    deterministic=True, verbose=0))
+                    callback_after_eval=self.after_eval, deterministic=True, verbose=0))
             if self.progress:
                 callbacks.append(ProgressCallback(cfg.max_steps, desc=self.config.name))
             remaining = cfg.max_steps - model.num_timesteps
@@ -253,6 +266,7 @@ class Trainer:
                                 reset_num_timesteps=self.resume is None,
                                 log_interval=10 if cfg.off_policy else 1)
                 except KeyboardInterrupt:
+                    self.interrupted = True
                     print(f"\npic4rl-train: interrupted at {model.num_timesteps} steps; "
                           "saving", file=sys.stderr)
         finally:

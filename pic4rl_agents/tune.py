@@ -1,0 +1,435 @@
+"""``pic4rl-tune``: hyperparameter search with Optuna, as RL Zoo does it. A sampler per algorithm
+draws trainer parameters, each trial trains in process from a base params file and is evaluated
+on the eval env's seeded test-kind pairs (``eval.*``), a median pruner stops trials whose eval
+success falls below the median of earlier trials at the same evaluation, and the best trial is
+written out as a params file that ``pic4rl-train`` takes as it is.
+
+    pic4rl-tune --base config/train_goto_lidar_td3.yaml --n-trials 50 --max-steps 50000
+    pic4rl-tune --base config/train_goto_lidar_td3.yaml --trial-seconds 600 --n-jobs 2 \\
+        --storage postgresql://user@host/optuna --study-name td3_lidar   # several machines
+
+The study lives in ``<study-dir>`` (default ``<runs_dir>/tune/<study-name>``): ``study.db``
+(the default storage), ``trials/trial_<n>/`` (each trial's run directory), and the summary,
+rewritten after every trial: ``trials.csv``, ``best_trial.yaml``, ``best_params.yaml``, and at
+the end ``importances.yaml`` and ``eval_curves.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import multiprocessing
+import os
+import sys
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import optuna
+import yaml
+from stable_baselines3.common.callbacks import BaseCallback
+
+from pic4rl_bridge.errors import BridgeError, ConfigError
+
+from .callbacks import SeededEvalCallback
+from .config import RunConfig, load_run_config, parse_overrides
+
+#: Hidden layers of the actor and of each critic, by the sampler's name for them.
+NET_ARCHS = {"small": [64, 64], "medium": [128, 128], "big": [256, 256]}
+OBJECTIVES = ("success_rate", "mean_reward")
+
+
+def _common(trial: Any) -> dict[str, Any]:
+    arch = NET_ARCHS[trial.suggest_categorical("net_arch", list(NET_ARCHS))]
+    return {"learning_rate": trial.suggest_float("learning_rate", 1e-5, 2e-3, log=True),
+            "gamma": trial.suggest_categorical("gamma", [0.95, 0.98, 0.99, 0.995, 0.999]),
+            "policy.net_arch": arch, "policy.critic_arch": arch}
+
+
+def sample_off_policy(trial: Any) -> dict[str, Any]:
+    """SAC and TQC (and the common part of TD3 and DDPG). ``gradient_steps`` is a fraction of
+    ``train_freq``: the update-to-data ratio, the wall-clock lever (a gradient step costs
+    more than an env step)."""
+    train_freq = trial.suggest_categorical("train_freq", [1, 2, 4, 8, 16, 32, 64])
+    ratio = trial.suggest_categorical("gradient_steps_ratio", [0.25, 0.5, 1.0])
+    return {**_common(trial),
+            "batch_size": trial.suggest_categorical("batch_size", [64, 128, 256, 512]),
+            "buffer_size": trial.suggest_categorical("buffer_size",
+                                                     [50_000, 200_000, 1_000_000]),
+            "learning_starts": trial.suggest_categorical("learning_starts",
+                                                         [1_000, 5_000, 10_000]),
+            "tau": trial.suggest_categorical("tau", [0.001, 0.005, 0.01, 0.02, 0.05]),
+            "train_freq": train_freq,
+            "gradient_steps": max(1, round(train_freq * ratio)),
+            "epsilon.initial": trial.suggest_categorical("epsilon_initial", [0.0, 0.1, 0.2])}
+
+
+def sample_td3(trial: Any) -> dict[str, Any]:
+    """TD3 and DDPG: the off-policy parameters and the Gaussian action noise."""
+    return {**sample_off_policy(trial),
+            "action_noise_std": trial.suggest_float("action_noise_std", 0.0, 0.5)}
+
+
+def sample_ppo(trial: Any, n_envs: int = 1) -> dict[str, Any]:
+    """PPO; the minibatch is at most one rollout (``ppo.n_steps`` × ``n_envs``)."""
+    n_steps = trial.suggest_categorical("n_steps", [128, 256, 512, 1024, 2048])
+    batch = trial.suggest_categorical("batch_size", [32, 64, 128, 256, 512])
+    return {**_common(trial), "epsilon.initial": 0.0,
+            "batch_size": min(batch, n_steps * n_envs), "ppo.n_steps": n_steps,
+            "ppo.n_epochs": trial.suggest_categorical("n_epochs", [1, 5, 10, 20]),
+            "ppo.ent_coef": trial.suggest_float("ent_coef", 1e-8, 0.1, log=True),
+            "ppo.gae_lambda": trial.suggest_categorical("gae_lambda", [0.9, 0.95, 0.98, 0.99]),
+            "ppo.clip_range": trial.suggest_categorical("clip_range", [0.1, 0.2, 0.3]),
+            "policy.activation": trial.suggest_categorical("activation", ["tanh", "relu"])}
+
+
+#: The sampler of each algorithm: a trial → dotted trainer parameters.
+SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
+    "td3": sample_td3, "ddpg": sample_td3, "sac": sample_off_policy,
+    "tqc": sample_off_policy, "ppo": sample_ppo}
+
+
+def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
+    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
+    kept in the trial's user attribute ``hyperparams`` for the best params file."""
+    algorithm = base.train.algorithm
+    sampler = SAMPLERS[algorithm]
+    sampled = sampler(trial, base.train.n_envs) if algorithm == "ppo" else sampler(trial)
+    params = {**sampled, "algorithm": algorithm, **fixed}
+    trial.set_user_attr("hyperparams", params)
+    return params
+
+
+@dataclass(frozen=True)
+class TuneSettings:
+    """One study: the base run, the trials' budget and evaluations, and where it is kept."""
+
+    base: RunConfig
+    fixed: dict[str, Any]  # trainer parameters every trial keeps (--hyperparams)
+    study_name: str
+    study_dir: Path
+    storage: str
+    max_steps: int
+    trial_seconds: float  # 0: the trials are bounded by max_steps alone
+    n_evaluations: int
+    eval_episodes: int | None = None  # None: the base's eval.episodes
+    objective: str = "success_rate"
+
+    def trial_run(self, number: int, params: dict[str, Any]) -> RunConfig:
+        """Trial ``number``'s run: the base with ``params``, this study's budget and
+        evaluations, in process, without checkpoints (its final model is kept)."""
+        train = {**params, "max_steps": self.max_steps, "run": f"trial_{number}",
+                 "runs_dir": str(self.study_dir / "trials"), "checkpoint.interval_steps": 0,
+                 "checkpoint.replay_buffer": False}
+        if self.trial_seconds > 0:
+            train.update({"eval.interval_s": self.trial_seconds / self.n_evaluations,
+                          "eval.interval_steps": 0})
+        else:
+            train.update({"eval.interval_steps": max(self.max_steps // self.n_evaluations, 1),
+                          "eval.interval_s": 0.0})
+        if self.eval_episodes is not None:
+            train["eval.episodes"] = self.eval_episodes
+        return RunConfig(self.base.train.replace(**train),
+                         self.base.env.replace(transport="inprocess"), self.base.sources)
+
+    def best_run(self, hyperparams: dict[str, Any]) -> RunConfig:
+        """The base run with the best trial's parameters: its own budget and evaluations."""
+        train = self.base.train.replace(**hyperparams, run=f"{self.study_name}_best")
+        return RunConfig(train, self.base.env, self.base.sources)
+
+
+class TrialReport(BaseCallback):
+    """``callback_after_eval`` of a trial: reports each evaluation to Optuna (step 1, 2, ...),
+    stops a trial that the pruner prunes, and one that has used its ``trial_seconds``."""
+
+    def __init__(self, trial: optuna.Trial, settings: TuneSettings) -> None:
+        super().__init__()
+        self.trial, self.settings = trial, settings
+        self.evaluations = 0
+        self.pruned = False
+
+    def _on_step(self) -> bool:
+        evaluation = self.parent
+        assert isinstance(evaluation, SeededEvalCallback)
+        value = (evaluation.last_success_rate if self.settings.objective == "success_rate"
+                 else evaluation.last_mean_reward)
+        self.evaluations += 1
+        self.trial.report(value, self.evaluations)
+        if self.trial.should_prune():
+            self.pruned = True
+            return False
+        budget = self.settings.trial_seconds
+        return not (budget > 0 and evaluation.last_row["train_wall_s"] >= budget)
+
+
+def objective(trial: optuna.Trial, settings: TuneSettings) -> float:
+    """Train trial ``trial`` and return its last evaluation's objective; raise
+    ``optuna.TrialPruned`` when the pruner stopped it."""
+    from .curves import eval_curves
+    from .train import Trainer
+
+    params = suggest(trial, settings.base, settings.fixed)
+    run = settings.trial_run(trial.number, params)
+    report = TrialReport(trial, settings)
+    trainer = Trainer(run, progress=False, after_eval=report)
+    trial.set_user_attr("run_dir", str(trainer.run_dir))
+    trainer.run()
+    if trainer.interrupted:
+        raise KeyboardInterrupt
+    try:
+        (evaluations,) = eval_curves(trainer.run_dir).values()
+    except ConfigError:
+        raise ConfigError(f"trial {trial.number}: no evaluation ran (max_steps "
+                          f"{settings.max_steps} ended it before the first)") from None
+    last = evaluations.iloc[-1]
+    for key in ("steps", "train_wall_s", "success_rate", "mean_reward", "mean_length"):
+        trial.set_user_attr(key, float(last[key]))
+    if report.pruned:
+        raise optuna.TrialPruned(f"pruned at evaluation {report.evaluations}")
+    return float(last[settings.objective])
+
+
+def _print_trial(study: Any, trial: Any) -> None:
+    attrs = trial.user_attrs
+    state = trial.state.name.lower()
+    if "success_rate" in attrs:
+        what = (f"success {attrs['success_rate']:.2f}, reward {attrs['mean_reward']:.1f}, "
+                f"length {attrs['mean_length']:.0f} at {attrs['steps']:.0f} steps, "
+                f"{attrs['train_wall_s']:.0f} s")
+    else:
+        what = "no evaluation"
+    try:
+        best = f"; best so far: trial {study.best_trial.number} ({study.best_value:.3g})"
+    except ValueError:  # no completed trial yet
+        best = ""
+    print(f"pic4rl-tune: trial {trial.number} {state}: {what}{best}", flush=True)
+
+
+def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) -> None:
+    """The study folder's summary (rewritten): trials.csv, best_trial.yaml, best_params.yaml;
+    with ``final``, importances.yaml (when Optuna can compute them) and eval_curves.png."""
+    from optuna.trial import TrialState
+
+    folder = settings.study_dir
+    _write(folder / "trials.csv", study.trials_dataframe().to_csv(index=False))
+    complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+    if not complete:
+        return
+    best = study.best_trial
+    _write(folder / "best_trial.yaml", yaml.safe_dump(
+        {"study": settings.study_name, "objective": settings.objective, "number": best.number,
+         "value": best.value, "params": best.params, "user_attrs": best.user_attrs},
+        sort_keys=False))
+    hyperparams = best.user_attrs.get("hyperparams")
+    if hyperparams is not None:
+        _write(folder / "best_params.yaml", settings.best_run(hyperparams).to_yaml())
+    if final:
+        _write_importances(study, folder)
+        _write_curves(complete, folder)
+
+
+def _write_importances(study: Any, folder: Path) -> None:
+    try:  # PED-ANOVA: numpy only (fANOVA needs scikit-learn); too few trials warn: none then
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", UserWarning)
+            importances = optuna.importance.get_param_importances(
+                study, evaluator=optuna.importance.PedAnovaImportanceEvaluator())
+    except (ValueError, RuntimeError, UserWarning) as err:
+        print(f"pic4rl-tune: no parameter importances ({err})", file=sys.stderr)
+        return
+    _write(folder / "importances.yaml",
+           yaml.safe_dump({k: round(float(v), 4) for k, v in importances.items()},
+                          sort_keys=False))
+
+
+def _write_curves(complete: list[Any], folder: Path, top: int = 8) -> None:
+    from .curves import eval_curves, save_eval_curves
+
+    curves = {}
+    for trial in sorted(complete, key=lambda t: t.value, reverse=True)[:top]:
+        run_dir = Path(trial.user_attrs.get("run_dir", ""))
+        if (run_dir / "eval").is_dir():
+            curves.update(eval_curves(run_dir, f"trial {trial.number} ({trial.value:.3g})"))
+    if curves:
+        save_eval_curves(curves, folder / "eval_curves.png",
+                         title=f"{folder.name}: the best {len(curves)} trials")
+
+
+def _write(path: Path, text: str) -> None:
+    """Write through a temporary file, so a reader (or another worker) never sees half."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def create_study(settings: TuneSettings, *, pruner: str = "median", n_startup_trials: int = 5,
+                 seed: int = 0) -> Any:
+    """The study in ``settings.storage`` (created, or loaded when it exists: trials on
+    several machines share it): TPE sampler, and RL Zoo's median pruner (no pruning before
+    ``n_startup_trials`` trials completed, nor in the first third of a trial's evaluations)."""
+    sampler = optuna.samplers.TPESampler(n_startup_trials=n_startup_trials, seed=seed)
+    if pruner == "median":
+        chosen: Any = optuna.pruners.MedianPruner(n_startup_trials=n_startup_trials,
+                                                  n_warmup_steps=settings.n_evaluations // 3)
+    else:
+        chosen = optuna.pruners.NopPruner()
+    return optuna.create_study(study_name=settings.study_name, storage=settings.storage,
+                               sampler=sampler, pruner=chosen, direction="maximize",
+                               load_if_exists=True)
+
+
+def optimize(settings: TuneSettings, *, n_trials: int, timeout_s: float | None = None,
+             pruner: str = "median", n_startup_trials: int = 5, seed: int = 0) -> Any:
+    """Run ``n_trials`` trials in this process (fewer when ``timeout_s`` passes first); the
+    summary is rewritten after each. A trial whose config is refused fails, and the next
+    goes on."""
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = create_study(settings, pruner=pruner, n_startup_trials=n_startup_trials, seed=seed)
+
+    def after(study: Any, trial: Any) -> None:
+        _print_trial(study, trial)
+        write_summary(study, settings)
+
+    study.optimize(lambda trial: objective(trial, settings), n_trials=n_trials,
+                   timeout=timeout_s, catch=(ConfigError, BridgeError), callbacks=[after])
+    return study
+
+
+def _worker(settings: TuneSettings, options: dict[str, Any]) -> None:
+    with contextlib.suppress(KeyboardInterrupt):  # the parent reports the interruption
+        optimize(settings, **options)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pic4rl-tune", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--base", default="config/train_goto_lidar_td3.yaml", metavar="FILE",
+                        help="the params file every trial starts from (default %(default)s)")
+    parser.add_argument("--algorithm", help="tune this algorithm instead of the base's")
+    parser.add_argument("--n-trials", type=int, default=20, help="trials to run (default 20)")
+    parser.add_argument("--timeout", type=float, metavar="S",
+                        help="stop starting trials after S seconds")
+    parser.add_argument("--n-jobs", type=int, default=1,
+                        help="worker processes sharing the study (default 1)")
+    parser.add_argument("--storage", metavar="URL",
+                        help="Optuna RDB storage (default sqlite:///<study-dir>/study.db)")
+    parser.add_argument("--study-name", help="default: the base run's name")
+    parser.add_argument("--study-dir", metavar="DIR",
+                        help="default <runs_dir>/tune/<study-name>")
+    parser.add_argument("--max-steps", type=int, default=50_000,
+                        help="env steps per trial (default 50000)")
+    parser.add_argument("--trial-seconds", type=float, default=0.0, metavar="S",
+                        help="training seconds per trial (evaluations excluded); 0: steps only")
+    parser.add_argument("--n-evaluations", type=int, default=5,
+                        help="evaluations per trial, reported to the pruner (default 5)")
+    parser.add_argument("--eval-episodes", type=int,
+                        help="episodes per evaluation (default: the base's eval.episodes)")
+    parser.add_argument("--objective", choices=OBJECTIVES, default="success_rate",
+                        help="what the trials maximise: eval success rate (default) or mean "
+                             "reward, at the trial's last evaluation")
+    parser.add_argument("--pruner", choices=("median", "none"), default="median")
+    parser.add_argument("--n-startup-trials", type=int, default=5,
+                        help="trials before the pruner and TPE start (default 5)")
+    parser.add_argument("--seed", type=int, default=0, help="the sampler's seed")
+    parser.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
+                        help="trainer parameters fixed in every trial (they win over the "
+                             "sampler's)")
+    parser.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY:VALUE",
+                        help="env (nav_env) parameters for every trial")
+    return parser
+
+
+def settings_from(args: argparse.Namespace) -> TuneSettings:
+    """The study's settings from the command line; a bad one is a ``ConfigError``."""
+    for flag, value in (("--n-trials", args.n_trials), ("--n-jobs", args.n_jobs),
+                        ("--max-steps", args.max_steps), ("--n-evaluations", args.n_evaluations)):
+        if value < 1:
+            raise ConfigError(f"{flag} {value}: expected a positive integer")
+    if not math.isfinite(args.trial_seconds) or args.trial_seconds < 0:
+        raise ConfigError(f"--trial-seconds {args.trial_seconds}: expected a number >= 0")
+    if not Path(args.base).is_file():
+        raise ConfigError(f"--base {args.base}: no such params file")
+    fixed = parse_overrides(args.hyperparams, flag="--hyperparams")
+    if args.algorithm:
+        fixed.setdefault("algorithm", args.algorithm)
+    if fixed.get("algorithm") == "ppo":
+        fixed.setdefault("epsilon.initial", 0.0)  # a base with ε-greedy: not for PPO
+    if args.eval_episodes is not None and args.eval_episodes < 1:
+        raise ConfigError(f"--eval-episodes {args.eval_episodes}: expected a positive integer")
+    env = parse_overrides(args.env_kwargs, flag="--env-kwargs")
+    base = load_run_config([args.base], train=fixed, env=env)
+    name = args.study_name or base.name
+    study_dir = Path(args.study_dir or Path(base.train.runs_dir) / "tune" / name)
+    study_dir.mkdir(parents=True, exist_ok=True)
+    storage = args.storage or f"sqlite:///{(study_dir / 'study.db').resolve()}"
+    return TuneSettings(base, fixed, name, study_dir, storage, args.max_steps,
+                        args.trial_seconds, args.n_evaluations, args.eval_episodes,
+                        args.objective)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Tune; exit 0 when done, 2 for bad arguments, 130 after Ctrl-C (the summary written)."""
+    args = build_parser().parse_args(argv)
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    settings: TuneSettings | None = None
+    try:
+        settings = settings_from(args)
+        options = {"n_trials": args.n_trials, "timeout_s": args.timeout, "pruner": args.pruner,
+                   "n_startup_trials": args.n_startup_trials}
+        print(f"pic4rl-tune: study {settings.study_name!r} in {settings.study_dir} "
+              f"({settings.storage}), {args.n_trials} trials of {settings.base.train.algorithm}"
+              f", {args.n_jobs} job(s)", flush=True)
+        started = time.perf_counter()
+        if args.n_jobs == 1:
+            study = optimize(settings, seed=args.seed, **options)
+        else:
+            study = _optimize_in_processes(settings, args.n_jobs, args.seed, options)
+    except KeyboardInterrupt:
+        print("\npic4rl-tune: interrupted", file=sys.stderr)
+        if settings is not None:
+            write_summary(create_study(settings), settings, final=True)
+        return 130
+    except (ConfigError, BridgeError) as err:
+        print(f"pic4rl-tune: {err}", file=sys.stderr)
+        return 2
+    write_summary(study, settings, final=True)
+    minutes = (time.perf_counter() - started) / 60
+    try:
+        best = (f"best trial {study.best_trial.number}: {settings.objective} "
+                f"{study.best_value:.3g}; {settings.study_dir / 'best_params.yaml'}")
+    except ValueError:
+        best = "no trial completed"
+    print(f"pic4rl-tune: {len(study.trials)} trials in the study, {minutes:.1f} min; {best}",
+          flush=True)
+    return 0
+
+
+def _optimize_in_processes(settings: TuneSettings, n_jobs: int, seed: int,
+                           options: dict[str, Any]) -> Any:
+    """``n_jobs`` processes, each running ``optimize`` on the shared storage (threads would
+    share one interpreter lock: the env and SB3's loop are Python); trials are split among
+    them and TPE is seeded per worker so that they do not sample alike."""
+    context = multiprocessing.get_context("spawn")
+    counts = [options["n_trials"] // n_jobs + (i < options["n_trials"] % n_jobs)
+              for i in range(n_jobs)]
+    create_study(settings)  # created once, before the workers load it
+    workers = [context.Process(target=_worker, args=(settings, {
+        **options, "n_trials": count, "seed": seed + i})) for i, count in enumerate(counts)
+        if count > 0]
+    for worker in workers:
+        worker.start()
+    try:
+        for worker in workers:
+            worker.join()
+    except KeyboardInterrupt:
+        for worker in workers:
+            worker.join(timeout=60)
+        raise
+    return create_study(settings)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

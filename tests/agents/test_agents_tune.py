@@ -1,0 +1,116 @@
+"""``pic4rl-tune`` with tiny trials in a SQLite study: a trial completes, a trial of "another
+machine" joins the same storage, and the median pruner prunes the next trial at its first
+evaluation; the summary, the best params file and the samplers."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+
+import optuna
+import pandas as pd
+import pytest
+import yaml
+from agents_helpers import LIDAR_TD3
+
+from pic4rl_agents import tune
+from pic4rl_agents.config import ALGORITHM_NAMES, load_run_config
+
+#: Trials of seconds: tiny nets, 200 steps, 2 evaluations of 1 episode each. Episodes of 30
+#: steps (3 s at 0.5 m/s: 1.5 m) never reach a test pair's goal (4-8 m away): success is 0.
+TINY_TRIAL = ["--max-steps", "200", "--n-evaluations", "2", "--eval-episodes", "1",
+              "--n-startup-trials", "1",
+              "--hyperparams", "policy.net_arch:[8]", "policy.critic_arch:[8]",
+              "batch_size:16", "learning_starts:50", "buffer_size:2000", "tensorboard:false",
+              "--env-kwargs", "episode_max_steps:30"]
+
+
+def run_tune(argv: list[str]) -> tuple[int, str]:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        code = tune.main(argv)
+    return code, out.getvalue()
+
+
+def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None:
+    study_dir = tmp_path / "study"
+    common = ["--base", str(LIDAR_TD3), "--study-dir", str(study_dir), "--study-name", "tiny",
+              "--n-trials", "1", *TINY_TRIAL]
+    code, out = run_tune(common)
+    assert code == 0, out
+    assert "trial 0 complete: success 0.00" in out
+    storage = f"sqlite:///{study_dir / 'study.db'}"
+    study = optuna.load_study(study_name="tiny", storage=storage)
+    assert [t.state for t in study.trials] == [optuna.trial.TrialState.COMPLETE]
+    assert study.trials[0].intermediate_values == {1: 0.0, 2: 0.0}
+
+    # Another machine's trial in the same storage: sampled the same way, success 1.0 at both
+    # evaluations. Against it the median at evaluation 1 is 0.5, and the next trial's 0 is
+    # below it: pruned there (n_startup_trials 1, no warm-up with 2 evaluations).
+    base = load_run_config([LIDAR_TD3])
+    other = study.ask()
+    tune.suggest(other, base, {"learning_rate": 0.00042})
+    other.report(1.0, 1)
+    other.report(1.0, 2)
+    study.tell(other, 1.0)
+
+    code, out = run_tune(common)
+    assert code == 0, out
+    assert "trial 2 pruned" in out and "best so far: trial 1 (1)" in out
+    study = optuna.load_study(study_name="tiny", storage=storage)
+    states = [t.state.name for t in study.trials]
+    assert states == ["COMPLETE", "COMPLETE", "PRUNED"]
+    assert study.trials[2].intermediate_values == {1: 0.0}
+
+    trials = study_dir / "trials"
+    first = pd.read_csv(trials / "trial_0" / "eval" / "0" / "evaluations.csv")
+    assert first["steps"].tolist() == [100, 200]
+    pruned = pd.read_csv(trials / "trial_2" / "eval" / "0" / "evaluations.csv")
+    assert pruned["steps"].tolist() == [100]  # stopped at its first evaluation
+    config = load_run_config([trials / "trial_2" / "config.yaml"]).train
+    assert config.policy.net_arch == (8,) and config.eval.episodes == 1
+    assert config.checkpoint.interval_steps == 0 and config.max_steps == 200
+
+    table = pd.read_csv(study_dir / "trials.csv")
+    assert table["state"].tolist() == states and "params_learning_rate" in table
+    best = yaml.safe_load((study_dir / "best_trial.yaml").read_text())
+    assert best["number"] == 1 and best["value"] == 1.0
+
+    # The best params file is a full training config: the base with the best trial's
+    # parameters, its own budget and evaluations, loaded as pic4rl-train loads it.
+    tuned = load_run_config([study_dir / "best_params.yaml"])
+    assert tuned.train.learning_rate == 0.00042 and tuned.name == "tiny_best"
+    assert tuned.train.max_steps == base.train.max_steps
+    assert tuned.train.eval == base.train.eval  # not the trials' 2 evaluations of 1 episode
+    assert tuned.env == load_run_config([LIDAR_TD3], env={"episode_max_steps": 30}).env
+    assert tuned.train.action_noise_std == other.params["action_noise_std"]
+    assert list(tuned.train.policy.net_arch) == tune.NET_ARCHS[other.params["net_arch"]]
+    assert (study_dir / "eval_curves.png").is_file()
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHM_NAMES)
+def test_every_algorithms_sampler_gives_a_valid_config(algorithm: str) -> None:
+    base = load_run_config([LIDAR_TD3], train={"algorithm": algorithm, "epsilon.initial": 0.0})
+    study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
+    for _ in range(20):
+        trial = study.ask()
+        params = tune.suggest(trial, base, {})
+        train = base.train.replace(**params)
+        assert train.algorithm == algorithm
+        assert trial.user_attrs["hyperparams"] == params
+        if algorithm == "ppo":
+            assert train.batch_size <= train.ppo.n_steps * train.n_envs
+        else:
+            assert 1 <= train.gradient_steps <= train.train_freq
+
+
+def test_bad_arguments_exit_2_naming_the_flag(tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    assert tune.main(["--base", str(tmp_path / "none.yaml")]) == 2
+    assert "--base" in capsys.readouterr().err
+    assert tune.main(["--base", str(LIDAR_TD3), "--n-trials", "0"]) == 2
+    assert "--n-trials 0" in capsys.readouterr().err
+    assert tune.main(["--base", str(LIDAR_TD3), "--study-dir", str(tmp_path),
+                      "--hyperparams", "learning_rat:0.1"]) == 2
+    assert "learning_rate" in capsys.readouterr().err  # did you mean
