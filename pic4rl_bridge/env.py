@@ -330,6 +330,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             "collision_tolerance_m": c.collision_tolerance_m,
             "safety_margin_m": c.warning_tolerance_m, "max_speed_mps": robot.max_linear_m_s,
         }
+        if frame.scan is not None:  # where the collision test puts the scan's points
+            mount = frame.scan.mount
+            facts["scan_mount"] = {"x_m": mount.x, "y_m": mount.y, "yaw_rad": mount.yaw}
         if context.goal is not None:
             facts["goal"] = list(context.goal)
             if self._sampler is not None and self._bag is not None:
