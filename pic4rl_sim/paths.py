@@ -212,6 +212,8 @@ class PathPlanner:
                 continue
             nb, nd, par = (np.concatenate(x) for x in zip(*moves))
             better = nd < dist[nb]
+            if not better.any():
+                continue
             nb, nd, par = nb[better], nd[better], par[better]
             order = np.lexsort((nd, nb))  # per cell, its shortest offer first
             nb, nd, par = nb[order], nd[order], par[order]

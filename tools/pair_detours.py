@@ -1,0 +1,55 @@
+"""How far the pairs of a goals-and-poses file are from the straight line: the detour of each
+pair (shortest collision-free path / straight line) and the fraction above a bound.
+
+    .venv/bin/python tools/pair_detours.py [config/goals_indoor_train.json] [--max-detour 1.3]
+
+The world is the indoor one (world_variant 0) and the robot the Jackal (its circumscribed
+radius), as for config/goals_indoor_train.json; other worlds and robots with the options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from pic4rl_bridge.episodes import load_goals_and_poses
+from pic4rl_sim.paths import PathPlanner
+from pic4rl_sim.robots import load_robot
+from pic4rl_sim.worlds import make_world
+
+
+def detours(path: str, *, world: str = "indoor", variant: int = 0, robot: str = "jackal",
+            resolution_m: float = 0.05) -> np.ndarray:
+    """The detour of each pair of the file (``inf`` where there is no path)."""
+    pairs = load_goals_and_poses(path)
+    planner = PathPlanner(make_world(world, seed=variant),
+                          robot_radius_m=load_robot(robot).footprint.bounding_radius_m,
+                          resolution_m=resolution_m)
+    return np.array([planner.length(p[:2], g) / math.dist(p[:2], g)
+                     for p, g in zip(pairs.poses, pairs.goals)])
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("file", nargs="?", default="config/goals_indoor_train.json")
+    parser.add_argument("--max-detour", type=float, default=1.3)
+    parser.add_argument("--world", default="indoor")
+    parser.add_argument("--variant", type=int, default=0)
+    parser.add_argument("--robot", default="jackal")
+    parser.add_argument("--resolution", type=float, default=0.05, help="grid cell (m)")
+    args = parser.parse_args(argv)
+    ratio = detours(args.file, world=args.world, variant=args.variant, robot=args.robot,
+                    resolution_m=args.resolution)
+    over = ratio > args.max_detour
+    print(f"{args.file}: {len(ratio)} pairs, detour > {args.max_detour}: {int(over.sum())} "
+          f"({over.mean():.1%}); no path: {int(np.isinf(ratio).sum())}; median detour "
+          f"{np.median(ratio):.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
