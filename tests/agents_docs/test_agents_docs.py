@@ -23,7 +23,7 @@ import pytest
 import yaml
 from docs_helpers import anchors, parameter_rows, section, table_rows
 
-from pic4rl_agents import tester, train
+from pic4rl_agents import tester, train, tune
 from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -95,6 +95,21 @@ def test_every_flag_is_documented_in_its_commands_section(doc, heading, module):
     assert not missing, f"docs/agents.md's {heading!r} does not document {missing}"
     for ros_option in ("--params-file", "-p"):
         assert documented(text, f"--ros-args {ros_option}"), (heading, ros_option)
+
+
+def test_every_tune_flag_and_its_default_is_documented(doc):
+    rows = table_rows(section(doc, "## Tuning (`pic4rl-tune`)"))
+    options = flags(tune.build_parser())
+    assert len(options) >= 15
+    missing = [flag for flag in options if not any(row.split()[0] == flag for row in rows)]
+    assert not missing, f"docs/agents.md's tuning section does not document {missing}"
+    defaults = tune.build_parser().parse_args([])
+    for flag, value in (("--n-trials N", defaults.n_trials), ("--n-jobs N", defaults.n_jobs),
+                        ("--n-evaluations N", defaults.n_evaluations),
+                        ("--n-startup-trials N", defaults.n_startup_trials)):
+        assert f"(default {value})" in rows[flag][0], flag
+    assert f"(default {defaults.max_steps:,})" in rows["--max-steps N"][0]
+    assert f"(default `{defaults.base}`)" in rows["--base FILE"][0]
 
 
 def test_the_documented_test_defaults_are_the_parsers():
