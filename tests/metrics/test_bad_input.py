@@ -523,3 +523,129 @@ def test_a_read_only_bag_is_judged_and_left_as_it_was(tmp_path: Path) -> None:
         assert _snapshot(bag) == before
     finally:
         os.chmod(bag, 0o755)
+
+
+# --------------------------------------------------------------------------- odd input (issue 11)
+
+
+def _laser(ns: int, ranges: Sequence[float], *, stamp_ns: int | None = None,
+           range_min: float = 0.05, range_max: float = 10.0) -> Any:
+    """A LaserScan of ``ranges`` received at ``ns``, its header stamped ``stamp_ns``."""
+    n = max(len(ranges), 1)
+    return T["sensor_msgs/msg/LaserScan"](
+        _header(ns if stamp_ns is None else stamp_ns, "base_scan"), -math.pi,
+        math.pi - 2 * math.pi / n, 2 * math.pi / n, 0.0, 0.0, range_min, range_max,
+        np.asarray(ranges, dtype=np.float32), np.zeros(0, np.float32),
+    )  # fmt: skip
+
+
+def _odom_and_scans(scan_of: Any, n: int = 11) -> list[tuple[str, Any]]:
+    """Odometry along +x, 0.1 m every 100 ms, and one scan per pose from ``scan_of(i, ns)``."""
+    out: list[tuple[str, Any]] = []
+    for i in range(n):
+        ns = DEFAULT_T0_NS + i * 100_000_000
+        out.append(("/odom", _odometry(ns, 0.1 * i, 0.0, 0.0, vx=1.0)))
+        out.append(("/scan", scan_of(i, ns)))
+    return out
+
+
+FOOTPRINT_FACT = ("/episode/facts", T["std_msgs/msg/String"]('{"footprint": {"radius_m": 0.2}}'))
+
+
+def test_scans_without_ranges_leave_the_pose_metrics_and_warn(tmp_path: Path) -> None:
+    """Every LaserScan with ranges=[]: no NumPy reduction error; scan metrics NaN, warned."""
+    bag = _write(tmp_path / "empty", [FOOTPRINT_FACT, *_odom_and_scans(lambda i, ns: _laser(ns, []))])
+    row = _row(compute([bag]), "empty")
+    assert row.error == "", row.error
+    assert row.metrics.path_length_m == pytest.approx(1.0, abs=1e-9)
+    assert math.isnan(row.metrics.obstacle_dist_min_m) and math.isnan(row.metrics.collision_count)
+    assert any("no ranges" in w for w in row.warnings), row.warnings
+
+
+@pytest.mark.parametrize(
+    ("name", "scan_of", "why"),
+    [
+        ("all_nan", lambda i, ns: _laser(ns, [math.nan] * 8), "has a valid beam"),
+        ("min_over_max", lambda i, ns: _laser(ns, [0.1] * 8, range_min=10.0, range_max=0.05),
+         "range_min > range_max"),
+    ],
+)
+def test_scans_that_say_nothing_give_nan_collisions_with_a_warning(
+    tmp_path: Path, name: str, scan_of: Any, why: str
+) -> None:
+    """docs/metrics.md: NaN when a value cannot be computed, never a silent zero."""
+    bag = _write(tmp_path / name, [FOOTPRINT_FACT, *_odom_and_scans(scan_of)])
+    row = _row(compute([bag]), name)
+    assert row.error == ""
+    assert math.isnan(row.metrics.collision_count)
+    assert math.isnan(row.metrics.safety_violation_time_s)
+    assert any(why in w for w in row.warnings), row.warnings
+
+
+def test_a_scan_topic_with_zero_stamps_warns_like_the_pose_topic(tmp_path: Path) -> None:
+    bag = _write(tmp_path / "zero", _odom_and_scans(lambda i, ns: _laser(ns, [1.0] * 8, stamp_ns=0)))
+    episode = read_episode(bag)
+    assert "scan: header stamps are zero; using bag receive times" in episode.warnings
+    assert len(episode.scan) == 11
+
+
+def test_an_unparseable_facts_message_costs_only_the_facts(tmp_path: Path) -> None:
+    facts = ("/episode/facts", T["std_msgs/msg/String"]("{'goal': oops"))
+    bag = _write(tmp_path / "facts", [facts, *_odom_messages(range(0, 1100, 100), [0.1 * i for i in range(11)])])
+    row = _row(compute([bag]), "facts")
+    assert row.error == "" and row.metrics.path_length_m == pytest.approx(1.0, abs=1e-9)
+    assert any("facts topic holds no JSON object" in w for w in row.warnings), row.warnings
+
+
+@pytest.mark.parametrize("payload", ["exploded", '{"outcome": "exploded", "stamp_ns": 5}', "{"])
+def test_an_unknown_outcome_word_is_warned_and_the_outcome_inferred(
+    tmp_path: Path, payload: str
+) -> None:
+    outcome = ("/episode/outcome", T["std_msgs/msg/String"](payload))
+    odom = _odom_messages(range(0, 1100, 100), [0.1 * i for i in range(11)])
+    bag = _write(tmp_path / "outcome", [*odom, outcome])
+    row = _row(compute([bag], given=frozenset({"goal"}),
+                       facts=parse_facts({"goal": [1.0, 0.0]}, source="test")[0]), "outcome")
+    assert row.error == ""
+    assert row.metrics.outcome == "goal" and row.metrics.success == 1.0  # inferred
+    assert any("outcome topic" in w and "ignored" in w for w in row.warnings), row.warnings
+
+
+def test_the_diverged_outcome_is_no_success_and_no_collision(tmp_path: Path) -> None:
+    bag = write_episode_bag(tmp_path / "diverged", LINE, outcome="diverged", goal=(2.0, 0.0))
+    row = _row(compute([bag]), "diverged")
+    assert row.error == "" and row.warnings == ()
+    assert row.metrics.outcome == "diverged" and row.metrics.success == 0.0
+    assert row.metrics.spl == 0.0
+
+
+@pytest.mark.parametrize("jobs", ["-3", "-1", "two"])
+def test_a_negative_jobs_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], jobs: str
+) -> None:
+    bag = write_episode_bag(tmp_path / "ok", LINE)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["compute", "--jobs", jobs, str(bag)])
+    assert exit_info.value.code == 2
+    assert "expected a number of processes >= 1, or 0 for one per core" in capsys.readouterr().err
+    with pytest.raises(ConfigError, match="jobs=-3"):
+        compute([bag], jobs=-3)
+
+
+def test_jobs_0_means_one_per_core(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bags = [write_episode_bag(tmp_path / f"ok{i}", LINE) for i in range(3)]
+    assert main(["compute", "--jobs", "0", "--format", "csv", *map(str, bags)]) == 0
+    assert len(capsys.readouterr().out.strip().splitlines()) == 1 + 3
+
+
+def test_physically_impossible_motion_is_flagged(tmp_path: Path) -> None:
+    """A few overwritten bytes turned a pose into 1e70 m: judged, but flagged, not silent."""
+    xs = [0.1 * i for i in range(11)]
+    xs[5] = 1e70
+    bag = _write(tmp_path / "damaged", _odom_messages(range(0, 1100, 100), xs))
+    row = _row(compute([bag]), "damaged")
+    assert row.error == ""
+    flagged = [w for w in row.warnings if "physically impossible" in w]
+    assert any("speed from pose differences up to 1e+71 m/s" in w for w in flagged), row.warnings
+    calm = _row(compute([write_episode_bag(tmp_path / "calm", LINE)]), "calm")
+    assert calm.warnings == ()
