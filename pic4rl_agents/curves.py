@@ -105,6 +105,7 @@ def plot_eval_curves(ax: Any, curves: Mapping[str, pd.DataFrame], *, x: str = "t
         xs = df[x] / 60.0 if x != "steps" else df[x]
         ys = df[metric] * 100.0 if metric == "success_rate" else df[metric]
         ax.plot(xs, ys, marker="o", ms=3, lw=1.5, label=label)
+    ax.set_xlim(left=0)  # runs compare from their start
     ax.set_xlabel(EVAL_AXES[x])
     ax.set_ylabel("eval success (%)" if metric == "success_rate" else f"eval {metric}")
     if metric == "success_rate":
