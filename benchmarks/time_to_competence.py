@@ -101,6 +101,8 @@ def measure(args: argparse.Namespace, runs_dir: Path) -> dict[str, float]:
     trainer = Trainer(run, progress=False,
                       after_eval=Watch(success_rate=args.target, budget_s=args.budget_s))
     trainer.run()
+    if args.runs_dir is not None:
+        print(f"run kept in {trainer.run_dir}", flush=True)
     (evaluations,) = eval_curves(trainer.run_dir).values()
     reached = evaluations[evaluations["success_rate"] >= args.target]
     first = reached.iloc[0] if len(reached) else None
@@ -124,8 +126,6 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if not keep:
             shutil.rmtree(runs_dir, ignore_errors=True)
-    if keep:
-        print(f"run kept in {runs_dir}")
     for name, value in results.items():
         text = "nan" if math.isnan(value) else (f"{value:.0f}" if name.startswith(("steps",
                                                 "evaluations")) else f"{value:.3f}")
