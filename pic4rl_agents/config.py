@@ -114,6 +114,7 @@ class TrainConfig:
     train_freq: int = 1  # env steps (per env) between updates
     gradient_steps: int = 1
     tau: float = 0.005
+    reward_scale: float = 1.0  # learner's reward = this x env's (logs, bags keep the env's)
     action_noise_std: float = 0.1  # ddpg/td3 Gaussian noise, in normalised action units
     policy: PolicyConfig = field(default_factory=PolicyConfig)
     epsilon: EpsilonConfig = field(default_factory=EpsilonConfig)
@@ -133,7 +134,8 @@ class TrainConfig:
         positive = {"max_steps": self.max_steps, "n_envs": self.n_envs,
                     "batch_size": self.batch_size, "buffer_size": self.buffer_size,
                     "train_freq": self.train_freq, "gradient_steps": self.gradient_steps,
-                    "learning_rate": self.learning_rate, "eval.episodes": self.eval.episodes,
+                    "learning_rate": self.learning_rate, "reward_scale": self.reward_scale,
+                    "eval.episodes": self.eval.episodes,
                     "reward_window": self.reward_window, "policy.cnn_features":
                     self.policy.cnn_features, "ppo.n_steps": self.ppo.n_steps,
                     "ppo.n_epochs": self.ppo.n_epochs}

@@ -36,22 +36,28 @@ def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
     return config.replace(**{"ros.namespace": env_namespace(config, rank, n_envs)})
 
 
-def _make(config: EnvConfig, monitor_file: str | None, node: Any = None) -> gym.Env:
-    env = NavEnv(config, node=node)
-    return Monitor(env, monitor_file, info_keywords=INFO_KEYWORDS)
+def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
+          reward_scale: float = 1.0) -> gym.Env:
+    """A monitored ``NavEnv``: the monitor logs the env's own (the paper's) rewards, and the
+    learner sees them times ``reward_scale`` (rewards of order 1 suit SB3's defaults)."""
+    env: gym.Env = Monitor(NavEnv(config, node=node), monitor_file, info_keywords=INFO_KEYWORDS)
+    if reward_scale != 1.0:
+        env = gym.wrappers.TransformReward(env, lambda r: reward_scale * r)
+    return env
 
 
 def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
-                 monitor_dir: Path | None = None, prefix: str = "", node: Any = None) -> VecEnv:
+                 monitor_dir: Path | None = None, prefix: str = "", node: Any = None,
+                 reward_scale: float = 1.0) -> VecEnv:
     """``n_envs`` monitored ``NavEnv``s (seeds ``seed + rank``), each writing
     ``<monitor_dir>/<prefix><rank>.monitor.csv``; ``node``: the trainer's rclpy node, used by
-    a single ROS env."""
+    a single ROS env; the learner's rewards are the env's times ``reward_scale``."""
     def factory(rank: int) -> Callable[[], gym.Env]:
         cfg = env_for_rank(config, rank, n_envs)
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
 
         def make() -> gym.Env:
-            return _make(cfg, file, node if n_envs == 1 else None)
+            return _make(cfg, file, node if n_envs == 1 else None, reward_scale)
         return make
 
     if monitor_dir is not None:
