@@ -12,8 +12,11 @@ Its env is its training config, then the given params files key by key, then
 ``--env-kwargs`` and ``-p``; a baseline uses the first agent's env (or the params files
 alone). Every agent drives the same episodes: the start–goal pairs named at test time
 (``episodes.file`` in a params file or the overrides), else the paper's 5 indoor pairs when
-the world is the indoor one (variant 0), else ``--episodes`` pairs drawn by the simulator from
-``--seed``; ``--random N`` always draws N. The training pairs are never reused for testing.
+the world is the indoor one (variant 0), else ``--episodes`` pairs drawn from ``--seed``;
+``--random N`` always draws N, of the kind ``--pairs`` names (``paper``: 4-8 m apart with a
+collision-free path at most 1.3 times the straight line, the default; ``any``: whatever the
+simulator samples). It prints which set it used. The training pairs are never reused for
+testing.
 Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics``'s own
 (``pic4rl-metrics compare`` on those bags prints the same).
 """
@@ -33,6 +36,7 @@ import numpy as np
 
 from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
+from pic4rl_sim.sampling import PAIR_KINDS
 
 from .config import (
     ENV_NODE,
@@ -137,10 +141,19 @@ def _test_env(spec: AgentSpec, args: argparse.Namespace) -> RunConfig:
             "world_variant", 0):
         pairs = str(DEFAULT_PAIRS)
     if args.random or not pairs:
-        overrides.update({"episodes.file": "", "episodes.ordered": False})
+        kind = args.pairs or ("paper" if args.random else "any")
+        overrides.update({"episodes.file": "", "episodes.ordered": False,
+                          "episodes.pair_kind": kind})
+        args.episode_set = (f"{args.random or args.episodes} random pairs of kind {kind!r} "
+                            f"with seed {args.seed}")
     else:
+        if args.pairs:
+            raise ConfigError(f"--pairs {args.pairs}: the test pairs come from {pairs}; add "
+                              "--random N to draw N pairs of that kind")
         overrides.update({"episodes.file": pairs, "episodes.ordered": True,
                           "episodes.change_goal_and_pose": 1})
+        args.episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
+                            else "pairs file") + f" {pairs}"
     return replace(spec.run, env=env.replace(**overrides))
 
 
@@ -209,7 +222,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--episodes", type=int, default=5,
                         help="episodes per agent (default 5, the paper's)")
     parser.add_argument("--random", type=int, metavar="N",
-                        help="N random start-goal pairs from the simulator instead of the pairs")
+                        help="N random start-goal pairs instead of the pairs")
+    parser.add_argument("--pairs", choices=tuple(PAIR_KINDS),
+                        help="kind of the drawn pairs: paper (4-8 m, detour <= 1.3; default "
+                             "with --random) or any (the simulator's)")
     parser.add_argument("--seed", type=int, default=0, help="the episodes' seed (default 0)")
     parser.add_argument("--bags", dest="bags_dir", default="bags", help="bags directory")
     parser.add_argument("--run", default="", help="run name (default: test_<date>-<time>); "
@@ -255,6 +271,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             bags_dir / (args.run or time.strftime("test_%Y%m%d-%H%M%S"))).name
         specs = resolve_agents(args, ros)
         episodes = args.random or args.episodes
+        print(f"episodes: {args.episode_set}", file=sys.stderr)
         for spec in specs:
             outcomes = run_agent(spec, episodes=episodes, seed=args.seed,
                                  progress=not args.no_progress)

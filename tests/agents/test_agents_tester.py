@@ -141,7 +141,8 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
                                "--env-kwargs", "sensor:depth",
                                "--sim-kwargs", "depth.enabled:true"])
     assert code == 2
-    assert err.startswith("pic4rl-test: --agent ") and "observes" in err
+    assert err.startswith("episodes: ") and "\npic4rl-test: --agent " in err
+    assert "observes" in err
     assert "test it with the sensor" in err and "Dict(" in err
     assert out == ""
     assert not list(tmp_path.rglob("*.db3"))
