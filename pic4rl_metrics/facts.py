@@ -108,10 +108,14 @@ class Footprint:
         (``pic4rl_bridge.tasks.collision.footprint_clearance``), re-implemented here because
         the metrics import no other pic4rl package."""
         p = np.asarray(points, dtype=float)
+        return self.signed_distance_xy(p[..., 0], p[..., 1])
+
+    def signed_distance_xy(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """``signed_distance`` of the points with coordinates ``x`` and ``y`` (same shape)."""
         if self.radius_m is not None:
-            return np.hypot(p[..., 0], p[..., 1]) - self.radius_m
-        qx = np.abs(p[..., 0]) - 0.5 * self.length_m  # type: ignore[operator]
-        qy = np.abs(p[..., 1]) - 0.5 * self.width_m  # type: ignore[operator]
+            return np.hypot(x, y) - self.radius_m
+        qx = np.abs(x) - 0.5 * self.length_m  # type: ignore[operator]
+        qy = np.abs(y) - 0.5 * self.width_m  # type: ignore[operator]
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         return outside + np.minimum(np.maximum(qx, qy), 0.0)
 

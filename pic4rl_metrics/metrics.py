@@ -17,6 +17,7 @@ import numpy as np
 from .facts import EpisodeFacts, Mount, Outcome
 from .kinematics import (
     Derivative,
+    PathTurning,
     VelocitySeries,
     bearing_in_body,
     differentiate,
@@ -78,19 +79,27 @@ class ScanClearance(NamedTuple):
     margin_m: np.ndarray  # signed distance of the nearest return to the footprint
 
 
-def scan_points(scan: ScanSeries, mount: Mount) -> tuple[np.ndarray, np.ndarray]:
-    """Valid returns as points in the base frame: x and y (n_scans, n_beams), NaN elsewhere;
-    the env's geometry (``pic4rl_bridge.tasks.collision.scan_points``)."""
-    ranges = scan.valid_ranges()
-    fx, fy = ranges * np.cos(scan.angles), ranges * np.sin(scan.angles)
+def scan_points(
+    scan: ScanSeries, mount: Mount, ranges: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Valid returns (``ranges``: ``scan.valid_ranges()``) as points in the base frame: x and
+    y (n_scans, n_beams), NaN elsewhere; the env's geometry
+    (``pic4rl_bridge.tasks.collision.scan_points``)."""
+    ranges = scan.valid_ranges() if ranges is None else ranges
+    angles = scan.angles
+    if len(angles) and (angles == angles[0]).all():
+        angles = angles[0]  # one scanner: the trigonometry once, not once per scan
+    fx, fy = ranges * np.cos(angles), ranges * np.sin(angles)
     c, s = math.cos(mount.yaw_rad), math.sin(mount.yaw_rad)
     return mount.x_m + c * fx - s * fy, mount.y_m + s * fx + c * fy
 
 
-def scan_clearance(scan: ScanSeries, facts: EpisodeFacts) -> ScanClearance:
+def scan_clearance(
+    scan: ScanSeries, facts: EpisodeFacts, ranges: np.ndarray | None = None
+) -> ScanClearance:
     """Nearest obstacle per scan, and its signed distance to the footprint when one is known
     (scan points placed by ``facts.scan_mount``, the base origin when unknown)."""
-    ranges = scan.valid_ranges()
+    ranges = scan.valid_ranges() if ranges is None else ranges
     valid = np.isfinite(ranges)
     count = valid.sum(axis=1)
     with np.errstate(all="ignore"):
@@ -98,8 +107,8 @@ def scan_clearance(scan: ScanSeries, facts: EpisodeFacts) -> ScanClearance:
     nearest = _row_min(ranges)
     if facts.footprint is None:
         return ScanClearance(nearest, mean, np.full(len(scan), NAN))
-    x, y = scan_points(scan, facts.scan_mount or Mount())
-    margin = _row_min(facts.footprint.signed_distance(np.stack([x, y], axis=-1)))
+    x, y = scan_points(scan, facts.scan_mount or Mount(), ranges)
+    margin = _row_min(facts.footprint.signed_distance_xy(x, y))
     return ScanClearance(nearest, mean, margin)
 
 
@@ -149,8 +158,15 @@ class Derived:
         return seconds(self.pose.t_ns)
 
     @cached_property
+    def valid_ranges(self) -> np.ndarray:
+        """The scans' valid returns (REP 117), NaN elsewhere."""
+        return self.scan.valid_ranges()  # type: ignore[union-attr]
+
+    @cached_property
     def clearance(self) -> ScanClearance | None:
-        return scan_clearance(self.scan, self.facts) if self.scan is not None else None
+        if self.scan is None:
+            return None
+        return scan_clearance(self.scan, self.facts, self.valid_ranges)
 
     @cached_property
     def collision(self) -> np.ndarray | None:
@@ -268,6 +284,10 @@ class Derived:
         return self._yaw(self.acc)
 
     @cached_property
+    def turning(self) -> PathTurning:
+        return path_turning(self.pose.x, self.pose.y, TURNING_STEP_M)
+
+    @cached_property
     def goal_dist(self) -> np.ndarray:
         gx, gy = self.facts.goal  # type: ignore[misc]
         return np.hypot(self.pose.x - gx, self.pose.y - gy)
@@ -354,7 +374,7 @@ _register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), qual
 
 @_register("scan_range_mean_m", "m", "mean scan range", ("scan",), quality=True)
 def _scan_range_mean(d: Derived) -> float:
-    valid = _finite(d.scan.valid_ranges())  # type: ignore[union-attr]
+    valid = _finite(d.valid_ranges)
     return float(valid.mean()) if valid.size else NAN
 
 
@@ -396,13 +416,13 @@ def _barn_score(d: Derived) -> float:
 
 @_register("path_curvature_mean_radpm", "rad/m", "mean curvature", quality=True)
 def _curvature(d: Derived) -> float:
-    turning = path_turning(d.pose.x, d.pose.y, TURNING_STEP_M)
+    turning = d.turning
     return float(np.mean(turning.turn_rad / turning.step_m)) if turning.turn_rad.size else NAN
 
 
 @_register("angle_over_length_radpm", "rad/m", "angle over length", quality=True)
 def _angle_over_length(d: Derived) -> float:
-    turning = path_turning(d.pose.x, d.pose.y, TURNING_STEP_M)
+    turning = d.turning
     if not turning.turn_rad.size or d.path_m <= 0:
         return NAN
     return float(turning.turn_rad.sum() / d.path_m)
