@@ -314,7 +314,7 @@ def _register(name: str, unit: str, label: str, needs: tuple[str, ...] = ("pose"
                   _builtin=True)
 
 
-_register("outcome", "-", "outcome", text=True)(lambda d: d.outcome.value)
+_register("outcome", "", "outcome", text=True)(lambda d: d.outcome.value)
 _register("success", "n/total", "success")(lambda d: d.success)
 _register("clearance_time_s", "s", "time", quality=True)(lambda d: d.time_s)
 _register("heading_error_mean_rad", "rad", "cum. heading", ("goal",), quality=True)(
@@ -334,7 +334,7 @@ def _distance_path_ratio(d: Derived) -> float:
 
 
 _register("optimal_path_m", "m", "optimal path")(lambda d: d.optimal[0])
-_register("optimal_path_source", "-", "optimal path source", text=True)(lambda d: d.optimal[1])
+_register("optimal_path_source", "", "optimal path source", text=True)(lambda d: d.optimal[1])
 
 
 @_register("path_optimality", "m/m", "path optimality", quality=True)

@@ -176,7 +176,7 @@ def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None
     if fmt == "markdown":
         return _markdown([f"{lb} [{u}]" if u else lb for lb, u in zip(labels, units)], rows, right)
     tex_labels = [METRICS[c].label if c in METRICS else latex_escape(c) for c in cols]
-    tex_units = [f"[{METRICS[c].unit}]" if c in METRICS else "" for c in cols]
+    tex_units = [f"[{METRICS[c].unit}]" if c in METRICS and METRICS[c].unit else "" for c in cols]
     tex_rows = [[c if c is None else latex_escape(c) for c in r] for r in rows]
     return "\n".join(_tabular([tex_labels, tex_units], tex_rows)) + "\n"
 
