@@ -1,7 +1,7 @@
 """``pic4rl-test``: trained agents and classical baselines on the same test episodes, each
 episode recorded to a bag, then one metrics table from the bags (the paper's testing package).
 
-    pic4rl-test --agent checkpoints/td3_lidar --baseline proportional
+    pic4rl-test --agent checkpoints/td3_lidar --baseline proportional --baseline dwa
     pic4rl-test --agent runs/sac_lidar --random 100 --seed 0
     pic4rl-test --agent td3=runs/td3_lidar/checkpoints/model_50000_steps.zip \
         --ros-args --params-file my_test_pairs.yaml
@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.sampling import PAIR_KINDS
@@ -49,7 +50,6 @@ from .config import (
 )
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
 
-BASELINES = ("proportional",)
 #: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
 DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"
 
@@ -122,9 +122,11 @@ def resolve_agents(args: argparse.Namespace, ros: RosArgs) -> list[AgentSpec]:
         else:
             raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
                               "or --ros-args --params-file FILE")
+        check_fits(baseline, run.env)  # before any run directory or bag exists
         specs.append(AgentSpec(baseline, run, baseline=baseline))
     if not specs:
-        raise ConfigError("nothing to test: give --agent PATH and/or --baseline proportional")
+        raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
+                          f"{'|'.join(BASELINES)}")
     return [replace(s, run=_test_env(s, args)) for s in specs]
 
 
@@ -158,7 +160,8 @@ def _test_env(spec: AgentSpec, args: argparse.Namespace) -> RunConfig:
 
 
 class Policy:
-    """What drives an episode: ``act(obs, env)`` → a normalised action."""
+    """What drives an episode: ``begin()`` at its start, then ``act(obs, env)`` → a
+    normalised action."""
 
     def __init__(self, spec: AgentSpec, env: Any) -> None:
         self.spec = spec
@@ -174,9 +177,13 @@ class Policy:
                     f"its test env gives {env.observation_space}; test it with the sensor "
                     "and settings it was trained with")
         else:
-            from pic4rl_bridge.baselines import GoToGoalController
+            from pic4rl_bridge.baselines import make_baseline
 
-            self.controller = GoToGoalController(env.scenario.robot)
+            self.controller = make_baseline(spec.baseline, env.config, env.scenario.robot)
+
+    def begin(self) -> None:
+        if self.controller is not None:
+            self.controller.reset()
 
     def act(self, obs: Any, env: Any) -> np.ndarray:
         if self.model is not None:
@@ -198,6 +205,7 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
         bar = tqdm(range(episodes), desc=spec.name, unit="episode", disable=not progress)
         for episode in bar:
             obs, _ = env.reset(seed=seed if episode == 0 else None)
+            policy.begin()
             done, info = False, {}
             while not done:
                 obs, _, terminated, truncated, info = env.step(policy.act(obs, env))

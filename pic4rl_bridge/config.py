@@ -110,6 +110,48 @@ class PersonConfig:
 
 
 @dataclass(frozen=True)
+class DwaConfig:
+    """The Dynamic Window Approach baseline (``pic4rl_bridge.baselines.DwaController``). The
+    velocity ranges, acceleration limits, window period and footprint are the robot's."""
+
+    horizon_s: float = 1.5  # each velocity sample is simulated this long
+    rollout_dt_s: float = 0.1  # time between the simulated poses checked against the scan
+    linear_samples: int = 7  # forward speeds sampled across the window (ends included)
+    angular_samples: int = 15  # yaw rates sampled across the window (ends included)
+    heading_weight: float = 1.0  # times 1 - |target bearing| / pi, from the nearest rollout pose
+    clearance_weight: float = 0.4  # times the distance driven before a collision (capped)
+    speed_weight: float = 0.3  # times v / max_linear_m_s
+    clearance_cap_m: float = 0.6  # a rollout free of collisions scores this distance (m)
+    lookahead_m: float = 2.0  # the target is the goal if a lane is free this far, else along
+    # the free lane nearest the goal's bearing (m)
+    safety_margin_m: float = 0.05  # beyond collision_tolerance_m: closer poses are collisions
+    point_resolution_m: float = 0.05  # scan points merged on a grid this fine (m)
+
+    def __post_init__(self) -> None:
+        for key in ("horizon_s", "rollout_dt_s", "clearance_cap_m", "lookahead_m",
+                    "point_resolution_m"):
+            value = getattr(self, key)
+            require(math.isfinite(value) and value > 0, f"baselines.dwa.{key}", value,
+                    "a positive number")
+        for key in ("heading_weight", "clearance_weight", "speed_weight", "safety_margin_m"):
+            value = getattr(self, key)
+            require(math.isfinite(value) and value >= 0, f"baselines.dwa.{key}", value,
+                    "a number >= 0")
+        for key in ("linear_samples", "angular_samples"):
+            value = getattr(self, key)
+            require(2 <= value <= 101, f"baselines.dwa.{key}", value, "an integer in [2, 101]")
+        require(self.rollout_dt_s <= self.horizon_s, "baselines.dwa.rollout_dt_s",
+                self.rollout_dt_s, f"at most horizon_s={self.horizon_s}")
+
+
+@dataclass(frozen=True)
+class BaselinesConfig:
+    """The classical controllers ``pic4rl-test --baseline`` runs (the env ignores them)."""
+
+    dwa: DwaConfig = field(default_factory=DwaConfig)
+
+
+@dataclass(frozen=True)
 class EpisodesConfig:
     """Where episodes start and end (see ``pic4rl_bridge.episodes``)."""
 
@@ -204,6 +246,7 @@ class EnvConfig:
     topics: TopicsConfig = field(default_factory=TopicsConfig)
     ros: RosConfig = field(default_factory=RosConfig)
     record: RecordConfig = field(default_factory=RecordConfig)
+    baselines: BaselinesConfig = field(default_factory=BaselinesConfig)
     #: The sim node's parameters (the ``sim`` section), checked by pic4rl_sim when used.
     sim_params: Mapping[str, Any] = field(default_factory=dict, compare=False)
 

@@ -27,7 +27,8 @@ if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section i
 @dataclass(frozen=True)
 class RobotInfo:
     """The robot as the tasks see it: footprint, drive, the commanded velocity ranges (the
-    env's limits within the robot's), sensor mounts in the base frame, control period."""
+    env's limits within the robot's), sensor mounts in the base frame, control period, and
+    the robot's acceleration limits (m/s², rad/s²; ``inf`` when unknown)."""
 
     name: str
     footprint: Footprint
@@ -40,6 +41,8 @@ class RobotInfo:
     lidar_mount: Pose2D | None = None
     depth_mount: Pose2D | None = None
     depth_hfov_rad: float = math.radians(87.0)
+    max_linear_accel_m_s2: float = math.inf  # the robot's (classical planners' window)
+    max_angular_accel_rad_s2: float = math.inf
 
 
 def _limit(wanted: float, robot_limit: float) -> float:
@@ -91,7 +94,9 @@ class Scenario:
             max_angular_rad_s=_limit(c.max_angular_rad_s, spec.max_angular_rad_s),
             max_lateral_m_s=_limit(c.max_lateral_m_s, spec.max_lateral_m_s) if omni else 0.0,
             control_dt_s=control_dt, lidar_mount=lidar or None, depth_mount=depth or None,
-            depth_hfov_rad=math.radians(spec.depth.hfov_deg) if spec.depth else math.radians(87))
+            depth_hfov_rad=math.radians(spec.depth.hfov_deg) if spec.depth else math.radians(87),
+            max_linear_accel_m_s2=spec.max_linear_accel_m_s2,
+            max_angular_accel_rad_s2=spec.max_angular_accel_rad_s2)
 
     @cached_property
     def world(self) -> WorldSpec | None:

@@ -39,17 +39,19 @@ def scan_points(scan: ScanData) -> np.ndarray:
 
 
 def footprint_clearance(points: np.ndarray, footprint: Footprint) -> np.ndarray:
-    """Signed distance (m) of each point (n, 2, base frame) from the footprint's boundary:
-    positive outside, negative inside. A rectangle is centred on the base, ``length_m``
-    along x and ``width_m`` along y."""
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    """Signed distance (m) of each point (..., 2, base frame) from the footprint's boundary,
+    shape (...): positive outside, negative inside. A rectangle is centred on the base,
+    ``length_m`` along x and ``width_m`` along y. Planners pass many poses' points at once
+    (float32 stays float32; the coordinates may be strided views)."""
+    p = np.asarray(points)
+    p = p if p.dtype in (np.float32, np.float64) else p.astype(np.float64)
+    x, y = p[..., 0], p[..., 1]
     if footprint.radius_m is not None:
-        return np.hypot(p[:, 0], p[:, 1]) - footprint.radius_m
-    half = 0.5 * np.array([footprint.length_m, footprint.width_m])
-    q = np.abs(p) - half  # per axis: how far beyond the box's face
-    outside = np.hypot(*np.maximum(q, 0.0).T)
-    inside = np.minimum(q.max(axis=1), 0.0)
-    return outside + inside
+        return np.sqrt(x * x + y * y) - footprint.radius_m
+    qx = np.abs(x) - 0.5 * footprint.length_m  # per axis: how far beyond the box's face
+    qy = np.abs(y) - 0.5 * footprint.width_m
+    ox, oy = np.maximum(qx, 0.0), np.maximum(qy, 0.0)
+    return np.sqrt(ox * ox + oy * oy) + np.minimum(np.maximum(qx, qy), 0.0)
 
 
 def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarray:
@@ -68,16 +70,21 @@ def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarra
     return _to_base(d, -d * right[keep], mount)
 
 
+def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
+    """The obstacle points (n, 2, base frame, m) the robot senses: the scan's, else the depth
+    image's, else none."""
+    if frame.scan is not None:
+        return scan_points(frame.scan)
+    if frame.depth is not None:
+        mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
+        return depth_points(frame.depth, mount, robot.depth_hfov_rad)
+    return np.empty((0, 2))
+
+
 def obstacle_distance(frame: SensorFrame, robot: RobotInfo) -> float:
     """Distance (m) from the footprint to the nearest obstacle sensed: from the scan, else from
     the depth image, else ``inf``. Negative when a return lies inside the footprint."""
-    if frame.scan is not None:
-        points = scan_points(frame.scan)
-    elif frame.depth is not None:
-        mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
-        points = depth_points(frame.depth, mount, robot.depth_hfov_rad)
-    else:
-        return math.inf
+    points = sensed_points(frame, robot)
     if len(points) == 0:
         return math.inf
     return float(footprint_clearance(points, robot.footprint).min())
