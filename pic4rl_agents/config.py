@@ -80,6 +80,25 @@ class EvalConfig:
 
 
 @dataclass(frozen=True)
+class CurriculumConfig:
+    """Pairs that widen as the agent succeeds (Arena-rosnav's staged training): stage i draws
+    pairs ``min_distance_m[i]``-``max_distance_m[i]`` apart with a detour of at most
+    ``max_detour[i]``; the next stage follows when the success rate of the stage's last
+    ``window`` episodes reaches ``up``, the previous one when it falls to ``down``."""
+
+    min_distance_m: tuple[float, ...] = ()  # empty: no curriculum (the env's episodes)
+    max_distance_m: tuple[float, ...] = ()
+    max_detour: tuple[float, ...] = ()
+    up: float = 0.8
+    down: float = 0.3
+    window: int = 50
+
+    @property
+    def enabled(self) -> bool:
+        return bool(self.min_distance_m)
+
+
+@dataclass(frozen=True)
 class CheckpointConfig:
     interval_steps: int = 10_000  # 0: only the final model
     replay_buffer: bool = True  # saved beside each checkpoint, so a resume keeps experience
@@ -121,6 +140,7 @@ class TrainConfig:
     ppo: PpoConfig = field(default_factory=PpoConfig)
     eval: EvalConfig = field(default_factory=EvalConfig)
     checkpoint: CheckpointConfig = field(default_factory=CheckpointConfig)
+    curriculum: CurriculumConfig = field(default_factory=CurriculumConfig)
     tensorboard: bool = True
     reward_window: int = 50  # episodes in the reward curve's moving average
 
@@ -160,6 +180,20 @@ class TrainConfig:
         require(self.algorithm != "ppo" or eps.initial == 0, "epsilon.initial", eps.initial,
                 "0 for ppo (ε-greedy replaces actions, which an on-policy algorithm cannot "
                 "learn from; PPO explores through its stochastic policy)")
+        cur = self.curriculum
+        stages = len(cur.min_distance_m)
+        require(len(cur.max_distance_m) == stages and len(cur.max_detour) == stages,
+                "curriculum.max_distance_m", list(cur.max_distance_m),
+                f"as many stages as curriculum.min_distance_m ({stages}), and so many "
+                "curriculum.max_detour")
+        for low, high, detour in zip(cur.min_distance_m, cur.max_distance_m, cur.max_detour):
+            require(0 <= low < high, "curriculum.max_distance_m", list(cur.max_distance_m),
+                    "distances (m) above each stage's min_distance_m")
+            require(detour >= 1, "curriculum.max_detour", list(cur.max_detour),
+                    "ratios >= 1 (shortest path / straight line)")
+        require(0 <= cur.down < cur.up <= 1, "curriculum.up", cur.up,
+                f"a success rate in (curriculum.down={cur.down}, 1]")
+        require(cur.window > 0, "curriculum.window", cur.window, "a positive number of episodes")
         for key in ("policy.net_arch", "policy.critic_arch", "policy.cnn_channels"):
             sizes = getattr(self.policy, key.split(".")[1])
             require(len(sizes) > 0 and all(s > 0 for s in sizes), key, list(sizes),

@@ -19,6 +19,9 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
 
+from .config import CurriculumConfig
+from .curriculum import STAGE_KEY, Curriculum
+
 #: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
 INFO_KEYWORDS = ("is_success", "outcome")
 
@@ -37,10 +40,15 @@ def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
 
 
 def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
-          reward_scale: float = 1.0) -> gym.Env:
-    """A monitored ``NavEnv``: the monitor logs the env's own (the paper's) rewards, and the
-    learner sees them times ``reward_scale`` (rewards of order 1 suit SB3's defaults)."""
-    env: gym.Env = Monitor(NavEnv(config, node=node), monitor_file, info_keywords=INFO_KEYWORDS)
+          reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None) -> gym.Env:
+    """A monitored ``NavEnv``, its pairs from ``curriculum``'s stage when one is given: the
+    monitor logs the env's own (the paper's) rewards, and the learner sees them times
+    ``reward_scale`` (rewards of order 1 suit SB3's defaults)."""
+    env: gym.Env = NavEnv(config, node=node)
+    keywords = INFO_KEYWORDS
+    if curriculum is not None and curriculum.enabled:
+        env, keywords = Curriculum(env, curriculum), (*INFO_KEYWORDS, STAGE_KEY)
+    env = Monitor(env, monitor_file, info_keywords=keywords)
     if reward_scale != 1.0:
         env = gym.wrappers.TransformReward(env, lambda r: reward_scale * r)
     return env
@@ -48,16 +56,18 @@ def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
 
 def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
                  monitor_dir: Path | None = None, prefix: str = "", node: Any = None,
-                 reward_scale: float = 1.0) -> VecEnv:
+                 reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None,
+                 ) -> VecEnv:
     """``n_envs`` monitored ``NavEnv``s (seeds ``seed + rank``), each writing
     ``<monitor_dir>/<prefix><rank>.monitor.csv``; ``node``: the trainer's rclpy node, used by
-    a single ROS env; the learner's rewards are the env's times ``reward_scale``."""
+    a single ROS env; the learner's rewards are the env's times ``reward_scale``; each env's
+    pairs follow ``curriculum`` when given."""
     def factory(rank: int) -> Callable[[], gym.Env]:
         cfg = env_for_rank(config, rank, n_envs)
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
 
         def make() -> gym.Env:
-            return _make(cfg, file, node if n_envs == 1 else None, reward_scale)
+            return _make(cfg, file, node if n_envs == 1 else None, reward_scale, curriculum)
         return make
 
     if monitor_dir is not None:

@@ -221,7 +221,7 @@ class Trainer:
         model = None
         try:
             env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed,
-                               reward_scale=cfg.reward_scale,
+                               reward_scale=cfg.reward_scale, curriculum=cfg.curriculum,
                                monitor_dir=self.monitor_dir, node=node,
                                prefix=f"{self.session}_")
             if self.resume is not None:
