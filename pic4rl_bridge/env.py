@@ -4,7 +4,9 @@ One config file (``sim:`` and ``nav_env:`` sections) says which task, robot, wor
 the task turns decoded sensor frames into observations, rewards and outcomes; the transport
 moves the robot; the recorder, when on, writes each episode to its own bag under
 ``<bags_dir>/<run>/<episode>/``. ``terminated`` is goal or collision, ``truncated`` the time
-limit (``episode_max_steps``); ``info["reward_terms"]`` holds each scaled reward term.
+limit (``episode_max_steps``) or a simulator whose physics diverged (``info["outcome"]`` is
+``diverged``, ``info["reason"]`` says why; its bag's outcome too); ``info["reward_terms"]``
+holds each scaled reward term.
 
 ``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (start,
 goal, sensor noise) and, with the same actions, the same observations and rewards through
@@ -282,13 +284,22 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                          -1.0, 1.0)
         frame = self.transport.step(self.task.command(action))
         judgement = self.task.judge(self._frame, frame, self._context, self._streak)
+        fault = self.transport.fault
+        if fault is not None:  # the robot was put back at its start: nothing to judge
+            judgement = dataclasses.replace(
+                judgement, terms=dict.fromkeys(judgement.terms, 0.0), outcome=None)
         self._frame, self._streak, self._last_action = frame, judgement.collision_streak, action
         self._steps += 1
         terminated = judgement.outcome is not None
-        truncated = not terminated and self._steps >= self.config.episode_max_steps
-        outcome = judgement.outcome or (Outcome.TIMEOUT if truncated else None)
+        truncated = not terminated and (fault is not None
+                                        or self._steps >= self.config.episode_max_steps)
+        outcome = judgement.outcome or (Outcome.DIVERGED if fault is not None
+                                        else Outcome.TIMEOUT if truncated else None)
         obs = self.task.observe(frame, self._context, action)
         info = self._info(judgement, frame, outcome)
+        if fault is not None:
+            info["reason"] = fault
+            log.error("episode %d ended: %s", self._episode - 1, fault)
         if outcome is not None:
             self._done = True
             self._end_bag(outcome)

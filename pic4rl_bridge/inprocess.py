@@ -67,6 +67,7 @@ class InProcessTransport(Transport):
         except SimError as err:
             raise EpisodeRejected(str(err)) from err
         self._stamp_ns += self._control_dt_ns
+        self.fault = None
         if self.tap is not None:
             self._messages().goal(self.engine.goal, self._stamp_ns, self.tap)
         return self._frame()
@@ -74,7 +75,8 @@ class InProcessTransport(Transport):
     def step(self, command: Twist2D) -> SensorFrame:
         if self.tap is not None:
             self._messages().command(command, self._stamp_ns, self.tap)
-        self.engine.step(command)
+        result = self.engine.step(command)
+        self.fault = result.reason if result.diverged else None
         self._stamp_ns += self._control_dt_ns
         return self._frame()
 

@@ -15,6 +15,8 @@ Subscriptions are raw: each message arrives as the CDR bytes on the wire, goes t
 Steps: ``lockstep`` publishes the command and waits for the sensor set it causes (the sync
 topic, scan or depth image, with a newer stamp, and every other needed topic at that stamp);
 ``rate`` publishes, waits one control period of wall time, and takes the latest messages.
+With our sim node, a step also waits for the sim's status of that step on ``diagnostics``: an
+ERROR (the physics diverged; the robot is back at its start) becomes the transport's ``fault``.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from typing import Any
 
 import rclpy
 from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Parameter as ParameterMsg
@@ -137,6 +140,11 @@ class RosTransport(Transport):
         self._frame_stamp_ns = -1
         self._closed = False
         self._subscribe(config, sensors)
+        self._faults: dict[int, str] = {}  # step stamp (ns) -> why the sim voided the episode
+        self._status: _Topic | None = None
+        self._status_live = False  # the sim publishes a status every step: wait for it
+        if config.ros.sim_node:
+            self._subscribe_status()
         self._cmd_stamped = config.ros.cmd_vel_type == "TwistStamped"
         kind = TwistStamped if self._cmd_stamped else Twist
         self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel, _RELIABLE)
@@ -194,6 +202,24 @@ class RosTransport(Transport):
                                                 raw=True)
             entry.name = sub.topic_name
             self._topics[topic] = entry
+
+    def _subscribe_status(self) -> None:
+        """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
+        physics diverged and the robot was put back at its start."""
+        from pic4rl_sim.messages import PHYSICS_STATUS
+
+        entry = _Topic("diagnostics", DiagnosticArray)
+
+        def on_status(msg: DiagnosticArray) -> None:
+            for status in msg.status:
+                if status.name == PHYSICS_STATUS:
+                    entry.stamp_ns = decode.stamp_ns(msg.header)
+                    if status.level == DiagnosticStatus.ERROR:
+                        self._faults[entry.stamp_ns] = status.message
+
+        sub = self.node.create_subscription(DiagnosticArray, "diagnostics", on_status, _RELIABLE)
+        entry.name = sub.topic_name
+        self._status = entry
 
     def _callback(self, entry: _Topic, needed: bool) -> Callable[[bytes], None]:
         """Stores the latest message of a topic frames need (decoded) or of one recorded only
@@ -275,6 +301,10 @@ class RosTransport(Transport):
             self._spin_until(lambda: goal.stamp_ns > used,
                              self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
         self._used_goal_ns = goal.stamp_ns
+        self.fault = None
+        self._faults.clear()
+        if self._status is not None:
+            self._status_live = self.node.count_publishers(self._status.name) > 0
         frame = self._next_frame(goal.stamp_ns, inclusive=True)
         self._t0_ns = goal.stamp_ns
         held, self._pending = self._pending, []
@@ -330,7 +360,12 @@ class RosTransport(Transport):
         if self._mode is StepMode.RATE:
             deadline = time.monotonic() + self._dt_s
             self._spin_until(lambda: time.monotonic() >= deadline, None, "control period")
-        return self._next_frame(self._frame_stamp_ns, inclusive=False)
+        before = self._frame_stamp_ns
+        frame = self._next_frame(before, inclusive=False)
+        void = [stamp for stamp in self._faults if stamp <= frame.stamp_ns]
+        reasons = [self._faults.pop(stamp) for stamp in sorted(void) if stamp > before]
+        self.fault = reasons[0] if reasons else None
+        return frame
 
     def _next_frame(self, after_ns: int, *, inclusive: bool) -> SensorFrame:
         """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
@@ -339,10 +374,13 @@ class RosTransport(Transport):
         sync = self._topics[self._roles.get("scan") or self._roles.get("depth")
                             or self._roles["pose"]]
         if self._mode is StepMode.LOCKSTEP:
+            status = self._status if self._status_live and not inclusive else None  # a step's
+
             def ready() -> bool:
                 s = sync.stamp_ns
                 fresh = s >= after_ns if inclusive else s > after_ns
-                return fresh and all(t.stamp_ns >= s for t in needed)
+                return fresh and all(t.stamp_ns >= s for t in needed) and (
+                    status is None or status.stamp_ns >= s)
             what = f"topic {sync.name}: a message stamped after {after_ns} ns"
         else:
             def ready() -> bool:

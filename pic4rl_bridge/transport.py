@@ -45,6 +45,9 @@ class Transport(ABC):
     including the commands sent."""
 
     tap: Tap | None = None
+    #: Why the episode cannot go on after the last step (the simulator's physics diverged and
+    #: it put the robot back at its start), or ``None``; cleared by ``reset``.
+    fault: str | None = None
 
     @abstractmethod
     def reset(self, request: EpisodeRequest) -> SensorFrame:

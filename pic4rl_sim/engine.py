@@ -64,6 +64,7 @@ class StepResult(NamedTuple):
 
     collided: bool  # the robot touches an obstacle at the period's end, or the person during it
     diverged: bool  # the physics blew up; the episode was reset to its start
+    reason: str = ""  # what diverged, when (empty otherwise)
 
 
 class CommandCheck(NamedTuple):
@@ -181,10 +182,11 @@ class Engine:
                 mujoco.mj_step(m, d)
                 touched = touched or (d.ncon > 0 and self.in_collision())
         if self._diverged(warnings):
-            log.error("physics diverged at t=%.3f s of the episode (seed %d); episode reset to "
-                      "its start", self.episode_time_s, self.seed)
+            reason = (f"physics diverged at t={self.episode_time_s:.3f} s of the episode "
+                      f"(seed {self.seed})")
+            log.error("%s; episode reset to its start", reason)
             self._restart()
-            return StepResult(collided=False, diverged=True)
+            return StepResult(collided=False, diverged=True, reason=reason)
         self.steps += 1
         self._odom = self.odometry.update(before, self.robot_pose(), self.config.control_dt_s,
                                           self._rng["odometry"])

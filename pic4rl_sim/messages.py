@@ -31,6 +31,8 @@ from .world import WorldSpec
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
+#: Name of the sim node's per-step status on ``diagnostics``: ERROR when the physics diverged.
+PHYSICS_STATUS = "sim: physics"
 _RGBA = {
     "wall": (0.75, 0.75, 0.72, 1.0), "furniture": (0.55, 0.38, 0.22, 1.0),
     "obstacle": (0.35, 0.45, 0.6, 1.0), "trunk": (0.4, 0.26, 0.13, 1.0),

@@ -13,7 +13,11 @@ step adds ``control_dt_s``. Every message of a step carries that stamp, publishe
 clock, ground_truth, odom, imu/data, person/pose, camera_info, image_raw, scan: the scan (or,
 without a LiDAR, the depth image) is a step's last message. In ``lockstep`` mode each
 ``cmd_vel`` advances one control period; in ``realtime`` mode a wall-clock timer steps with the
-latest command, or a stop once it is older than ``cmd_timeout_s`` of sim time.
+latest command, or a stop once it is older than ``cmd_timeout_s`` of sim time. Each step first
+publishes ``diagnostics`` (``diagnostic_msgs/DiagnosticArray``, the step's stamp): status
+``sim: physics`` is OK, or ERROR with the reason when the physics diverged, which the engine
+logs (through this node's logger) and answers by putting the robot back at its start: the
+episode is void, and the bridge ends it as ``diverged``.
 
 Episodes: set ``seed``, ``world_variant``, ``start_pose``, ``goal`` (or any parameter) with the
 parameter services, whose result is the acknowledgement, then call ``reset_world``. The reset
@@ -37,6 +41,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import (
@@ -60,10 +65,10 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
 from visualization_msgs.msg import MarkerArray
 
-from .engine import Engine, limit_command
+from .engine import Engine, StepResult, limit_command
 from .errors import ConfigError, WorldError
 from .geometry import Twist2D
-from .messages import StateMessages, goal_pose, world_markers
+from .messages import PHYSICS_STATUS, StateMessages, goal_pose, world_markers
 from .params import (
     MAX_SEED,
     ROBOT,
@@ -149,6 +154,9 @@ class SimNode(Node):
         self._messages = StateMessages(self._engine)
         self._goal_pub = self.create_publisher(PoseStamped, "goal_pose", _LATCHED)
         self._markers_pub = self.create_publisher(MarkerArray, "world/markers", _LATCHED)
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "diagnostics", _RELIABLE)
+        self._status = DiagnosticArray(status=[DiagnosticStatus(
+            name=PHYSICS_STATUS, hardware_id=self._config.robot.name)])
         self._use_engine()
         self._publish_episode()
         self.create_subscription(Twist, "cmd_vel", self._on_cmd_vel, _RELIABLE)
@@ -286,9 +294,20 @@ class SimNode(Node):
             publisher.publish(msg)
 
     def _step(self, command: Twist2D) -> None:
-        self._engine.step(command)  # a divergence is logged there and resets to the start
+        result = self._engine.step(command)  # a divergence is logged there, reset to the start
         self._stamp_ns += self._control_dt_ns
+        self._publish_status(result)
         self._publish_state()
+
+    def _publish_status(self, result: StepResult) -> None:
+        """The step's physics status on ``diagnostics``, stamped like its sensor messages and
+        published before them: a bridge knows the step is void before it sees the step."""
+        status = self._status.status[0]
+        status.level = DiagnosticStatus.ERROR if result.diverged else DiagnosticStatus.OK
+        status.message = result.reason if result.diverged else "ok"
+        stamp = self._status.header.stamp
+        stamp.sec, stamp.nanosec = divmod(self._stamp_ns, 1_000_000_000)
+        self._diagnostics_pub.publish(self._status)
 
     def _on_cmd_vel(self, msg: Twist) -> None:
         checked = limit_command(Twist2D(msg.linear.x, msg.linear.y, msg.angular.z),

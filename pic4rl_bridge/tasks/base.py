@@ -24,11 +24,13 @@ from ..robot import RobotInfo
 
 
 class Outcome(str, Enum):
-    """How an episode ended (the bag contract's words)."""
+    """How an episode ended (the bag contract's words). ``DIVERGED``: the simulator's physics
+    blew up, so the episode was cut; it judges no navigation."""
 
     GOAL = "goal"
     COLLISION = "collision"
     TIMEOUT = "timeout"
+    DIVERGED = "diverged"
 
 
 @dataclass(frozen=True)
