@@ -224,7 +224,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         finally:
             self.transport.tap = None
         if self.recorder is not None:
-            self._bag = self.recorder.begin()
+            self._bag = self.recorder.begin(qos=self.transport.offered_qos)
             for raw in held:
                 self._bag.write(raw)
             self.transport.tap = self._bag.write

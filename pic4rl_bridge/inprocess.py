@@ -23,9 +23,17 @@ from .config import EnvConfig
 from .errors import ConfigError, EpisodeRejected
 from .frame import ScanData, SensorFrame, as_published
 from .robot import Scenario
-from .transport import EpisodeRequest, RawMessage, Tap, Transport
+from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")
+_SENSOR_DATA = OfferedQos(reliable=False, depth=5)  # rclpy's qos_profile_sensor_data
+#: The QoS the sim node offers its topics with (``pic4rl_sim.node``), and the ROS transport
+#: its ``cmd_vel``; the rest: reliable, volatile, depth 10.
+_NODE_QOS = {"scan": _SENSOR_DATA, "imu/data": _SENSOR_DATA,
+             "camera/depth/camera_info": _SENSOR_DATA, "camera/depth/image_raw": _SENSOR_DATA,
+             "goal_pose": OfferedQos(transient_local=True, depth=1),
+             "world/markers": OfferedQos(transient_local=True, depth=1),
+             "cmd_vel": OfferedQos(depth=100)}
 
 
 def _f32(value: float) -> float:
@@ -79,6 +87,11 @@ class InProcessTransport(Transport):
         self.fault = result.reason if result.diverged else None
         self._stamp_ns += self._control_dt_ns
         return self._frame()
+
+    def offered_qos(self, topic: str) -> OfferedQos | None:
+        """As the sim node and the ROS transport offer it."""
+        name = topic[len(self._namespace):] if topic.startswith(self._namespace) else topic
+        return _NODE_QOS.get(name.lstrip("/"), OfferedQos())
 
     def close(self) -> None:
         self.tap = None

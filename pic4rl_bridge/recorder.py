@@ -19,8 +19,10 @@ import json
 import logging
 import re
 import sqlite3
+import struct
 import time
-from collections.abc import Mapping
+import zlib
+from collections.abc import Callable, Mapping
 from enum import Enum
 from functools import cache
 from pathlib import Path
@@ -45,11 +47,13 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from .errors import RecorderError
-from .transport import RawMessage
+from .transport import OfferedQos, RawMessage
 
 log = logging.getLogger(__name__)
 
 STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
+#: The ROS 2 distribution whose message definitions and bag format the bags hold.
+ROS_DISTRO = "jazzy"
 #: The outcome words of the contract (``close``'s ``outcome``).
 OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
 STRING = "std_msgs/msg/String"
@@ -60,10 +64,12 @@ _UNSET = QosTime(0, 0)  # rmw's "unspecified": the default (infinite) deadline, 
 #: Offered QoS of latched topics (goals, markers), so that ``ros2 bag play`` re-latches them.
 LATCHED_QOS = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
                   _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
-#: Offered QoS of every other topic.
+#: Offered QoS of every other topic (when the transport does not know better).
 DEFAULT_QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE,
                   _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
 LATCHED_SUFFIXES = ("goal_pose", "markers")
+#: How a transport tells how a topic was offered (``Transport.offered_qos``).
+QosSource = Callable[[str], OfferedQos | None]
 
 
 @cache
@@ -102,9 +108,58 @@ def custom_data(facts: Mapping[str, Any]) -> dict[str, str]:
     return {k: fact_text(facts[k]) for k in keys if facts[k] is not None}
 
 
-def offered_qos(topic: str) -> Qos:
-    """Transient-local for goals and markers (re-latched on replay), else reliable/volatile."""
-    return LATCHED_QOS if topic.endswith(LATCHED_SUFFIXES) else DEFAULT_QOS
+def offered_qos(topic: str, offered: OfferedQos | None = None) -> Qos:
+    """The bag's QoS record of ``topic``: as ``offered`` (what its publisher really offered),
+    else transient-local for goals and markers (re-latched on replay), else reliable."""
+    if offered is None:
+        return LATCHED_QOS if topic.endswith(LATCHED_SUFFIXES) else DEFAULT_QOS
+    return Qos(QosHistory.KEEP_LAST if offered.depth > 0 else QosHistory.UNKNOWN, offered.depth,
+               QosReliability.RELIABLE if offered.reliable else QosReliability.BEST_EFFORT,
+               QosDurability.TRANSIENT_LOCAL if offered.transient_local
+               else QosDurability.VOLATILE, _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET,
+               False)
+
+
+def _finish_files(bag: Path) -> None:
+    """What rosbags' writer leaves out, filled in after it closed ``bag``: ``ros_distro``
+    (it writes ``rosbags``) in ``metadata.yaml`` and the storage's copy, and in MCAP files
+    each chunk's CRC-32 and the data section's, so that a reader detects a damaged chunk."""
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    meta.write_text(text.replace("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}", 1))
+    for db in bag.glob("*.db3"):
+        with sqlite3.connect(db) as conn:
+            conn.execute("UPDATE metadata SET metadata = replace(metadata, ?, ?)",
+                         ("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}"))
+        conn.close()
+    for mcap in bag.glob("*.mcap"):
+        data = bytearray(mcap.read_bytes())
+        # Same length, so no offset in the file moves (YAML ignores the trailing spaces).
+        old = b"ros_distro: rosbags"
+        data[:] = data.replace(old, f"ros_distro: {ROS_DISTRO}".encode().ljust(len(old)), 1)
+        _mcap_crcs(data)
+        mcap.write_bytes(bytes(data))
+
+
+def _mcap_crcs(data: bytearray) -> None:
+    """Set the CRC-32 of every uncompressed chunk's records and of the data section, in place
+    (MCAP: a CRC of 0 means "not computed", which rosbags writes)."""
+    pos = 8  # past the magic
+    while pos + 9 <= len(data):
+        op = data[pos]
+        (length,) = struct.unpack_from("<Q", data, pos + 1)
+        body = pos + 9
+        if op == 0x06:  # chunk: start, end, uncompressed size, CRC, compression, records
+            (compression_len,) = struct.unpack_from("<I", data, body + 28)
+            compression = bytes(data[body + 32:body + 32 + compression_len])
+            start = body + 40 + compression_len
+            (records_len,) = struct.unpack_from("<Q", data, start - 8)
+            if compression == b"":
+                struct.pack_into("<I", data, body + 24, zlib.crc32(data[start:start + records_len]))
+        elif op == 0x0F:  # data end: the CRC of everything before it
+            struct.pack_into("<I", data, body, zlib.crc32(data[:pos]))
+            return
+        pos = body + length
 
 
 class EpisodeBag:
@@ -120,14 +175,15 @@ class EpisodeBag:
     leaves an MCAP file that may not be readable.
     """
 
-    def __init__(self, path: Path, *, storage: str = "sqlite3",
-                 flush_interval_s: float = 1.0) -> None:
+    def __init__(self, path: Path, *, storage: str = "sqlite3", flush_interval_s: float = 1.0,
+                 qos: QosSource | None = None) -> None:
         if storage not in STORAGES:
             raise RecorderError(f"{path}: storage {storage!r} is unknown; expected "
                                 f"{' or '.join(STORAGES)}")
         self.path = Path(path)
         self.storage = storage
         self.flush_interval_s = float(flush_interval_s)
+        self._qos = qos
         #: Messages written per topic (facts and outcome included).
         self.counts: dict[str, int] = {}
         self._facts: dict[str, Any] = {"run": self.path.parent.name, "episode": self.path.name}
@@ -220,8 +276,9 @@ class EpisodeBag:
                 if msgtype not in typestore().fielddefs:
                     raise RecorderError(f"{self.path}: topic {topic!r} has type {msgtype!r}, "
                                         "which the recorder's typestore (ROS 2 Jazzy) lacks")
+                offered = self._qos(topic) if self._qos is not None else None
                 conn = writer.add_connection(topic, msgtype, typestore=typestore(),
-                                             offered_qos_profiles=[offered_qos(topic)])
+                                             offered_qos_profiles=[offered_qos(topic, offered)])
                 self._connections[topic, msgtype] = conn
             writer.write(conn, stamp, data)
         except (WriterError, sqlite3.Error, OSError) as err:
@@ -243,6 +300,7 @@ class EpisodeBag:
         self._writer = self._db = None
         try:
             writer.close()
+            _finish_files(self.path)
         except (WriterError, sqlite3.Error, OSError) as err:
             raise RecorderError(f"{self.path}: cannot close the episode bag: {err}") from err
 
@@ -283,15 +341,17 @@ class RunRecorder:
         """The bag directories this recorder began, in order."""
         return list(self._episodes)
 
-    def begin(self, episode: str | None = None) -> EpisodeBag:
+    def begin(self, episode: str | None = None, *, qos: QosSource | None = None) -> EpisodeBag:
         """Open the next episode's bag: ``episode`` if given (``RecorderError`` if it exists),
-        else ``episode_NNNN`` numbered after the highest one on disk."""
+        else ``episode_NNNN`` numbered after the highest one on disk; ``qos`` tells how each
+        topic was offered (the transport's)."""
         if episode is None:
             episode = f"{EPISODE_PREFIX}{self._next_index():04d}"
         path = self.run_dir / _component(episode, "episode")
         if path.exists():
             raise RecorderError(f"{path}: the episode bag exists already; not overwriting it")
-        bag = EpisodeBag(path, storage=self.storage, flush_interval_s=self.flush_interval_s)
+        bag = EpisodeBag(path, storage=self.storage, flush_interval_s=self.flush_interval_s,
+                         qos=qos)
         self._episodes.append(path)
         return bag
 

@@ -57,7 +57,7 @@ from .config import EnvConfig, StepMode
 from .errors import ConfigError, EpisodeRejected, TransportError
 from .frame import SensorFrame
 from .robot import Scenario
-from .transport import EpisodeRequest, RawMessage, Transport
+from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)
 
@@ -404,6 +404,17 @@ class RosTransport(Transport):
             person = decode.planar_pose(topics[roles["person"]].msg.pose)
         self._frame_stamp_ns = stamp_ns
         return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person)
+
+    def offered_qos(self, topic: str) -> OfferedQos | None:
+        """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
+        DDS does not tell a remote publisher's history depth)."""
+        infos = self.node.get_publishers_info_by_topic(topic)
+        if not infos:
+            return None
+        qos = infos[0].qos_profile
+        return OfferedQos(reliable=qos.reliability == ReliabilityPolicy.RELIABLE,
+                          transient_local=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL,
+                          depth=int(qos.depth))
 
     def flush(self) -> None:
         """Lockstep: wait (briefly) until every recorded topic has reached the last frame's

@@ -29,6 +29,15 @@ class RawMessage(NamedTuple):
 Tap = Callable[[RawMessage], None]
 
 
+class OfferedQos(NamedTuple):
+    """How a topic's publisher offers it, as a bag's metadata records it: reliable or best
+    effort, transient-local (latched) or volatile, history depth (0: not known)."""
+
+    reliable: bool = True
+    transient_local: bool = False
+    depth: int = 10
+
+
 @dataclass(frozen=True)
 class EpisodeRequest:
     """The next episode: its seed (sampling and sensor noise), and a start and goal in the
@@ -57,6 +66,10 @@ class Transport(ABC):
     @abstractmethod
     def step(self, command: Twist2D) -> SensorFrame:
         """Send ``command`` (body frame) for one control period; return the frame it causes."""
+
+    def offered_qos(self, topic: str) -> OfferedQos | None:
+        """How the publisher of ``topic`` (absolute) offers it; ``None`` when not known."""
+        return None
 
     def flush(self) -> None:  # noqa: B027 - nothing to wait for by default
         """Deliver to ``tap`` every message stamped up to the last frame (the episode ends)."""
