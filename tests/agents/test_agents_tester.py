@@ -156,6 +156,10 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
     (["--baseline", "proportional", "--episodes", "0"], "expected a positive number"),
     (["--baseline", "proportional", "--env-kwargs", "sensr:depth", "--ros-args",
       "--params-file", str(LIDAR_TD3)], "did you mean 'sensor'"),
+    (["--baseline", "proportional", "--ros-args", "--params-file",
+      str(LIDAR_TD3.parent / "env_person_omni.yaml")],
+     "the baselines drive goToPose (a goal and a (v, ω) action); this env's task is "
+     "'personMonitoring'"),
 ])
 def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]

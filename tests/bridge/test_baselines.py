@@ -1,0 +1,124 @@
+"""The classical baselines: DWA goes round a wall that the proportional controller drives into,
+never commands beyond the robot's velocity and acceleration limits, and a baseline that does
+not fit the task is refused before anything runs.
+
+The wall world is analytic: the 10 m walled arena of ``tests/ros_helpers.py`` without its
+furniture and a 0.2 × 2 m wall across the straight line from the start (-2, 0) to the goal
+(2, 0).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from pic4rl_sim.geometry import Footprint, Pose2D, Twist2D
+
+from pic4rl_bridge.baselines import DwaController, make_baseline
+from pic4rl_bridge.config import DwaConfig, EnvConfig
+from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.robot import RobotInfo
+from pic4rl_bridge.tasks.goto import planar_command
+
+ROOT = Path(__file__).resolve().parents[2]
+CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
+WALL_MJCF = """<mujoco model="wall">
+  <worldbody>
+    <geom name="floor" type="plane" size="0 0 0.05"/>
+    <geom name="north" type="box" pos="0 5.05 0.5" size="5.1 0.05 0.5"/>
+    <geom name="south" type="box" pos="0 -5.05 0.5" size="5.1 0.05 0.5"/>
+    <geom name="east" type="box" pos="5.05 0 0.5" size="0.05 5 0.5"/>
+    <geom name="west" type="box" pos="-5.05 0 0.5" size="0.05 5 0.5"/>
+    <geom name="wall" type="box" pos="0 0 0.5" size="0.1 1.0 0.5"/>
+  </worldbody>
+</mujoco>
+"""
+EPISODE = {"start": [-2.0, 0.0, 0.0], "goal": [2.0, 0.0]}
+#: The Jackal of env_goto_lidar.yaml: v in [0, 0.5] m/s, |ω| <= 1 rad/s, 3 m/s², 6 rad/s².
+JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.508, width_m=0.430), omni=False,
+                   min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
+                   max_lateral_m_s=0.0, control_dt_s=0.1, lidar_mount=Pose2D(0.12, 0.0, 0.0),
+                   max_linear_accel_m_s2=3.0, max_angular_accel_rad_s2=6.0)
+
+
+@pytest.fixture(scope="module")
+def wall(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("world") / "wall.xml"
+    path.write_text(WALL_MJCF)
+    return path
+
+
+def drive(name: str, world: Path) -> tuple[str, list[Twist2D]]:
+    """One episode of baseline ``name`` from (-2, 0) to (2, 0); its outcome and commands."""
+    env = NavEnv(CONFIG, sim={"world": str(world)}, overrides={"episode_max_steps": 300})
+    commands: list[Twist2D] = []
+    try:
+        controller = make_baseline(name, env.config, env.scenario.robot)
+        env.reset(seed=0, options=EPISODE)
+        controller.reset()
+        done, info = False, {}
+        while not done:
+            action = controller.action(env.frame)
+            commands.append(env.task.command(action))
+            _, _, terminated, truncated, info = env.step(action)
+            done = terminated or truncated
+    finally:
+        env.close()
+    return info["outcome"], commands
+
+
+def test_dwa_goes_round_the_wall_the_proportional_controller_hits(wall):
+    assert drive("proportional", wall)[0] == "collision"
+    outcome, commands = drive("dwa", wall)
+    assert outcome == "goal"
+    window = [(abs(b.vx - a.vx), abs(b.wz - a.wz)) for a, b in zip(commands, commands[1:])]
+    assert max(dv for dv, _ in window) <= 3.0 * 0.1 + 1e-6  # within the acceleration window
+    assert max(dw for _, dw in window) <= 6.0 * 0.1 + 1e-6
+
+
+def _scan(ranges: list[float]) -> ScanData:
+    values = np.asarray(ranges, np.float32)
+    return ScanData(values, -math.pi, 2 * math.pi / len(values), 0.1, 10.0, JACKAL.lidar_mount)
+
+
+@settings(max_examples=60, deadline=None)
+@given(ranges=st.lists(st.one_of(st.floats(0.05, 10.0), st.just(math.inf)), min_size=8,
+                       max_size=72),
+       goal=st.tuples(st.floats(-8, 8), st.floats(-8, 8)),
+       start=st.tuples(st.floats(-0.5, 0.5), st.floats(-1.0, 1.0)),
+       steps=st.integers(1, 6))
+def test_dwa_never_commands_beyond_the_robots_limits(ranges, goal, start, steps):
+    """From any commanded (v, ω), over random scans and goals, each command stays within the
+    velocity ranges and one control period's acceleration of the one before, and the env's
+    action map gives back the same velocities."""
+    dwa = DwaController(JACKAL, DwaConfig(), collision_tolerance_m=0.05)
+    dwa.reset()
+    dwa._last = (min(max(start[0], 0.0), 0.5), start[1])  # the window's centre: a past command
+    previous = dwa._last
+    for k in range(steps):
+        frame = SensorFrame(k, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=goal,
+                            scan=_scan(np.roll(ranges, k).tolist()))
+        v, w = dwa.command(frame)
+        assert 0.0 <= v <= 0.5 and abs(w) <= 1.0
+        assert abs(v - previous[0]) <= 0.3 + 1e-9 and abs(w - previous[1]) <= 0.6 + 1e-9
+        dwa._last = (v, w)
+        command = planar_command(dwa.action(frame), JACKAL)
+        assert command.vx == pytest.approx(dwa._last[0], abs=1e-6)
+        assert command.wz == pytest.approx(dwa._last[1], abs=1e-6)
+        previous = dwa._last
+
+
+def test_a_baseline_that_does_not_fit_the_task_is_refused():
+    with pytest.raises(ConfigError, match="personMonitoring"):
+        make_baseline("proportional", EnvConfig(task="personMonitoring"), JACKAL)
+    robot = RobotInfo(name="bare", footprint=Footprint(radius_m=0.2), omni=False,
+                      min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
+                      max_lateral_m_s=0.0, control_dt_s=0.1)
+    with pytest.raises(ConfigError, match="acceleration limits"):
+        make_baseline("dwa", EnvConfig(), robot)
