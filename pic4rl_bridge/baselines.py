@@ -111,8 +111,9 @@ class DwaController:
         self.collision_m = collision_tolerance_m + c.safety_margin_m
         steps = max(1, round(c.horizon_s / c.rollout_dt_s))
         self._times = c.rollout_dt_s * np.arange(1, steps + 1)  # (K,) s
+        # Only points a rollout pose can bring within the collision distance matter.
         self._reach_m = (max(robot.max_linear_m_s, -robot.min_linear_m_s) * c.horizon_s
-                         + robot.footprint.bounding_radius_m + c.clearance_cap_m)
+                         + robot.footprint.bounding_radius_m + self.collision_m)
         self._last: tuple[float, float] | None = None
         self._side = 0.0  # +1: the last detour turned left of the goal, -1: right, 0: none
         self._lane_step = 2.0 * math.pi / _LANES
@@ -182,8 +183,9 @@ class DwaController:
         return x, y, yaw
 
     def _near_points(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The sensed points within reach (float32 x, y in the base frame), one per cell of a
-        ``point_resolution_m`` grid: walls seen at 1° steps need no more."""
+        """The sensed points a rollout can come within the collision distance of (float32 x,
+        y in the base frame), one per cell of a ``point_resolution_m`` grid: walls seen at 1°
+        steps need no more."""
         near = points[np.hypot(points[:, 0], points[:, 1]) < self._reach_m]
         _, first = np.unique(np.floor(near / self.config.point_resolution_m), axis=0,
                              return_index=True)
@@ -192,8 +194,8 @@ class DwaController:
 
     def _clearance(self, px: np.ndarray, py: np.ndarray, x: np.ndarray, y: np.ndarray,
                    yaw: np.ndarray) -> np.ndarray:
-        """The footprint's signed distance (m) to the nearest point at every rollout pose
-        (S, K); ``inf`` without points."""
+        """The footprint's signed distance (m) to the nearest of the points at every rollout
+        pose (S, K); ``inf`` without points."""
         if len(px) == 0:
             return np.full(x.shape, np.inf)
         # Each pose's frame: local = R(-yaw) (p - t), every pose and point at once (float32:
