@@ -38,10 +38,16 @@ def odometry(msg: Any) -> tuple[Pose2D, Twist2D]:
 
 
 def scan(msg: Any, mount: Pose2D) -> ScanData:
-    """A ``sensor_msgs/LaserScan`` (float32 ranges kept as they are)."""
-    return ScanData(np.array(msg.ranges, dtype=np.float32), float(msg.angle_min),
-                    float(msg.angle_increment), float(msg.range_min), float(msg.range_max),
+    """A ``sensor_msgs/LaserScan`` (float32 ranges kept as they are). Its float32 fields are
+    read as the wire holds them: a message built in this process and never serialized (the
+    in-process transport's) still holds the float64 it was given."""
+    return ScanData(np.array(msg.ranges, dtype=np.float32), _f32(msg.angle_min),
+                    _f32(msg.angle_increment), _f32(msg.range_min), _f32(msg.range_max),
                     mount)
+
+
+def _f32(value: float) -> float:
+    return float(np.float32(value))
 
 
 def depth_image(msg: Any, *, topic: str = "depth") -> np.ndarray:

@@ -125,6 +125,19 @@ def test_scan_keeps_float32_ranges_and_angles() -> None:
     np.testing.assert_allclose(scan.angles()[[0, 3]], [-math.pi, 0.0], atol=1e-6)
 
 
+def test_an_unserialized_scan_decodes_as_the_wire_would_carry_it() -> None:
+    """The in-process transport decodes messages it built and never serialized, whose float32
+    fields still hold float64: its frames must equal the ROS transport's all the same."""
+    msg = LaserScan(angle_min=-math.pi, angle_max=math.pi, angle_increment=2 * math.pi / 360,
+                    range_min=0.1, range_max=10.0)
+    msg.ranges = [1.0] * 360
+    wire = deserialize_message(serialize_message(msg), LaserScan)
+    local, remote = decode.scan(msg, Pose2D(0.0, 0.0)), decode.scan(wire, Pose2D(0.0, 0.0))
+    assert (local.angle_min_rad, local.angle_increment_rad, local.range_min_m) == (
+        remote.angle_min_rad, remote.angle_increment_rad, remote.range_min_m)
+    np.testing.assert_array_equal(local.angles(), remote.angles())
+
+
 # --- depth images -----------------------------------------------------------------------------
 
 PIXELS_M = np.array([[0.5, 1.25, math.inf], [3.0, 0.0, 7.125]], np.float32)
