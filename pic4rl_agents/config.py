@@ -122,7 +122,8 @@ class TrainConfig:
     runs_dir: str = "runs"
     seed: int = 0
     max_steps: int = 100_000  # env steps in all (SB3's total_timesteps)
-    n_envs: int = 1  # > 1: SubprocVecEnv, one sim each
+    n_envs: int = 1  # > 1: one sim each, in vec_env
+    vec_env: str = "subproc"  # n_envs > 1: subproc (a process each) | dummy (all in this one)
     device: str = "cpu"  # torch device: cpu | cuda | auto
     torch_threads: int = 1  # per process; 0: torch's default
     learning_rate: float = 3e-4
@@ -147,6 +148,8 @@ class TrainConfig:
     def __post_init__(self) -> None:
         require(self.algorithm in ALGORITHM_NAMES, "algorithm", self.algorithm,
                 f"one of {', '.join(ALGORITHM_NAMES)}")
+        require(self.vec_env in ("subproc", "dummy"), "vec_env", self.vec_env,
+                "subproc or dummy")
         require(self.device in ("cpu", "cuda", "auto"), "device", self.device,
                 "cpu, cuda or auto")
         require(self.policy.activation in ("relu", "tanh", "elu"), "policy.activation",

@@ -1,9 +1,10 @@
 """The training and testing envs: ``NavEnv`` in SB3's ``Monitor``, vectorised.
 
 One env lives in the trainer's process (the paper's training(env(Node)) shape: through ROS it
-uses the trainer's node); ``n_envs > 1`` run in ``SubprocVecEnv`` workers, each with its own
-sim: through ROS the sims sit in namespaces ``env_0``, ``env_1``, ... (``pic4rl-run`` starts
-them), in process each worker builds its own engine.
+uses the trainer's node); ``n_envs > 1`` run in ``SubprocVecEnv`` workers (or all in this
+process, ``vec_env: dummy``), each with its own sim: through ROS the sims sit in namespaces
+``env_0``, ``env_1``, ... (``pic4rl-run`` starts them), in process each env builds its own
+engine.
 """
 
 from __future__ import annotations
@@ -57,11 +58,13 @@ def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
 def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
                  monitor_dir: Path | None = None, prefix: str = "", node: Any = None,
                  reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None,
-                 ) -> VecEnv:
+                 vec_env: str = "subproc") -> VecEnv:
     """``n_envs`` monitored ``NavEnv``s (seeds ``seed + rank``), each writing
     ``<monitor_dir>/<prefix><rank>.monitor.csv``; ``node``: the trainer's rclpy node, used by
     a single ROS env; the learner's rewards are the env's times ``reward_scale``; each env's
-    pairs follow ``curriculum`` when given."""
+    pairs follow ``curriculum`` when given. ``vec_env``: ``subproc`` runs each env in a worker
+    process, ``dummy`` all of them in this one (cheaper when an env step costs less than the
+    workers' messages, as in process on two cores)."""
     def factory(rank: int) -> Callable[[], gym.Env]:
         cfg = env_for_rank(config, rank, n_envs)
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
@@ -73,7 +76,9 @@ def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
     if monitor_dir is not None:
         monitor_dir.mkdir(parents=True, exist_ok=True)
     fns = [factory(rank) for rank in range(n_envs)]
-    vec: VecEnv = DummyVecEnv(fns) if n_envs == 1 else SubprocVecEnv(fns,
-                                                                      start_method="forkserver")
+    if n_envs == 1 or vec_env == "dummy":
+        vec: VecEnv = DummyVecEnv(fns)
+    else:
+        vec = SubprocVecEnv(fns, start_method="forkserver")
     vec.seed(seed)
     return vec

@@ -222,6 +222,7 @@ class Trainer:
         try:
             env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed,
                                reward_scale=cfg.reward_scale, curriculum=cfg.curriculum,
+                               vec_env=cfg.vec_env,
                                monitor_dir=self.monitor_dir, node=node,
                                prefix=f"{self.session}_")
             if self.resume is not None:

@@ -176,6 +176,10 @@ class PathPlanner:
         s, g = self._snap(start, "start"), self._snap(goal, "goal")
         if s < 0 or g < 0:
             return np.zeros((0, 2))
+        fits = self.clearance_at(np.array([start, goal])) >= self.robot_radius_m
+        fits &= self.free[self._cell(np.array([start, goal]))]
+        if fits.all() and self.visible(start, goal)[0]:
+            return np.array([start, goal])  # in sight: the straight line is the shortest path
         limit = max_length_m * _OCTILE_BIAS / self.resolution_m + 4.0  # cells, loose
         cells = self._search(s, g, limit)
         if cells is None or not len(cells):
@@ -183,8 +187,6 @@ class PathPlanner:
         centres = list(self._centre(cells))
         # An end where the disc fits replaces its cell's centre; another is joined to its
         # (snapped) cell by a straight segment that counts in the length.
-        fits = self.clearance_at(np.array([start, goal])) >= self.robot_radius_m
-        fits &= self.free[self._cell(np.array([start, goal]))]
         first = start if fits[0] else centres[0]
         last = goal if fits[1] else centres[-1]
         taut = list(self._pull(np.array([first, *centres[1:-1], last])))
