@@ -37,7 +37,8 @@ def doc() -> str:
 @pytest.fixture(scope="module")
 def emitted() -> dict[str, Any]:
     """What the four registered envs emit in two steps from a seeded reset (the second step
-    ends the episode as a timeout): every info key, and each task's reward terms."""
+    ends the episode as a timeout), then in a step whose physics diverges: every info key,
+    and each task's reward terms."""
     info_keys: set[str] = set()
     terms: dict[str, set[str]] = {}
     configs = {}
@@ -56,6 +57,11 @@ def emitted() -> dict[str, Any]:
                 *_, info = env.step(action)
                 info_keys |= set(info)
                 terms.setdefault(spec["task"], set()).update(info["reward_terms"])
+            env.reset()  # a diverged step (a NaN state, as the engine detects it) adds its keys
+            env.unwrapped.transport.engine.data.qvel[:] = np.nan
+            *_, info = env.step(np.zeros(env.action_space.shape, np.float32))
+            assert info["outcome"] == "diverged"
+            info_keys |= set(info)
         finally:
             env.close()
     return {"info": info_keys, "terms": terms}
