@@ -232,7 +232,7 @@ class EpisodeBag:
             self._commit()
 
     def close(self, outcome: str, stamp_ns: int, facts: Mapping[str, Any] | None = None) -> Path:
-        """End the episode: publish the ``outcome`` (goal, collision or timeout) at
+        """End the episode: publish the ``outcome`` (one of ``OUTCOMES``) at
         ``stamp_ns`` (ns), store every fact and the outcome in ``custom_data``, write
         ``metadata.yaml``; return the bag directory."""
         word = jsonable(outcome)
