@@ -68,6 +68,8 @@ def _policy(config: TrainConfig, observation_space: gym.Space) -> tuple[str, dic
     critic = "vf" if config.algorithm == "ppo" else "qf"
     kwargs: dict[str, Any] = {"net_arch": {"pi": list(p.net_arch), critic: list(p.critic_arch)},
                               "activation_fn": _ACTIVATIONS[p.activation]}
+    if config.algorithm == "ppo":
+        kwargs["log_std_init"] = p.log_std_init
     image = isinstance(observation_space, gym.spaces.Box) and len(observation_space.shape) == 3
     if isinstance(observation_space, gym.spaces.Dict) or image:
         kwargs["features_extractor_class"] = DepthGoalExtractor

@@ -50,6 +50,7 @@ class PolicyConfig:
     cnn_features: int = 128  # the CNN's output size, concatenated with the goal vector
     share_features_extractor: bool = False  # off-policy: actor and critic share the CNN
     activation: str = "relu"  # relu | tanh | elu
+    log_std_init: float = 0.0  # ppo: the Gaussian's initial log std (0: std 1 action unit)
 
 
 @dataclass(frozen=True)
