@@ -3,10 +3,19 @@ fixtures are in this folder's conftest.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
+import signal
+import subprocess
+import sys
+import time
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
+
+import pytest
+from ros_helpers import sim_env
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config"
@@ -24,6 +33,13 @@ TRAINED_STEPS = 300
 CHECKPOINT_STEPS = 100
 EVAL_STEPS = 150
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+#: ``pic4rl-run``, as ``python -m`` (the console script runs the same ``main``).
+LAUNCHER = [sys.executable, "-m", "pic4rl_agents.run"]
+#: Generous ROS waits: sims and trainers start slowly on a loaded machine.
+ROS_TIMEOUT_S = 60.0
+ROS_ARGS = ["-p", f"ros.timeout_s:={ROS_TIMEOUT_S}"]
+SIM, TRAINER = "pic4rl_sim.node", "pic4rl_agents.train"
 
 
 @dataclass(frozen=True)
@@ -61,3 +77,55 @@ def processes_with(tag: str, needle: str) -> list[int]:
         if state != b"Z" and needle in cmdline and tag.encode() in environ:
             found.append(int(entry.name))
     return found
+
+
+@dataclass
+class Launcher:
+    """One ``pic4rl-run`` process in a session of its own, its output in ``log``."""
+
+    proc: subprocess.Popen[bytes]
+    log: Path
+    tag: str  # NAME=value in the environment of the launcher and of everything it starts
+
+    @classmethod
+    def start(cls, args: list[str], log: Path, domain: int) -> Launcher:
+        """``pic4rl-run ARGS`` on ``domain``, tagged, its output to ``log``."""
+        tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
+        env = sim_env(domain, dict([tag.split("=", 1)]))
+        with log.open("wb") as out:
+            proc = subprocess.Popen([*LAUNCHER, *args], cwd=ROOT, env=env, stdout=out,
+                                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                    start_new_session=True)
+        return cls(proc, log, tag)
+
+    @property
+    def output(self) -> str:
+        return self.log.read_text(errors="replace")
+
+    def wait(self, timeout_s: float) -> int:
+        try:
+            return self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"pic4rl-run still running after {timeout_s} s:\n{self.output}")
+
+    def left(self, needle: str = SIM) -> list[int]:
+        """Pids of processes it started that are still alive (``needle`` in the command)."""
+        deadline = time.monotonic() + 2.0  # a sim killed just now may take a moment to go
+        while (pids := processes_with(self.tag, needle)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        return pids
+
+    def stop(self, *, interrupt: bool = True) -> None:
+        """The launcher stopped (Ctrl-C first when ``interrupt``, SIGKILL if it lingers) and
+        anything it left behind (found by the tag) killed."""
+        if self.proc.poll() is None:
+            if interrupt:
+                os.kill(self.proc.pid, signal.SIGINT)
+            try:
+                self.proc.wait(timeout=60 if interrupt else 0)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait()
+        for pid in processes_with(self.tag, "python"):
+            with contextlib.suppress(ProcessLookupError):  # gone meanwhile
+                os.killpg(os.getpgid(pid), signal.SIGKILL)

@@ -1,6 +1,7 @@
 """Fixtures of the agents' tests: one short in-process training run that the train,
 exploration and tester tests read (copy it before changing it: the whole session shares it),
-and a DDS domain per integration test (``tests/ros_helpers.py``, whose report hook is shared).
+a DDS domain per integration test (``tests/ros_helpers.py``, whose report hook is shared), and
+``pic4rl-run`` launchers that are always stopped.
 Constants and helpers are in ``agents_helpers.py``.
 """
 
@@ -8,6 +9,8 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 from agents_helpers import (
@@ -17,6 +20,7 @@ from agents_helpers import (
     SHORT_EPISODES,
     TINY,
     TRAINED_STEPS,
+    Launcher,
     TrainedRun,
 )
 from ros_helpers import (  # noqa: F401 - the report hook is shared
@@ -48,3 +52,22 @@ def trained_run(tmp_path_factory: pytest.TempPathFactory) -> TrainedRun:
 @pytest.fixture
 def domain() -> int:
     return next_domain()
+
+
+@pytest.fixture
+def launch(tmp_path: Path) -> Iterator[Callable[..., Launcher]]:
+    """Start ``pic4rl-run ARGS`` on a fresh domain; afterwards the launcher and anything it
+    left behind (found by the tag) are stopped."""
+    started: list[Launcher] = []
+
+    def start(*args: str, domain: int | None = None) -> Launcher:
+        log = tmp_path / f"launcher{len(started)}.log"
+        started.append(Launcher.start(list(args), log,
+                                      next_domain() if domain is None else domain))
+        return started[-1]
+
+    try:
+        yield start
+    finally:
+        for launcher in started:
+            launcher.stop()

@@ -9,21 +9,25 @@ even though they run in sessions of their own).
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
-import subprocess
-import sys
 import time
-import uuid
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 import yaml
-from agents_helpers import LIDAR_TD3, ROOT, TINY, processes_with
-from ros_helpers import next_domain, sim_env
+from agents_helpers import (
+    LIDAR_TD3,
+    ROS_ARGS,
+    SIM,
+    TINY,
+    TRAINER,
+    Launcher,
+    processes_with,
+)
+from ros_helpers import next_domain
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import ALGORITHMS, load_model
@@ -31,72 +35,6 @@ from pic4rl_metrics.aggregate import aggregate
 from pic4rl_metrics.batch import compute
 
 pytestmark = pytest.mark.integration
-
-#: ``pic4rl-run``, as ``python -m`` (the console script runs the same ``main``).
-LAUNCHER = [sys.executable, "-m", "pic4rl_agents.run"]
-#: Generous ROS waits: sims and trainers start slowly on a loaded machine.
-ROS_ARGS = ["-p", "ros.timeout_s:=60.0"]
-SIM, TRAINER = "pic4rl_sim.node", "pic4rl_agents.train"
-
-
-@dataclass
-class Launcher:
-    """One ``pic4rl-run`` process in a session of its own, its output in ``log``."""
-
-    proc: subprocess.Popen[bytes]
-    log: Path
-    tag: str  # NAME=value in the environment of the launcher and of everything it starts
-
-    @property
-    def output(self) -> str:
-        return self.log.read_text(errors="replace")
-
-    def wait(self, timeout_s: float) -> int:
-        try:
-            return self.proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            pytest.fail(f"pic4rl-run still running after {timeout_s} s:\n{self.output}")
-
-    def left(self, needle: str = SIM) -> list[int]:
-        """Pids of processes it started that are still alive (``needle`` in the command)."""
-        deadline = time.monotonic() + 2.0  # a sim killed just now may take a moment to go
-        while (pids := processes_with(self.tag, needle)) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        return pids
-
-
-@pytest.fixture
-def launch(tmp_path: Path) -> Iterator[Callable[..., Launcher]]:
-    """Start ``pic4rl-run ARGS`` on a fresh domain; afterwards the launcher and anything it
-    left behind (found by the tag) are stopped."""
-    started: list[Launcher] = []
-
-    def start(*args: str, domain: int | None = None) -> Launcher:
-        tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
-        env = sim_env(next_domain() if domain is None else domain, dict([tag.split("=", 1)]))
-        log = tmp_path / f"launcher{len(started)}.log"
-        with log.open("wb") as out:
-            proc = subprocess.Popen([*LAUNCHER, *args], cwd=ROOT, env=env, stdout=out,
-                                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                    start_new_session=True)
-        started.append(Launcher(proc, log, tag))
-        return started[-1]
-
-    try:
-        yield start
-    finally:
-        for launcher in started:
-            if launcher.proc.poll() is None:
-                os.kill(launcher.proc.pid, signal.SIGINT)
-                try:
-                    launcher.proc.wait(timeout=60)
-                except subprocess.TimeoutExpired:
-                    os.killpg(launcher.proc.pid, signal.SIGKILL)
-                    launcher.proc.wait()
-            for pid in processes_with(launcher.tag, "python"):
-                with contextlib.suppress(ProcessLookupError):  # gone meanwhile
-                    os.killpg(os.getpgid(pid), signal.SIGKILL)
-
 
 def train_args(runs: Path, algorithm: str, *extra: str, steps: int = 200) -> list[str]:
     hyper = [*TINY, f"algorithm:{algorithm}", "checkpoint.interval_steps:0",
@@ -127,14 +65,8 @@ def ros_runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Callable[[str
 
     def get(algorithm: str) -> RosRun:
         if algorithm not in done:
-            tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
-            log = runs / f"{algorithm}.log"
-            with log.open("wb") as out:
-                proc = subprocess.Popen(
-                    [*LAUNCHER, *train_args(runs, algorithm)], cwd=ROOT,
-                    env=sim_env(next_domain(), dict([tag.split("=", 1)])), stdout=out,
-                    stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
-            launcher = Launcher(proc, log, tag)
+            launcher = Launcher.start(train_args(runs, algorithm), runs / f"{algorithm}.log",
+                                      next_domain())
             launchers.append(launcher)
             code = launcher.wait(300)
             done[algorithm] = RosRun(code, runs / algorithm, launcher.output, launcher.left())
@@ -144,12 +76,7 @@ def ros_runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Callable[[str
         yield get
     finally:
         for launcher in launchers:
-            if launcher.proc.poll() is None:
-                os.killpg(launcher.proc.pid, signal.SIGKILL)
-                launcher.proc.wait()
-            for pid in processes_with(launcher.tag, "python"):
-                with contextlib.suppress(ProcessLookupError):  # gone meanwhile
-                    os.killpg(os.getpgid(pid), signal.SIGKILL)
+            launcher.stop(interrupt=False)
 
 
 @pytest.mark.slow
