@@ -72,6 +72,8 @@ class RewardConfig:
     distance: float = 1.0  # goToPose: times d_{t-1} - d_t (m), the paper's dense r_d
     heading: float = 0.0  # goToPose: times (1 - 2 sqrt(|goal angle| / pi)) (the original code)
     step: float = 0.0  # every task: added each step (a time penalty when < 0)
+    proximity: float = 0.0  # goToPose: times max(0, 1 - clearance / proximity_range_m)
+    proximity_range_m: float = 0.5  # goToPose: clearance (m) from which proximity starts
     progress: float = 10.0  # vineyard: times the advance along the row (m)
     centering: float = 1.0  # vineyard: times -|offset from the row's centre line| (m)
     row_end: float = 100.0  # vineyard: reaching the row's end
@@ -267,6 +269,7 @@ class EnvConfig:
                     "goal_tolerance_m": self.goal_tolerance_m,
                     "collision_steps": self.collision_steps, "lidar.beams": self.lidar.beams,
                     "lidar.max_range_m": self.lidar.max_range_m,
+                    "reward.proximity_range_m": self.reward.proximity_range_m,
                     "depth.width": self.depth.width, "depth.height": self.depth.height,
                     "depth.max_depth_m": self.depth.max_depth_m,
                     "episodes.change_goal_and_pose": self.episodes.change_goal_and_pose,

@@ -92,6 +92,8 @@ class _GoToPose(Task):
         terms = {"distance": reward.distance * (d_prev - d),
                  "heading": reward.heading * (1.0 - 2.0 * math.sqrt(abs(angle) / math.pi)),
                  "step": reward.step,
+                 "proximity": reward.proximity * max(
+                     0.0, 1.0 - safety.min_obstacle_m / reward.proximity_range_m),
                  "goal": reward.goal if reached else 0.0,
                  "collision": reward.collision if crashed else 0.0}
         outcome = Outcome.GOAL if reached else Outcome.COLLISION if crashed else None

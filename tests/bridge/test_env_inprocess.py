@@ -172,7 +172,7 @@ def test_reward_is_the_sum_of_its_terms_and_distance_is_progress(arena: Path) ->
             action = np.array([0.5, 0.8 if k < 5 else -0.3], np.float32)
             obs, reward, terminated, truncated, info = env.step(action)
             terms = info["reward_terms"]
-            assert set(terms) == {"distance", "heading", "step", "goal", "collision"}
+            assert set(terms) == {"distance", "heading", "step", "proximity", "goal", "collision"}
             assert reward == pytest.approx(sum(terms.values()), rel=1e-12, abs=1e-12)
             distance = float(obs[BEAMS])
             assert terms["distance"] == pytest.approx(scale * (previous - distance), abs=1e-5)

@@ -18,7 +18,7 @@ from pic4rl_bridge.tasks.base import Outcome
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
 
 INC = 2 * math.pi / 360
-TERMS = {"distance", "heading", "step", "goal", "collision"}
+TERMS = {"distance", "heading", "step", "proximity", "goal", "collision"}
 
 
 def robot(min_linear: float = 0.0) -> RobotInfo:
@@ -111,6 +111,20 @@ def test_distance_reward_over_a_known_motion():
     assert j.reward == pytest.approx(2.0 * (3.0 - d) - 0.1)
     back = task.judge(frame(0.5), frame(0.0), context, 0)
     assert back.terms["distance"] == pytest.approx(-1.0)
+
+
+@pytest.mark.parametrize("ahead_m, expected", [(math.inf, 0.0), (0.3 + 0.5, 0.0),
+                                               (0.3 + 0.25, -0.5), (0.3 + 0.1, -0.8)])
+def test_proximity_term(ahead_m, expected):
+    # The test robot is a disc of 0.3 m at the scan's origin: clearance = range - 0.3.
+    config = EnvConfig().replace(**{"reward.proximity": -1.0})
+    task = GoToPoseLidar(config, robot())
+    context = task.begin(frame(0.0))
+    j = task.judge(frame(0.0), frame(0.0, ahead_m=ahead_m), context, 0)
+    assert j.terms["proximity"] == pytest.approx(expected, abs=1e-6)
+    off = GoToPoseLidar(EnvConfig(), robot()).judge(frame(0.0), frame(0.0, ahead_m=0.4),
+                                                    context, 0)
+    assert off.terms["proximity"] == 0.0
 
 
 @pytest.mark.parametrize("yaw, expected", [(0.0, 1.0), (math.pi / 4, 0.0), (math.pi, -1.0)])
