@@ -187,6 +187,18 @@ CSV_COLUMNS = ("steps", "wall_s", "train_wall_s", "eval_s", "episodes", "success
                "mean_reward", "mean_length", *(f"{o}_rate" for o in OUTCOME_COLUMNS))
 
 
+class WallClockLimit(BaseCallback):
+    """Ends training once ``limit_s`` seconds have passed since ``start`` (a
+    ``time.perf_counter()`` reading): training for a time budget rather than a step count."""
+
+    def __init__(self, limit_s: float, start: float) -> None:
+        super().__init__()
+        self.limit_s, self.start = limit_s, start
+
+    def _on_step(self) -> bool:
+        return time.perf_counter() - self.start < self.limit_s
+
+
 class StopAfterEval(BaseCallback):
     """``callback_after_eval`` of a ``SeededEvalCallback``: ends training once an evaluation
     reaches ``success_rate`` or the training clock passes ``budget_s`` (either may be None)."""

@@ -123,6 +123,7 @@ class TrainConfig:
     runs_dir: str = "runs"
     seed: int = 0
     max_steps: int = 100_000  # env steps in all (SB3's total_timesteps)
+    max_wall_s: float = 0.0  # also stop after this many seconds of the session; 0: no limit
     n_envs: int = 1  # > 1: one sim each, in vec_env
     vec_env: str = "subproc"  # n_envs > 1: subproc (a process each) | dummy (all in this one)
     device: str = "cpu"  # torch device: cpu | cuda | auto
@@ -170,6 +171,7 @@ class TrainConfig:
                         "action_noise_std": self.action_noise_std,
                         "eval.interval_steps": self.eval.interval_steps,
                         "eval.interval_s": self.eval.interval_s,
+                        "max_wall_s": self.max_wall_s,
                         "checkpoint.interval_steps": self.checkpoint.interval_steps}
         for key, value in non_negative.items():
             require(math.isfinite(value) and value >= 0, key, value, "a number >= 0")

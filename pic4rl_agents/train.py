@@ -191,7 +191,12 @@ class Trainer:
         from stable_baselines3.common.logger import configure
 
         from .algorithms import build_model, load_model
-        from .callbacks import ProgressCallback, RewardCurveCallback, SeededEvalCallback
+        from .callbacks import (
+            ProgressCallback,
+            RewardCurveCallback,
+            SeededEvalCallback,
+            WallClockLimit,
+        )
         from .curves import episode_table
         from .envs import make_vec_env
 
@@ -259,6 +264,8 @@ class Trainer:
                     best_model_save_path=str(self.run_dir / "best" / str(self.session)),
                     log_path=str(self.run_dir / "eval" / str(self.session)),
                     callback_after_eval=self.after_eval, deterministic=True, verbose=0))
+            if cfg.max_wall_s > 0:
+                callbacks.append(WallClockLimit(cfg.max_wall_s, started))
             if self.progress:
                 callbacks.append(ProgressCallback(cfg.max_steps, desc=self.config.name))
             remaining = cfg.max_steps - model.num_timesteps

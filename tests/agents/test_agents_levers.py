@@ -1,5 +1,5 @@
-"""The training curriculum: stages move up and down on the success rate, and each stage's
-filters reach the env's pair sampling."""
+"""Training levers: the curriculum (stages move up and down on the success rate, and each
+stage's filters reach the env's pair sampling) and the wall-clock limit."""
 
 from __future__ import annotations
 
@@ -96,3 +96,24 @@ def test_the_stage_filters_reach_the_env(tmp_path):
 def test_bad_curricula_are_named(params, key):
     with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
         TrainConfig().replace(**params)
+
+
+def test_max_wall_s_stops_a_run_on_time(tmp_path):
+    """A run with a step budget far beyond its time limit stops at the time limit, saved."""
+    import time
+
+    from agents_helpers import TINY
+
+    from pic4rl_agents.train import main
+
+    started = time.perf_counter()
+    code = main(["--run", "timed", "-n", "1000000", "--no-progress", "--hyperparams", *TINY,
+                 "max_wall_s:4", f"runs_dir:{tmp_path}", "eval.interval_steps:0",
+                 "checkpoint.interval_steps:0", "--ros-args", "--params-file",
+                 str(CONFIG / "train_goto_lidar_td3.yaml")])
+    took = time.perf_counter() - started
+    assert code == 0 and took < 60
+    summary = (tmp_path / "timed" / "summary.yaml").read_text()
+    assert "total_steps" in summary and (tmp_path / "timed" / "model.zip").is_file()
+    steps = int(summary.split("total_steps:")[1].split()[0])
+    assert 0 < steps < 1_000_000
