@@ -25,24 +25,17 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import QoSProfile
+from world_helpers import walled_square_mjcf
 
 _DOMAIN_BASE = random.SystemRandom().randrange(1, 101)
 _DOMAINS = itertools.count()
 LIVE: list[SimProcess] = []
 _CLIENT_NAMES = itertools.count()
 
-ARENA_MJCF = """<mujoco model="arena">
-  <worldbody>
-    <geom name="floor" type="plane" size="0 0 0.05"/>
-    <geom name="north" type="box" pos="0 5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="south" type="box" pos="0 -5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="east" type="box" pos="5.05 0 0.5" size="0.05 5 0.5"/>
-    <geom name="west" type="box" pos="-5.05 0 0.5" size="0.05 5 0.5"/>
+ARENA_MJCF = walled_square_mjcf(5.0, """
     <geom name="crate" type="box" pos="3 3 0.5" size="0.5 0.5 0.5"/>
     <geom name="post" type="cylinder" pos="-3 3 0.5" size="0.3 0.5"/>
-  </worldbody>
-</mujoco>
-"""
+""")
 """A 10 m walled square with a crate at (3, 3) and a post at (-3, 3): fast to start, and
 known free space (the robot may drive from (-2, 0) along +x)."""
 

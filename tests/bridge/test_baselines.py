@@ -17,6 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pic4rl_sim.geometry import Footprint, Pose2D, Twist2D
+from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.baselines import DwaController, make_baseline
 from pic4rl_bridge.config import DwaConfig, EnvConfig
@@ -28,17 +29,8 @@ from pic4rl_bridge.tasks.goto import planar_command
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
-WALL_MJCF = """<mujoco model="wall">
-  <worldbody>
-    <geom name="floor" type="plane" size="0 0 0.05"/>
-    <geom name="north" type="box" pos="0 5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="south" type="box" pos="0 -5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="east" type="box" pos="5.05 0 0.5" size="0.05 5 0.5"/>
-    <geom name="west" type="box" pos="-5.05 0 0.5" size="0.05 5 0.5"/>
-    <geom name="wall" type="box" pos="0 0 0.5" size="0.1 1.0 0.5"/>
-  </worldbody>
-</mujoco>
-"""
+WALL_MJCF = walled_square_mjcf(
+    5.0, '<geom name="wall" type="box" pos="0 0 0.5" size="0.1 1.0 0.5"/>', model="wall")
 EPISODE = {"start": [-2.0, 0.0, 0.0], "goal": [2.0, 0.0]}
 #: The Jackal of env_goto_lidar.yaml: v in [0, 0.5] m/s, |ω| <= 1 rad/s, 3 m/s², 6 rad/s².
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.508, width_m=0.430), omni=False,

@@ -13,25 +13,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader
+from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.env import NavEnv
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
-UNSTABLE_MJCF = """<mujoco model="unstable">
-  <worldbody>
-    <geom name="floor" type="plane" size="0 0 0.05"/>
-    <geom name="north" type="box" pos="0 5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="south" type="box" pos="0 -5.05 0.5" size="5.1 0.05 0.5"/>
-    <geom name="east" type="box" pos="5.05 0 0.5" size="0.05 5 0.5"/>
-    <geom name="west" type="box" pos="-5.05 0 0.5" size="0.05 5 0.5"/>
+UNSTABLE_MJCF = walled_square_mjcf(5.0, """
     <body name="spring" pos="4 4 0.5">
       <joint name="spring" type="slide" axis="0 0 1" stiffness="1e12" springref="1"/>
       <geom type="sphere" size="0.05" mass="1e-6" contype="0" conaffinity="0"/>
     </body>
-  </worldbody>
-</mujoco>
-"""
+""", model="unstable")
 EPISODE = {"start": [-2.0, 0.0, 0.0], "goal": [0.0, 0.0]}
 FORWARD = np.array([0.0, 0.0], np.float32)
 

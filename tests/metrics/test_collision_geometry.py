@@ -22,6 +22,7 @@ from pic4rl_metrics.series import ScanSeries
 from pic4rl_metrics.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
 from pic4rl_sim.geometry import Footprint as SimFootprint
 from pic4rl_sim.geometry import Pose2D
+from world_helpers import walled_square_mjcf
 
 REAL_BAGS = Path(__file__).resolve().parents[2].parent / "shared" / "real_bags"
 JACKAL = {"length_m": 0.508, "width_m": 0.430}
@@ -98,17 +99,8 @@ def test_the_mount_is_read_from_tf_static_in_a_real_bag() -> None:
 
 # --- recorded episodes: the env's flags are the metrics' flags ------------------------------
 
-ARENA_MJCF = """<mujoco model="arena">
-  <worldbody>
-    <geom name="floor" type="plane" size="0 0 0.05"/>
-    <geom name="north" type="box" pos="0 3.05 0.5" size="3.1 0.05 0.5"/>
-    <geom name="south" type="box" pos="0 -3.05 0.5" size="3.1 0.05 0.5"/>
-    <geom name="east" type="box" pos="3.05 0 0.5" size="0.05 3 0.5"/>
-    <geom name="west" type="box" pos="-3.05 0 0.5" size="0.05 3 0.5"/>
-    <geom name="post" type="cylinder" pos="-1 1.5 0.5" size="0.3 0.5"/>
-  </worldbody>
-</mujoco>
-"""
+ARENA_MJCF = walled_square_mjcf(
+    3.0, '<geom name="post" type="cylinder" pos="-1 1.5 0.5" size="0.3 0.5"/>')
 #: (start x, y, yaw; constant action): into a wall head-on, at a slant, a circle that touches
 #: nothing (a timeout: no false flag), and into the post.
 DRIVES = (
