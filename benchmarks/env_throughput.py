@@ -21,8 +21,6 @@ from __future__ import annotations
 import argparse
 import os
 import random
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,6 +29,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from _sim import start_sim, stop_sim
 
 import pic4rl_bridge  # noqa: F401 - registers the envs
 from pic4rl_sim.engine import Engine
@@ -62,14 +61,6 @@ def bare_loop(engine: Engine, steps: int) -> float:
     return time.perf_counter() - start
 
 
-def start_sim(domain: int) -> subprocess.Popen[bytes]:
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain),
-           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-    return subprocess.Popen([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
-                             "--params-file", str(CONFIG)], env=env, start_new_session=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--steps", type=int, default=1000, help="steps per timed episode")
@@ -77,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     domain = random.randint(1, 100)
-    sim = start_sim(domain)
+    sim = start_sim(domain, "--params-file", str(CONFIG))
     bags = tempfile.TemporaryDirectory(prefix="env_throughput_")
     common = {"episode_max_steps": args.steps, "ros.domain_id": domain}
     record = {"record.enabled": True, "record.bags_dir": bags.name}
@@ -103,8 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for env in envs.values():
             env.close()
-        os.killpg(sim.pid, signal.SIGINT)
-        sim.wait(timeout=10)
+        stop_sim(sim)
         bags.cleanup()
     rate = {name: args.steps / t for name, t in best.items()}
     print(f"RESULT env_bare_engine_steps_per_s {rate['bare']:.0f}")

@@ -25,14 +25,13 @@ from __future__ import annotations
 import argparse
 import os
 import random
-import signal
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import NamedTuple
 
+from _sim import start_sim, stop_sim
 from pic4rl_bridge.baselines import DwaController, make_baseline
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.frame import SensorFrame
@@ -85,14 +84,6 @@ def replay(dwa: DwaController, frames: list[SensorFrame]) -> float:
     return time.perf_counter() - start
 
 
-def start_sim(domain: int) -> subprocess.Popen[bytes]:
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain),
-           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-    return subprocess.Popen([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
-                             "--params-file", str(CONFIG)], env=env, start_new_session=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-
-
 def path_times(env: NavEnv, pairs: list[tuple[list[float], tuple[float, float]]],
                repeat: int) -> tuple[float, float]:
     """Mean seconds of one shortest-path query: with its planner (grid) built for it, and on
@@ -123,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     domain = random.randint(1, 100)
-    sim = start_sim(domain)
+    sim = start_sim(domain, "--params-file", str(CONFIG))
     bags = tempfile.TemporaryDirectory(prefix="eval_throughput_")
     common = {"episode_max_steps": args.max_steps, "ros.domain_id": domain,
               "episodes.pair_kind": "paper", "record.enabled": True,
@@ -149,8 +140,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         for env in envs.values():
             env.close()
-        os.killpg(sim.pid, signal.SIGINT)
-        sim.wait(timeout=10)
+        stop_sim(sim)
         bags.cleanup()
     rate = {name: args.episodes / s for name, s in best.items()}
     dwa_rate = len(frames) / control_s

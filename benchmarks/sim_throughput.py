@@ -21,16 +21,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import random
-import signal
-import subprocess
 import sys
 import time
 from collections.abc import Callable
 
 import mujoco
 import numpy as np
+from _sim import start_sim, stop_sim
 
 from pic4rl_sim.engine import Engine, EngineConfig
 from pic4rl_sim.geometry import Twist2D
@@ -112,15 +110,11 @@ def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int]:
     from sensor_msgs.msg import LaserScan
 
     domain = random.randint(1, 100)
-    env = {**os.environ, "ROS_DOMAIN_ID": str(domain),
-           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
-    sim = subprocess.Popen(
-        [sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
-         "-p", f"world:={WORLD}", "-p", f"world_variant:={SEED}", "-p", "robot:=jackal",
-         "-p", "clock_mode:=lockstep", "-p", f"lidar.beams:={BEAMS}",
-         "-p", f"control_dt_s:={CONTROL_DT_S}", "-p", f"physics_dt_s:={PHYSICS_DT_S}",
-         "-p", "depth.enabled:=false", "-p", f"seed:={SEED}"],
-        env=env, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    sim = start_sim(domain, "-p", f"world:={WORLD}", "-p", f"world_variant:={SEED}",
+                    "-p", "robot:=jackal", "-p", "clock_mode:=lockstep",
+                    "-p", f"lidar.beams:={BEAMS}", "-p", f"control_dt_s:={CONTROL_DT_S}",
+                    "-p", f"physics_dt_s:={PHYSICS_DT_S}", "-p", "depth.enabled:=false",
+                    "-p", f"seed:={SEED}")
     context = rclpy.Context()
     rclpy.init(context=context, domain_id=domain)
     try:
@@ -165,13 +159,7 @@ def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int]:
         return time.perf_counter() - start, missed
     finally:
         rclpy.shutdown(context=context)
-        if sim.poll() is None:
-            os.killpg(sim.pid, signal.SIGINT)
-            try:
-                sim.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                os.killpg(sim.pid, signal.SIGKILL)
-                sim.wait()
+        stop_sim(sim)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -36,7 +36,6 @@ import math
 import multiprocessing
 import os
 import random
-import signal
 import subprocess
 import sys
 import tempfile
@@ -48,6 +47,7 @@ from typing import Any
 import numpy as np
 import torch
 import yaml
+from _sim import stop_sim
 
 from pic4rl_agents.algorithms import build_model
 from pic4rl_agents.config import RunConfig, load_run_config
@@ -147,18 +147,6 @@ def start_sims(cases: list[Case], tmp: Path,
                     env=dict(os.environ), start_new_session=True, stdin=subprocess.DEVNULL,
                     stdout=out, stderr=subprocess.STDOUT)
             sims.append((proc, log))
-
-
-def stop_sim(proc: subprocess.Popen[bytes]) -> None:
-    if proc.poll() is None:
-        try:
-            os.killpg(proc.pid, signal.SIGINT)
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-        except ProcessLookupError:
-            proc.wait()
 
 
 def set_up(case: Case, sizes: Sizes) -> None:
