@@ -6,14 +6,10 @@ Only the shape of the output is checked, never a speed: timings belong to the be
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
+from bench_helpers import read_results, run_benchmark
 
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "eval_throughput.py"
 FIGURES = ("eval_dwa_inprocess_episodes_per_s", "eval_dwa_ros_episodes_per_s",
            "eval_ros_vs_inprocess_ratio", "eval_dwa_control_steps_per_s",
            "eval_inprocess_env_steps_per_s", "eval_dwa_vs_env_steps_ratio",
@@ -22,15 +18,9 @@ FIGURES = ("eval_dwa_inprocess_episodes_per_s", "eval_dwa_ros_episodes_per_s",
 
 @pytest.mark.integration
 def test_the_benchmark_ends_with_one_result_line_per_figure() -> None:
-    env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    done = subprocess.run([sys.executable, str(SCRIPT), "--episodes", "1", "--max-steps", "10",
-                           "--repeat", "1"],
-                          capture_output=True, text=True, timeout=300, env=env, check=False)
-    assert done.returncode == 0, done.stderr
-    tail = done.stdout.rstrip("\n").splitlines()[-len(FIGURES):]
-    assert all(line.startswith("RESULT ") for line in tail), done.stdout
-    results = {name: float(value) for _, name, value in (line.split() for line in tail)}
-    assert tuple(results) == FIGURES
+    done = run_benchmark("eval_throughput.py", "--episodes", "1", "--max-steps", "10",
+                         "--repeat", "1")
+    results = read_results(done.stdout, FIGURES)
     assert all(math.isfinite(v) and v > 0 for v in results.values()), results
     ros = results["eval_dwa_ros_episodes_per_s"]
     local = results["eval_dwa_inprocess_episodes_per_s"]

@@ -13,6 +13,7 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
+from bench_helpers import read_results
 
 from pic4rl_metrics.synthetic import straight_line, write_episode_bag
 
@@ -35,14 +36,7 @@ def bench() -> ModuleType:
 
 def _results(stdout: str) -> dict[str, float]:
     """The trailing ``RESULT <name> <value>`` lines, which must end the output."""
-    lines = stdout.rstrip("\n").splitlines()
-    tail = lines[-len(FIGURES) :]
-    assert all(line.startswith("RESULT ") for line in tail), stdout
-    figures = {}
-    for line in tail:
-        _, name, value = line.split()
-        figures[name] = float(value)
-    assert list(figures) == list(FIGURES)
+    figures = read_results(stdout, FIGURES)
     assert all(math.isfinite(v) and v > 0 for v in figures.values()), figures
     return figures
 
