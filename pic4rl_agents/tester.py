@@ -9,8 +9,8 @@ episode recorded to a bag, then one metrics table from the bags (the paper's tes
 An agent is a run or checkpoint directory (``model.zip`` and ``config.yaml``) or a model zip
 (its run's ``config.yaml`` is found above it; else give ``--algorithm`` and a params file).
 Its env is its training config, then the given params files key by key, then
-``--env-kwargs`` and ``-p``; a baseline uses the first agent's env (or the params files
-alone). Every agent drives the same episodes: the start–goal pairs named at test time
+``--env-kwargs`` and ``-p``; a baseline uses the first agent's env, but with the robot's full
+speed range (``min_linear_m_s`` 0 unless given), or the params files alone. Every agent drives the same episodes: the start–goal pairs named at test time
 (``episodes.file`` in a params file or the overrides), else the paper's 5 indoor pairs when
 the world is the indoor one (variant 0), else ``--episodes`` pairs drawn from ``--seed``;
 ``--random N`` always draws N, of the kind ``--pairs`` names (``paper``: 4-8 m apart with a
@@ -117,6 +117,10 @@ def resolve_agents(args: argparse.Namespace, ros: RosArgs) -> list[AgentSpec]:
             raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
         if specs:
             run = specs[0].run
+            if "min_linear_m_s" not in env_overrides:
+                # An agent's speed floor is its own training choice; a baseline drives the
+                # robot's full range unless the user says otherwise.
+                run = replace(run, env=run.env.replace(min_linear_m_s=0.0))
         elif ros.params_files:
             run = load_run_config(ros.params_files, env=env_overrides, sim=sim_overrides)
         else:

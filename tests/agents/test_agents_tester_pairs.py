@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 
 import pytest
-from agents_helpers import LIDAR_TD3
+from agents_helpers import LIDAR_TD3, ROOT
 
 from pic4rl_agents import tester
 from pic4rl_metrics.batch import compute
@@ -64,3 +64,21 @@ def test_pairs_without_random_is_refused_when_a_file_gives_the_pairs(tmp_path: P
     assert code == 2
     assert "--pairs paper: the test pairs come from" in err and "--random N" in err
     assert not list(tmp_path.rglob("*.db3"))
+
+
+def test_a_baseline_drives_the_robot_full_speed_range(tmp_path):
+    """An agent's speed floor (min_linear_m_s) is not imposed on the baselines beside it."""
+    from pic4rl_agents.tester import build_parser, resolve_agents
+    from pic4rl_agents.rosargs import split_ros_args
+
+    def specs(*extra: str) -> list:
+        plain, ros = split_ros_args(["--agent", str(ROOT / "checkpoints" / "td3_lidar"),
+                                     "--baseline", "dwa", *extra])
+        args = build_parser().parse_args(plain)
+        args.run_dir_name = "unused"  # set by main() once the run directory is chosen
+        return resolve_agents(args, ros)
+
+    agent, dwa = specs()
+    assert agent.run.env.min_linear_m_s == 0.1 and dwa.run.env.min_linear_m_s == 0.0
+    assert [s.run.env.min_linear_m_s for s in specs("--env-kwargs", "min_linear_m_s:0.2")] == [
+        0.2, 0.2]
