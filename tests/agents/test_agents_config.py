@@ -57,7 +57,8 @@ def test_a_shipped_training_file_loads_with_its_algorithm_and_sensor(name: str) 
     assert run.name == trainer["run"] == f"{algorithm}_{sensor}"
     assert run.train.max_steps == trainer["max_steps"]
     assert run.train.policy.net_arch == tuple(trainer["policy"]["net_arch"])
-    assert run.train.epsilon.initial == trainer["epsilon"]["initial"]
+    assert run.train.epsilon.initial == trainer.get("epsilon", {}).get("initial", 0.0)
+    assert run.train.reward_scale == trainer.get("reward_scale", 1.0)
     assert run.train.off_policy
     assert dict(run.env.sim_params) == raw["sim"]["ros__parameters"]
     assert run.env.sim_params["depth.enabled"] is (sensor == "depth")
@@ -72,17 +73,17 @@ def test_the_run_name_defaults_to_algorithm_and_sensor(tmp_path: Path) -> None:
 
 def test_later_files_win_key_by_key_in_every_section(tmp_path: Path) -> None:
     """As ROS merges several --params-file: only the keys the second file names change, nested
-    mappings included (``epsilon.decay`` changes, ``epsilon.initial`` stays)."""
+    mappings included (``curriculum.up`` changes, ``curriculum.down`` stays)."""
     over = write(tmp_path / "over.yaml", {
-        "trainer": {"learning_rate": 0.01, "epsilon": {"decay": 0.5}},
+        "trainer": {"learning_rate": 0.01, "curriculum": {"up": 0.9}},
         "nav_env": {"reward": {"goal": 500.0}},
         "sim": {"world_variant": 3},
     })
     base = load_run_config([LIDAR_TD3])
     merged = load_run_config([LIDAR_TD3, over])
     assert merged.train.learning_rate == 0.01
-    assert merged.train.epsilon.decay == 0.5
-    assert merged.train.epsilon.initial == base.train.epsilon.initial == 0.2
+    assert merged.train.curriculum.up == 0.9
+    assert merged.train.curriculum.down == base.train.curriculum.down == 0.3
     assert merged.train.max_steps == base.train.max_steps
     assert merged.env.reward.goal == 500.0
     assert merged.env.reward.collision == base.env.reward.collision
@@ -147,7 +148,7 @@ def test_a_bad_value_is_an_error_naming_its_key(key: str, value: Any) -> None:
 
 def test_ppo_refuses_epsilon_greedy() -> None:
     with pytest.raises(ConfigError, match=r"epsilon.initial: 0.2 is invalid; expected 0 for ppo"):
-        load_run_config([LIDAR_TD3], train={"algorithm": "ppo"})
+        load_run_config([LIDAR_TD3], train={"algorithm": "ppo", "epsilon.initial": 0.2})
     run = load_run_config([LIDAR_TD3], train={"algorithm": "ppo", "epsilon.initial": 0.0})
     assert run.train.algorithm == "ppo" and not run.train.off_policy
 
