@@ -19,8 +19,10 @@ from ros_helpers import sim_env
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config"
-LIDAR_TD3 = CONFIG / "train_goto_lidar_td3.yaml"
-DEPTH_TD3 = CONFIG / "train_goto_depth_td3.yaml"
+#: The previous shipped recipes (one env, ε-greedy, replay buffers in checkpoints, the pairs
+#: file): the fixtures of the trainer and tester tests, which the shipped files no longer are.
+LIDAR_TD3 = ROOT / "tests" / "agents" / "data" / "train_goto_lidar_td3_basic.yaml"
+DEPTH_TD3 = ROOT / "tests" / "agents" / "data" / "train_goto_depth_td3_basic.yaml"
 
 #: Trainer overrides (``--hyperparams``) for runs that take seconds: tiny nets, a short warm-up,
 #: a small buffer, one-episode evaluations, no TensorBoard.

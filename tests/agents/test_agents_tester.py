@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from agents_helpers import LIDAR_TD3, TrainedRun
+from agents_helpers import CONFIG, LIDAR_TD3, TrainedRun
 
 from pic4rl_agents import tester
 from pic4rl_agents.config import load_run_config
@@ -157,7 +157,7 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
     (["--baseline", "proportional", "--env-kwargs", "sensr:depth", "--ros-args",
       "--params-file", str(LIDAR_TD3)], "did you mean 'sensor'"),
     (["--baseline", "proportional", "--ros-args", "--params-file",
-      str(LIDAR_TD3.parent / "env_person_omni.yaml")],
+      str(CONFIG / "env_person_omni.yaml")],
      "the baselines drive goToPose (a goal and a (v, ω) action); this env's task is "
      "'personMonitoring'"),
 ])

@@ -55,7 +55,7 @@ def test_pairs_any_draws_the_simulators_pairs_and_a_pairs_file_is_named(
 
     code, err = run_main(["--episodes", "1", "--bags", str(tmp_path), "--run", "d", *SHORT])
     assert code == 0, err
-    named = Path(LIDAR_TD3).parent / "goals_indoor_train.json"  # its params file's episodes.file
+    named = (Path(LIDAR_TD3).parent / "../../../config/goals_indoor_train.json").resolve()
     assert f"episodes: pairs file {named}" in err
 
 

@@ -126,7 +126,7 @@ def test_the_documented_test_defaults_are_the_parsers():
 # -- shipped files, algorithms, baselines, test pairs ------------------------------------------
 
 
-def test_every_training_file_is_named_with_its_run_algorithm_sensor_and_steps(doc):
+def test_every_training_file_is_named_with_its_run_algorithm_sensor_and_budget(doc):
     files = sorted(f"config/{p.name}" for p in (ROOT / "config").glob("train_*.yaml"))
     assert len(files) >= 4
     rows = table_rows(section(doc, "## Quick start"))
@@ -134,10 +134,10 @@ def test_every_training_file_is_named_with_its_run_algorithm_sensor_and_steps(do
     assert not missing, f"docs/agents.md's quick-start table does not name {missing}"
     for file in files:
         run = load_run_config([ROOT / file])
-        run_name, algorithm, sensor, steps = (c.strip("`") for c in rows[file][:4])
+        run_name, algorithm, sensor, budget = (c.strip("`") for c in rows[file][:4])
         assert (run_name, algorithm, sensor) == (run.name, run.train.algorithm,
                                                  run.env.sensor), file
-        assert int(steps.replace(",", "")) == run.train.max_steps, file
+        assert budget == f"{run.train.max_wall_s / 60:g} min", file
     stale = sorted(set(re.findall(r"config/train_[a-z_]+\.yaml", doc)) - set(files))
     assert not stale, f"docs/agents.md names training files that do not exist: {stale}"
 
