@@ -32,8 +32,8 @@ import numpy as np
 from _sim import start_sim, stop_sim
 
 import pic4rl_bridge  # noqa: F401 - registers the envs
-from pic4rl_sim.engine import Engine
-from pic4rl_sim.geometry import Twist2D
+from pic4rl_sim.engine.core import Engine
+from pic4rl_sim.engine.geometry import Twist2D
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "env_goto_lidar.yaml"
 ENV_ID = "pic4rl/GoToPoseLidar-v0"

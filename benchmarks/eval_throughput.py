@@ -10,7 +10,7 @@ bag as ``pic4rl-test`` records it, at most ``--max-steps`` steps:
 - ROS 2 episodes: the same over the ``sim`` node in another process (lockstep);
 - DWA alone: ``DwaController.command`` over the frames of those episodes, replayed, against
   the in-process env's own stepping rate (recording on, DWA's time excluded);
-- shortest path: ``pic4rl_sim.paths.shortest_path_length`` for the episodes' pairs, with a
+- shortest path: ``pic4rl_sim.engine.paths.shortest_path_length`` for the episodes' pairs, with a
   planner built for each (cold) and with the cached one (warm).
 
 Episode loops run interleaved, best of ``--repeat``. Target (docs/performance.md): DWA
@@ -35,7 +35,7 @@ from _sim import start_sim, stop_sim
 from pic4rl_bridge.baselines import DwaController, make_baseline
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.frame import SensorFrame
-from pic4rl_sim import paths
+from pic4rl_sim.engine import paths
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "env_goto_lidar.yaml"
 

@@ -31,7 +31,7 @@ from pic4rl_bridge.config import (
     read_params_file,
 )
 from pic4rl_bridge.errors import ConfigError, require
-from pic4rl_sim.sampling import PAIR_KINDS
+from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 TRAINER_NODE = "trainer"
 ENV_NODE = "nav_env"

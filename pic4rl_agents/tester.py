@@ -37,7 +37,7 @@ import numpy as np
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
-from pic4rl_sim.sampling import PAIR_KINDS
+from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from .config import (
     ENV_NODE,

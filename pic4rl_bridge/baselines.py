@@ -19,7 +19,7 @@ import numpy as np
 from .config import DwaConfig, EnvConfig, TaskName
 from .errors import ConfigError
 from .frame import SensorFrame
-from .robot import RobotInfo
+from .robot_info import RobotInfo
 from .tasks.collision import footprint_clearance, sensed_points
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
-from pic4rl_sim.sampling import PAIR_KINDS
+from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from .errors import ConfigError, require, unknown_key
 
@@ -163,7 +163,7 @@ class EpisodesConfig:
     starting_goal_range_m: float = 2.9  # ... within ± this of the initial pose in x and y
     max_attempts: int = 20  # goals redrawn when the simulator rejects one
     ordered: bool = False  # walk the file's pairs in order (PIC4rl-gym's testing mode)
-    # Sampled pairs (no file): a kind of pic4rl_sim.sampling.PAIR_KINDS, any | paper; 0 below
+    # Sampled pairs (no file): a kind of pic4rl_sim.engine.sampling.PAIR_KINDS, any | paper; 0 below
     # keeps the kind's value. Other than plain "any", the env draws the pair (with a path check).
     pair_kind: str = "any"
     min_distance_m: float = 0.0  # straight start-goal distance at least (m)

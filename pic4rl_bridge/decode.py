@@ -10,7 +10,7 @@ import sys
 from typing import Any
 
 import numpy as np
-from pic4rl_sim.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from .errors import TransportError
 from .frame import ScanData, yaw_from_quaternion

@@ -25,15 +25,15 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.geometry import Pose2D
-from pic4rl_sim.sampling import PairKind
+from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
 from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
-from .robot import Scenario
+from .robot_info import Scenario
 from .tasks import make_task
 from .tasks.base import EpisodeContext, Judgement, Outcome
 from .transport import EpisodeRequest, RawMessage, Transport

@@ -7,7 +7,7 @@ curriculum, central area first, obstacles after. Without a file the simulator sa
 pair from the episode's seed. The schedule draws everything from the caller's rng, so one seed
 gives one sequence of episodes.
 
-Pairs of a kind (``episodes.pair_kind``; ``pic4rl_sim.sampling.PAIR_KINDS``) other than plain
+Pairs of a kind (``episodes.pair_kind``; ``pic4rl_sim.engine.sampling.PAIR_KINDS``) other than plain
 ``any`` are drawn here, by ``PairSampler`` from the episode's seed, and sent to the simulator
 as an explicit start and goal: both transports then run the same pair, and the simulator's own
 sampling stays as it was.
@@ -26,18 +26,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pic4rl_sim.errors import SimError
-from pic4rl_sim.geometry import Pose2D
-from pic4rl_sim.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
+from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_sim.engine.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
 
 from .config import EpisodesConfig
 from .errors import ConfigError
 from .transport import EpisodeRequest
 
 if TYPE_CHECKING:
-    from pic4rl_sim.paths import PathPlanner
-    from pic4rl_sim.world import WorldSpec
+    from pic4rl_sim.engine.paths import PathPlanner
+    from pic4rl_sim.engine.world_spec import WorldSpec
 
-    from .robot import Scenario
+    from .robot_info import Scenario
 
 _SEED_END = 2**31 - 1
 
@@ -242,7 +242,7 @@ class PairSampler:
     @property
     def planner(self) -> PathPlanner:
         if self._planner is None:
-            from pic4rl_sim.paths import planner_for
+            from pic4rl_sim.engine.paths import planner_for
 
             self._planner = planner_for(self.world, robot_radius_m=self.robot_radius_m)
         return self._planner

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from pic4rl_sim.geometry import Pose2D, Twist2D, yaw_to_quaternion
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D, yaw_to_quaternion
 
 
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:

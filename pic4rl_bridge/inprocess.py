@@ -5,7 +5,7 @@ It mirrors the sim node step for step: a reset advances sim time one control per
 every sensor once; a step tracks the command for one control period, then reads every sensor
 once. Values pass through the same float32 buffers and quaternions as the node's messages, so
 the frames equal the ROS transport's bit for bit. When recording, it builds the node's own
-messages (``pic4rl_sim.messages``), decodes the frame from them and hands them to the tap
+messages (``pic4rl_sim.node.messages``), decodes the frame from them and hands them to the tap
 serialized, so its bags equal the node's too.
 """
 
@@ -14,15 +14,15 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pic4rl_sim.engine import Engine
+from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.errors import SimError
-from pic4rl_sim.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from . import decode
 from .config import EnvConfig
 from .errors import ConfigError, EpisodeRejected
 from .frame import ScanData, SensorFrame, as_published
-from .robot import Scenario
+from .robot_info import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")
@@ -129,7 +129,7 @@ class _MessageWriter:
 
     def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
         from geometry_msgs.msg import Twist
-        from pic4rl_sim.messages import StateMessages, goal_pose
+        from pic4rl_sim.node.messages import StateMessages, goal_pose
         from rclpy.serialization import serialize_message
 
         self._engine = engine

@@ -50,13 +50,13 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
 from visualization_msgs.msg import MarkerArray
 
-from pic4rl_sim.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from . import decode
 from .config import EnvConfig, StepMode
 from .errors import ConfigError, EpisodeRejected, TransportError
 from .frame import SensorFrame
-from .robot import Scenario
+from .robot_info import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)
@@ -206,7 +206,7 @@ class RosTransport(Transport):
     def _subscribe_status(self) -> None:
         """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
         physics diverged and the robot was put back at its start."""
-        from pic4rl_sim.messages import PHYSICS_STATUS
+        from pic4rl_sim.node.messages import PHYSICS_STATUS
 
         entry = _Topic("diagnostics", DiagnosticArray)
 

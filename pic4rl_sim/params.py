@@ -17,12 +17,12 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
-from .engine import EngineConfig
+from .engine.core import EngineConfig
 from .errors import ConfigError, require, unknown_key
-from .geometry import Pose2D
-from .robots import DepthCameraSpec, LidarSpec, RobotSpec, load_robot
-from .world import WorldSpec
-from .worlds import GENERATORS, generator_params, make_world
+from .engine.geometry import Pose2D
+from .engine.robot_specs import DepthCameraSpec, LidarSpec, RobotSpec, load_robot
+from .engine.world_spec import WorldSpec
+from .engine.world_generators import GENERATORS, generator_params, make_world
 
 MAX_SEED = 2**31 - 1
 

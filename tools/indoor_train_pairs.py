@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pic4rl_sim.robots import load_robot
-from pic4rl_sim.sampling import sample_start_goal
-from pic4rl_sim.worlds import make_world
+from pic4rl_sim.engine.robot_specs import load_robot
+from pic4rl_sim.engine.sampling import sample_start_goal
+from pic4rl_sim.engine.world_generators import make_world
 
 OUT = Path(__file__).resolve().parents[1] / "config" / "goals_indoor_train.json"
 COMMENT = ("Training start-goal pairs of the indoor world (world_variant 0) for the Jackal: "

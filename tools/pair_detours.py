@@ -17,9 +17,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from pic4rl_bridge.episodes import load_goals_and_poses
-from pic4rl_sim.paths import PathPlanner
-from pic4rl_sim.robots import load_robot
-from pic4rl_sim.worlds import make_world
+from pic4rl_sim.engine.paths import PathPlanner
+from pic4rl_sim.engine.robot_specs import load_robot
+from pic4rl_sim.engine.world_generators import make_world
 
 
 def detours(path: str, *, world: str = "indoor", variant: int = 0, robot: str = "jackal",

@@ -6,11 +6,11 @@ from typing import TYPE_CHECKING
 
 from ..config import EnvConfig, SensorName, TaskName
 from ..errors import ConfigError
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Outcome, Task
 
 if TYPE_CHECKING:
-    from pic4rl_sim.world import WorldSpec
+    from pic4rl_sim.engine.world_spec import WorldSpec
 
 __all__ = ["EpisodeContext", "Judgement", "Outcome", "Task", "make_task"]
 

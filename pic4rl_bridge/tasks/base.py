@@ -16,11 +16,11 @@ from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 
 
 class Outcome(str, Enum):

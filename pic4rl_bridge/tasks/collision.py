@@ -12,11 +12,11 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from pic4rl_sim.geometry import Footprint, Pose2D
+from pic4rl_sim.engine.geometry import Footprint, Pose2D
 
 from ..config import EnvConfig
 from ..frame import ScanData, SensorFrame
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 
 
 def _to_base(forward: np.ndarray, left: np.ndarray, mount: Pose2D) -> np.ndarray:

@@ -14,11 +14,11 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.geometry import Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Outcome, Task
 from .collision import assess
 from .observations import (

@@ -12,7 +12,7 @@ import math
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.geometry import Pose2D, wrap_angle
+from pic4rl_sim.engine.geometry import Pose2D, wrap_angle
 
 from ..config import DepthObsConfig
 

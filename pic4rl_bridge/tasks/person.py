@@ -12,11 +12,11 @@ import math
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.geometry import Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Outcome, Task
 from .collision import assess
 from .observations import MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors, target_polar

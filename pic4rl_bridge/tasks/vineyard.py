@@ -13,12 +13,12 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from pic4rl_sim.geometry import Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..errors import ConfigError
 from ..frame import SensorFrame
-from ..robot import RobotInfo
+from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Outcome, Task
 from .collision import assess
 from .goto import planar_action_space, planar_command

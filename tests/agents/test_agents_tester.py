@@ -26,10 +26,10 @@ from pic4rl_agents.tester import DEFAULT_PAIRS, AgentSpec
 from pic4rl_bridge.config import load_env_config
 from pic4rl_metrics.aggregate import aggregate
 from pic4rl_metrics.batch import MetricsResult, compute
-from pic4rl_sim.engine import EngineConfig
-from pic4rl_sim.robots import JACKAL
-from pic4rl_sim.sampling import check_free
-from pic4rl_sim.worlds import make_world
+from pic4rl_sim.engine.core import EngineConfig
+from pic4rl_sim.engine.robot_specs import JACKAL
+from pic4rl_sim.engine.sampling import check_free
+from pic4rl_sim.engine.world_generators import make_world
 
 SHORT = ["--env-kwargs", "episode_max_steps:100", "--no-progress"]
 PAIRS = json.loads(DEFAULT_PAIRS.read_text())

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from pic4rl_sim.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.baselines import DwaController, make_baseline
@@ -24,7 +24,7 @@ from pic4rl_bridge.config import DwaConfig, EnvConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.frame import ScanData, SensorFrame
-from pic4rl_bridge.robot import RobotInfo
+from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks.goto import planar_command
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 import yaml
-from pic4rl_sim.geometry import Footprint, Pose2D
+from pic4rl_sim.engine.geometry import Footprint, Pose2D
 
 from pic4rl_bridge.config import (
     CONTRACT_TOPICS,
@@ -22,7 +22,7 @@ from pic4rl_bridge.config import (
     param_names,
 )
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.robot import Scenario
+from pic4rl_bridge.robot_info import Scenario
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIGS = sorted((REPO / "config").glob("env_*.yaml"))

@@ -21,8 +21,8 @@ from pic4rl_bridge.episodes import (
 )
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics.facts import parse_facts
-from pic4rl_sim.paths import planner_for
-from pic4rl_sim.sampling import PAIR_KINDS
+from pic4rl_sim.engine.paths import planner_for
+from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 REPO = Path(__file__).resolve().parents[2]
 LIDAR_CONFIG = REPO / "config" / "env_goto_lidar.yaml"

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_sim.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Pose2D
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.tasks.observations import (clipped_action, depth_observation, depth_space,

@@ -20,8 +20,8 @@ from pic4rl_metrics.facts import Mount
 from pic4rl_metrics.metrics import scan_clearance
 from pic4rl_metrics.series import ScanSeries
 from pic4rl_metrics.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
-from pic4rl_sim.geometry import Footprint as SimFootprint
-from pic4rl_sim.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Footprint as SimFootprint
+from pic4rl_sim.engine.geometry import Pose2D
 from world_helpers import walled_square_mjcf
 
 REAL_BAGS = Path(__file__).resolve().parents[2].parent / "shared" / "real_bags"

@@ -15,15 +15,15 @@ from typing import Any
 
 import pytest
 
-from pic4rl_sim.model import WHEEL_GRIP, yaw_inertia_kg_m2
+from pic4rl_sim.engine.model import WHEEL_GRIP, yaw_inertia_kg_m2
 from pic4rl_sim.params import ParamSpec, parameter_table
-from pic4rl_sim.robots import BUILT_IN, JACKAL, Drive, RobotSpec
-from pic4rl_sim.sensors import STANDARD_GRAVITY_M_S2
-from pic4rl_sim.worlds import GENERATORS
+from pic4rl_sim.engine.robot_specs import BUILT_IN, JACKAL, Drive, RobotSpec
+from pic4rl_sim.engine.sensors import STANDARD_GRAVITY_M_S2
+from pic4rl_sim.engine.world_generators import GENERATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "sim.md"
-NODE_SOURCE = ROOT / "pic4rl_sim" / "node.py"
+NODE_SOURCE = ROOT / "pic4rl_sim" / "node" / "sim_node.py"
 CREATE_CALLS = frozenset({"create_publisher", "create_subscription", "create_service",
                           "create_client"})
 # The sim's interfaces as /work/shared/DESIGN.md lists them. The names parsed from node.py must

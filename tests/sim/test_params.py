@@ -11,7 +11,7 @@ import sys
 import pytest
 
 from pic4rl_sim.errors import ConfigError
-from pic4rl_sim.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.params import (
     ROBOT,
     ClockMode,
@@ -22,8 +22,8 @@ from pic4rl_sim.params import (
     parse_start,
     resolve,
 )
-from pic4rl_sim.robots import BUILT_IN, BURGER, JACKAL, OMNI
-from pic4rl_sim.worlds import GENERATORS, generator_params
+from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI
+from pic4rl_sim.engine.world_generators import GENERATORS, generator_params
 
 RCLPY_OWN = ("use_sim_time", "start_type_description_service")
 

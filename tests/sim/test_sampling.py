@@ -10,10 +10,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.geometry import Pose2D
-from pic4rl_sim.sampling import check_free, sample_start_goal
-from pic4rl_sim.world import Box, WorldSpec
-from pic4rl_sim.worlds import make_world
+from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_sim.engine.sampling import check_free, sample_start_goal
+from pic4rl_sim.engine.world_spec import Box, WorldSpec
+from pic4rl_sim.engine.world_generators import make_world
 
 WORLDS = {kind: make_world(kind, seed=0) for kind in ("indoor", "obstacles", "person", "vineyard")}
 

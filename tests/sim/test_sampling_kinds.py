@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.paths import PathPlanner
-from pic4rl_sim.robots import JACKAL
-from pic4rl_sim.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
-from pic4rl_sim.world import Box, WorldSpec
-from pic4rl_sim.worlds import make_world
+from pic4rl_sim.engine.paths import PathPlanner
+from pic4rl_sim.engine.robot_specs import JACKAL
+from pic4rl_sim.engine.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
+from pic4rl_sim.engine.world_spec import Box, WorldSpec
+from pic4rl_sim.engine.world_generators import make_world
 
 INDOOR = make_world("indoor", seed=0)
 RADIUS = JACKAL.footprint.bounding_radius_m

@@ -10,7 +10,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
 PACKAGE = REPO / "pic4rl_sim"
-ROS_MODULES = {"node.py", "messages.py"}  # the only places that may import rclpy and messages
+ROS_PACKAGE = "node"  # pic4rl_sim/node/: the only place that may import rclpy and messages
 ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "rosgraph_msgs",
              "visualization_msgs", "rcl_interfaces", "builtin_interfaces")
 NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_metrics", "pic4rl_bridge",
@@ -28,12 +28,13 @@ def imported_roots(path: Path) -> set[str]:
 
 
 def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> None:
-    modules = sorted(PACKAGE.glob("*.py"))
-    assert {p.name for p in modules} >= {"engine.py", "node.py", "sensors.py"}
+    modules = sorted(PACKAGE.rglob("*.py"))
+    names = {str(p.relative_to(PACKAGE)) for p in modules}
+    assert names >= {"engine/core.py", "node/sim_node.py", "engine/sensors.py"}
     for path in modules:
         roots = imported_roots(path)
         assert not roots & set(NEVER), f"{path.name} imports {sorted(roots & set(NEVER))}"
-        if path.name not in ROS_MODULES:
+        if path.relative_to(PACKAGE).parts[0] != ROS_PACKAGE:
             ros = sorted(roots & set(ROS_ROOTS))
             assert not ros, f"{path.name} imports {ros}"
 
@@ -41,7 +42,7 @@ def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> N
 def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None:
     code = (
         "import json, sys\n"
-        "import pic4rl_sim.engine, pic4rl_sim.params, pic4rl_sim.worlds\n"
+        "import pic4rl_sim.engine.core, pic4rl_sim.params, pic4rl_sim.engine.world_generators\n"
         f"heavy = {ROS_ROOTS + NEVER!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
         "print(json.dumps('mujoco' in sys.modules))\n"

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.world import Box, Cylinder, WorldSpec, clearance
-from pic4rl_sim.worlds import (
+from pic4rl_sim.engine.world_spec import Box, Cylinder, WorldSpec, clearance
+from pic4rl_sim.engine.world_generators import (
     GENERATORS,
     PARAM_DOCS,
     generator_params,

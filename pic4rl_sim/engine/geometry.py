@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from .errors import require
+from ..errors import require
 
 
 class Pose2D(NamedTuple):

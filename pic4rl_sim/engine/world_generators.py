@@ -17,9 +17,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from .errors import ConfigError, WorldError, require, unknown_key
+from ..errors import ConfigError, WorldError, require, unknown_key
 from .geometry import Pose2D
-from .world import Box, Cylinder, PersonSpec, WorldSpec, clearance
+from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 
 WALL_THICKNESS_M = 0.1
 WALL_HEIGHT_M = 1.0

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from .geometry import Pose2D, Twist2D, wrap_angle, yaw_to_quaternion
-from .robots import DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
+from .robot_specs import DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
 
 STANDARD_GRAVITY_M_S2 = 9.80665
 # ROS reads a zero covariance as "unknown"; an exact (noise-free) quantity gets this instead.

@@ -65,11 +65,11 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
 from visualization_msgs.msg import MarkerArray
 
-from .engine import Engine, StepResult, limit_command
-from .errors import ConfigError, WorldError
-from .geometry import Twist2D
+from ..engine.core import Engine, StepResult, limit_command
+from ..errors import ConfigError, WorldError
+from ..engine.geometry import Twist2D
 from .messages import PHYSICS_STATUS, StateMessages, goal_pose, world_markers
-from .params import (
+from ..params import (
     MAX_SEED,
     ROBOT,
     ClockConfig,
@@ -83,9 +83,9 @@ from .params import (
     parameter_table,
     resolve,
 )
-from .robots import load_robot
-from .sampling import check_free
-from .world import WorldSpec
+from ..engine.robot_specs import load_robot
+from ..engine.sampling import check_free
+from ..engine.world_spec import WorldSpec
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
               ParamType.DOUBLE: Parameter.Type.DOUBLE, ParamType.STRING: Parameter.Type.STRING,

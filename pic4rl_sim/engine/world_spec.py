@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import require
+from ..errors import require
 from .geometry import Pose2D
 
 

@@ -13,15 +13,15 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
-from pic4rl_sim.geometry import Footprint, Pose2D
-from pic4rl_sim.robots import Drive, RobotSpec, load_robot
+from pic4rl_sim.engine.geometry import Footprint, Pose2D
+from pic4rl_sim.engine.robot_specs import Drive, RobotSpec, load_robot
 
 from .config import EnvConfig
 from .errors import ConfigError
 
 if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section is used
     from pic4rl_sim.params import SimConfig
-    from pic4rl_sim.world import WorldSpec
+    from pic4rl_sim.engine.world_spec import WorldSpec
 
 
 @dataclass(frozen=True)

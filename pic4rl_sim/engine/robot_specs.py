@@ -17,7 +17,7 @@ from typing import Any, TypeVar
 
 import yaml
 
-from .errors import ConfigError, require, unknown_key
+from ..errors import ConfigError, require, unknown_key
 from .geometry import Footprint
 
 

@@ -15,13 +15,13 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from .errors import WorldError, require
+from ..errors import WorldError, require
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
-from .robots import Drive, RobotSpec
+from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
 from .sensors import DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
-from .world import WorldSpec
+from .world_spec import WorldSpec
 
 log = logging.getLogger(__name__)
 

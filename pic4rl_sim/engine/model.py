@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import mujoco
 
-from .errors import WorldError
-from .robots import Drive, RobotSpec
+from ..errors import WorldError
+from .robot_specs import Drive, RobotSpec
 from .sensors import STANDARD_GRAVITY_M_S2
-from .world import WorldSpec
+from .world_spec import WorldSpec
 
 ROBOT_BODY = "pic4rl_robot"
 PERSON_BODY = "pic4rl_person"

@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import WorldError, require
+from ..errors import WorldError, require
 from .geometry import Pose2D
-from .world import WorldSpec
+from .world_spec import WorldSpec
 
 if TYPE_CHECKING:
     from .paths import PathPlanner

@@ -7,7 +7,7 @@ LiDAR ranges and depth pixels are written into the messages' own buffers through
 Frames: ``world`` is the fixed frame of the world's geometry, goal, person and ground truth;
 ``odom`` is wheel odometry's frame, equal to ``world`` when an episode starts (the estimate
 starts at the true start pose, then drifts with the odometry's errors); sensors carry the
-frame ids of ``pic4rl_sim.sensors``. No TF is published (tf2_msgs is not on PyPI).
+frame ids of ``pic4rl_sim.engine.sensors``. No TF is published (tf2_msgs is not on PyPI).
 """
 
 from __future__ import annotations
@@ -24,10 +24,10 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from .engine import Engine
-from .geometry import Pose2D, yaw_to_quaternion
-from .sensors import EXACT_VARIANCE
-from .world import WorldSpec
+from ..engine.core import Engine
+from ..engine.geometry import Pose2D, yaw_to_quaternion
+from ..engine.sensors import EXACT_VARIANCE
+from ..engine.world_spec import WorldSpec
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
