@@ -43,12 +43,11 @@ from .config import (
     ENV_NODE,
     RunConfig,
     beside,
-    free_path,
     load_run_config,
     parse_overrides,
-    run_config_file,
 )
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
+from .runs import free_path, run_config_file
 
 #: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
 DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"

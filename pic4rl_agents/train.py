@@ -39,12 +39,11 @@ from .config import (
     EvalConfig,
     RunConfig,
     TrainConfig,
-    free_path,
     load_run_config,
     parse_overrides,
-    run_config_file,
 )
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
+from .runs import free_path, run_config_file
 
 _CHECKPOINT = re.compile(r"^model_(\d+)_steps\.zip$")
 
