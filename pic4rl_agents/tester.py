@@ -35,14 +35,13 @@ from typing import Any
 import numpy as np
 
 from pic4rl_bridge.baselines import BASELINES, check_fits
-from pic4rl_bridge.config import node_section, read_params_file
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
+from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from .config import (
     ENV_NODE,
     RunConfig,
-    beside,
     load_run_config,
     parse_overrides,
 )
@@ -84,9 +83,9 @@ def _test_pairs(ros: RosArgs, env_overrides: dict[str, Any]) -> str | None:
     """The ``episodes.file`` named at test time (params files, then overrides), if any."""
     pairs = None
     for path in ros.params_files:
-        section = node_section(read_params_file(path), ENV_NODE, source=path) or {}
+        section = params_file.node_section(params_file.read(path), ENV_NODE, source=path) or {}
         if section.get("episodes.file"):
-            pairs = beside(section["episodes.file"], Path(path))
+            pairs = params_file.beside(section["episodes.file"], Path(path))
     return env_overrides.get("episodes.file", pairs)
 
 

@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from pic4rl_bridge.config import EnvConfig, EpisodesConfig, dataclass_params, param_names
+from pic4rl_bridge.config import EnvConfig, EpisodesConfig
+from pic4rl_sim.schema import param_names, to_params
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
 
 from .config import (
@@ -105,7 +106,7 @@ def route_params(params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]
         elif key in env_keys:
             env[key] = value
         else:
-            raise unknown_key(key, {**train_keys, **env_keys}, where="-p parameters")
+            raise unknown_key(key, (*train_keys, *env_keys), where="-p parameters")
     return train, env
 
 
@@ -145,7 +146,7 @@ def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
     """The evaluation env of a run whose env is ``env``: in process, not recording, and every
     ``episodes.*`` key back at its default (no training pairs, no curriculum) but
     ``episodes.pair_kind``, the evaluation's: pairs sampled from the seed, like a test's."""
-    defaults = {f"episodes.{k}": v for k, v in dataclass_params(EpisodesConfig()).items()}
+    defaults = {f"episodes.{k}": v for k, v in to_params(EpisodesConfig()).items()}
     return env.replace(**{**defaults, "episodes.pair_kind": evaluation.pair_kind,
                           "transport": "inprocess", "record.enabled": False})
 

@@ -16,7 +16,8 @@ class SimError(Exception):
 
 
 class ConfigError(SimError):
-    """A robot, world, sensor or node parameter is unknown or invalid."""
+    """A parameter (of any node: sim, env, trainer), a robot, a world, a sensor or a file they
+    name is unknown or invalid."""
 
 
 class WorldError(SimError):

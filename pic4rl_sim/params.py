@@ -1,50 +1,52 @@
 """The sim node's parameters as data, and the typed configuration built from their values.
 
-One table (``parameter_table``) gives each parameter its name, type, default, description and
-range; the node declares them from it and ``build_config`` turns a full set of values into
-frozen configs. Everything here is pure Python, so the rules are unit-tested without ROS.
-Sensor defaults come from the chosen robot, hence the table is a function of the robot.
+``SimParams`` describes the node's own parameters (``pic4rl_sim.schema``: description, unit,
+range); the sensor parameters are the fields of the robot's sensor specs, with the robot's
+values as defaults, and the world parameters those of the chosen generator, so the table is a
+function of the robot (``parameter_table``). The node declares them from it and
+``build_config`` turns a full set of values into frozen configs. Pure Python: the rules are
+unit-tested without ROS.
 """
 
 from __future__ import annotations
 
-import array
 import dataclasses
 import difflib
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from enum import Enum
 from typing import Any
 
 from .engine.core import EngineConfig
-from .errors import ConfigError, require, unknown_key
 from .engine.geometry import Pose2D
-from .engine.robot_specs import DepthCameraSpec, LidarSpec, RobotSpec, load_robot
-from .engine.world_spec import WorldSpec
+from .engine.robot_specs import (
+    DepthCameraSpec,
+    ImuSpec,
+    LidarSpec,
+    OdometrySpec,
+    RobotSpec,
+    load_robot,
+)
 from .engine.world_generators import GENERATORS, generator_params, make_world
+from .engine.world_spec import WorldSpec
+from .errors import ConfigError, require, unknown_key
+from .schema import (
+    ParamEnum,
+    ParamSpec,
+    ParamType,
+    Range,
+    check,
+    from_params,
+    param,
+    param_type,
+    specs,
+)
 
 MAX_SEED = 2**31 - 1
+_SEED = Range(0, MAX_SEED)
 
 
-class ParamType(str, Enum):
-    """The ROS 2 parameter types the node uses (names as in ``rclpy.Parameter.Type``)."""
-
-    BOOL = "BOOL"
-    INTEGER = "INTEGER"
-    DOUBLE = "DOUBLE"
-    STRING = "STRING"
-    DOUBLE_ARRAY = "DOUBLE_ARRAY"
-
-
-_PYTHON_TYPES = {bool: ParamType.BOOL, int: ParamType.INTEGER, float: ParamType.DOUBLE,
-                 str: ParamType.STRING}
-_EXPECTED = {ParamType.BOOL: "a bool", ParamType.INTEGER: "an integer",
-             ParamType.DOUBLE: "a number", ParamType.STRING: "a string",
-             ParamType.DOUBLE_ARRAY: "a list of numbers"}
-
-
-class ClockMode(str, Enum):
+class ClockMode(ParamEnum):
     """``lockstep``: each ``cmd_vel`` advances one control period; ``realtime``: a wall timer."""
 
     LOCKSTEP = "lockstep"
@@ -52,149 +54,80 @@ class ClockMode(str, Enum):
 
 
 @dataclass(frozen=True)
-class ParamSpec:
-    """One node parameter: ``range`` is inclusive (ROS ranges are); ``choices`` closes a string."""
+class SimParams:
+    """The sim node's own parameters (the ``sim:`` section, less sensors and world settings)."""
 
-    name: str
-    type: ParamType
-    default: Any
-    description: str
-    range: tuple[float, float] | None = None
-    choices: tuple[str, ...] = ()
+    robot: str = param("jackal", doc="built-in robot (jackal, husky, burger, omni) or the path "
+                       "of a robot YAML file")
+    world: str = param("indoor", doc=f"world generator ({', '.join(GENERATORS)}) or the path of "
+                       "an MJCF .xml file")
+    world_variant: int = param(0, doc="seed of the world generator: the same variant gives the "
+                               "same geometry", range=_SEED)
+    seed: int = param(0, doc="seed of the next episode (sampling and sensor noise); a "
+                      "reset_world without a new value uses the previous episode's seed + 1",
+                      range=_SEED)
+    start_pose: tuple[float, ...] = param((), doc="[x, y, yaw] (m, m, rad) of the robot in the "
+                                          "world frame at the next reset_world; empty = sampled "
+                                          "with clearance")
+    goal: tuple[float, ...] = param((), doc="[x, y] (m) of the goal in the world frame at the "
+                                    "next reset_world; empty = sampled")
+    clock_mode: ClockMode = param(ClockMode.LOCKSTEP, doc="lockstep: each cmd_vel advances one "
+                                  "control period; realtime: a wall-clock timer steps with the "
+                                  "latest command (applies immediately)")
+    real_time_factor: float = param(1.0, doc="realtime mode: simulated seconds per wall-clock "
+                                    "second, in (0, 1000] (applies immediately)",
+                                    range=Range(0.0, 1000.0, lo_open=True))
+    cmd_timeout_s: float = param(0.5, doc="realtime mode: a command older than this (sim time) "
+                                 "is replaced by a stop (applies immediately)",
+                                 range=Range(0.0, 3600.0))
+    physics_dt_s: float = param(EngineConfig.physics_dt_s, doc="MuJoCo time step, in (0, 0.05]",
+                                unit="s", range=Range(0.0, 0.05, lo_open=True))
+    control_dt_s: float = param(EngineConfig.control_dt_s, doc="control period: one cmd_vel in "
+                                "lockstep, one published set of sensor messages; a whole "
+                                "multiple of physics_dt_s", unit="s",
+                                range=Range(0.0, 10.0, lo_open=True))
+    clearance_m: float = param(EngineConfig.clearance_m, doc="free space around the footprint "
+                               "for sampled starts and goals", unit="m", range=Range(0.0, 100.0))
+    min_goal_distance_m: float = param(EngineConfig.min_goal_distance_m, doc="least distance "
+                                       "between a sampled start and goal", unit="m",
+                                       range=Range(0.0, 1000.0))
 
-    def check(self, value: Any) -> Any:
-        """``value`` in this parameter's type (an integer where a number is wanted becomes a
-        float), or ``ConfigError`` naming the key, the value and what was expected."""
-        typed = _coerce(self.type, value)
-        require(typed is not None, self.name, value, _EXPECTED[self.type])
-        value = typed
-        if self.range is not None:
-            lo, hi = self.range
-            require(lo <= value <= hi, self.name, value, f"a value in [{lo}, {hi}]")
-        if self.choices:
-            require(value in self.choices, self.name, value, f"one of {', '.join(self.choices)}")
-        return value
+    def __post_init__(self) -> None:
+        check(self)
 
 
-def _coerce(kind: ParamType, value: Any) -> Any:
-    """``value`` as ``kind``, or ``None`` when it is not one."""
-    is_int = isinstance(value, int) and not isinstance(value, bool)
-    if kind is ParamType.BOOL:
-        return value if isinstance(value, bool) else None
-    if kind is ParamType.INTEGER:
-        return value if is_int else None
-    if kind is ParamType.DOUBLE:
-        return float(value) if is_int or isinstance(value, float) else None
-    if kind is ParamType.STRING:
-        return value if isinstance(value, str) else None
-    if isinstance(value, (list, tuple, array.array)):
-        items = [_coerce(ParamType.DOUBLE, v) for v in value]
-        return None if any(v is None for v in items) else items
-    return None
-
-
-# -- the table ---------------------------------------------------------------------------------
-
-_ANY_M = (0.0, 1000.0)
-_SENSOR_DOCS: dict[str, tuple[str, tuple[float, float]]] = {
-    "lidar.beams": ("number of LiDAR beams", (1, 10_000)),
-    "lidar.fov_deg": ("LiDAR field of view, centred on the mount's forward axis (deg)",
-                      (0.0, 360.0)),
-    "lidar.range_min_m": ("LiDAR minimum range; closer returns read -inf (m)", _ANY_M),
-    "lidar.range_max_m": ("LiDAR maximum range; farther returns read +inf (m)", _ANY_M),
-    "lidar.noise_std_m": ("standard deviation of the Gaussian noise on each range (m)",
-                          (0.0, 10.0)),
-    "lidar.dropout_prob": ("probability that a beam is dropped (reads +inf)", (0.0, 1.0)),
-    "depth.width": ("depth image width (px)", (1, 4096)),
-    "depth.height": ("depth image height (px)", (1, 4096)),
-    "depth.hfov_deg": ("depth camera horizontal field of view (deg)", (0.0, 180.0)),
-    "depth.min_depth_m": ("depth camera minimum depth; closer pixels read -inf (m)", _ANY_M),
-    "depth.max_depth_m": ("depth camera maximum depth; farther pixels read +inf (m)", _ANY_M),
-    "depth.noise_std_m": ("standard deviation of the Gaussian noise on each pixel (m)",
-                          (0.0, 10.0)),
-    "imu.gyro_noise_std_rad_s": ("standard deviation of the gyro's white noise (rad/s)",
-                                 (0.0, 10.0)),
-    "imu.accel_noise_std_m_s2": ("standard deviation of the accelerometer's white noise (m/s^2)",
-                                 (0.0, 100.0)),
-    "odometry.linear_scale_error": ("systematic wheel-odometry error on distance "
-                                    "(0.02 = 2 % too far)", (-1.0, 1.0)),
-    "odometry.angular_scale_error": ("systematic wheel-odometry error on rotation", (-1.0, 1.0)),
-    "odometry.linear_noise_std": ("relative noise on each period's odometry displacement",
-                                  (0.0, 0.999)),
-    "odometry.angular_noise_std": ("relative noise on each period's odometry rotation",
-                                   (0.0, 0.999)),
-}
-
-ROBOT = ParamSpec("robot", ParamType.STRING, "jackal",
-                  "built-in robot (jackal, husky, burger, omni) or the path of a robot YAML file")
-
-_CORE = (
-    ParamSpec("world", ParamType.STRING, "indoor",
-              f"world generator ({', '.join(GENERATORS)}) or the path of an MJCF .xml file"),
-    ParamSpec("world_variant", ParamType.INTEGER, 0,
-              "seed of the world generator: the same variant gives the same geometry",
-              (0, MAX_SEED)),
-    ParamSpec("seed", ParamType.INTEGER, 0,
-              "seed of the next episode (sampling and sensor noise); a reset_world without a new "
-              "value uses the previous episode's seed + 1", (0, MAX_SEED)),
-    ParamSpec("start_pose", ParamType.DOUBLE_ARRAY, [],
-              "[x, y, yaw] (m, m, rad) of the robot in the world frame at the next reset_world; "
-              "empty = sampled with clearance"),
-    ParamSpec("goal", ParamType.DOUBLE_ARRAY, [],
-              "[x, y] (m) of the goal in the world frame at the next reset_world; empty = sampled"),
-    ParamSpec("clock_mode", ParamType.STRING, ClockMode.LOCKSTEP.value,
-              "lockstep: each cmd_vel advances one control period; realtime: a wall-clock timer "
-              "steps with the latest command (applies immediately)",
-              choices=tuple(m.value for m in ClockMode)),
-    ParamSpec("real_time_factor", ParamType.DOUBLE, 1.0,
-              "realtime mode: simulated seconds per wall-clock second, in (0, 1000] (applies "
-              "immediately)", (0.0, 1000.0)),
-    ParamSpec("cmd_timeout_s", ParamType.DOUBLE, 0.5,
-              "realtime mode: a command older than this (sim time) is replaced by a stop "
-              "(applies immediately)", (0.0, 3600.0)),
-    ParamSpec("physics_dt_s", ParamType.DOUBLE, EngineConfig.physics_dt_s,
-              "MuJoCo time step, in (0, 0.05] (s)", (0.0, 0.05)),
-    ParamSpec("control_dt_s", ParamType.DOUBLE, EngineConfig.control_dt_s,
-              "control period: one cmd_vel in lockstep, one published set of sensor messages; a "
-              "whole multiple of physics_dt_s (s)", (0.0, 10.0)),
-    ParamSpec("clearance_m", ParamType.DOUBLE, EngineConfig.clearance_m,
-              "free space around the footprint for sampled starts and goals (m)", (0.0, 100.0)),
-    ParamSpec("min_goal_distance_m", ParamType.DOUBLE, EngineConfig.min_goal_distance_m,
-              "least distance between a sampled start and goal (m)", (0.0, 1000.0)),
-)
+_CORE = specs(SimParams)
+ROBOT = _CORE[0]
 
 
 def _world_params() -> tuple[ParamSpec, ...]:
     """``world.<kind>.<param>`` for every parameter of every generator."""
-    specs = []
+    out = []
     for kind in GENERATORS:
         for name, (kind_type, default, doc) in generator_params(kind).items():
-            specs.append(ParamSpec(f"world.{kind}.{name}", _PYTHON_TYPES[kind_type], default,
-                                   f"{kind} world: {doc}"))
-    return tuple(specs)
+            out.append(ParamSpec(f"world.{kind}.{name}", param_type(kind_type)[0], default,
+                                 f"{kind} world: {doc}"))
+    return tuple(out)
 
 
 def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
-    """Sensor overrides, with the robot's own sensors as defaults (a sensor the robot lacks
-    defaults to the stock one, disabled)."""
-    defaults = {"lidar": robot.lidar or LidarSpec(), "depth": robot.depth or DepthCameraSpec(),
-                "imu": robot.imu, "odometry": robot.odometry}
-    specs = [
+    """Sensor overrides: the fields of the robot's sensor specs, with the robot's own sensors
+    as defaults (a sensor the robot lacks defaults to the stock one, disabled)."""
+    return (
         ParamSpec("lidar.enabled", ParamType.BOOL, robot.lidar is not None,
                   "whether the robot carries its LiDAR (publishes scan)"),
         ParamSpec("depth.enabled", ParamType.BOOL, robot.depth is not None,
                   "whether the robot carries its depth camera (publishes camera/depth/*)"),
-    ]
-    for name, (doc, bounds) in _SENSOR_DOCS.items():
-        sensor, field = name.split(".")
-        default = getattr(defaults[sensor], field)
-        specs.append(ParamSpec(name, _PYTHON_TYPES[type(default)], default, doc, bounds))
-    return tuple(specs)
+        *specs(LidarSpec, defaults=robot.lidar or LidarSpec(), prefix="lidar."),
+        *specs(DepthCameraSpec, defaults=robot.depth or DepthCameraSpec(), prefix="depth."),
+        *specs(ImuSpec, defaults=robot.imu, prefix="imu."),
+        *specs(OdometrySpec, defaults=robot.odometry, prefix="odometry."),
+    )
 
 
 def parameter_table(robot: RobotSpec) -> tuple[ParamSpec, ...]:
     """Every parameter of the node, ``robot`` first, with ``robot``'s sensors as defaults."""
-    return (ROBOT, *_CORE, *_world_params(), *_sensor_params(robot))
+    return (*_CORE, *_world_params(), *_sensor_params(robot))
 
 
 def resolve(table: Iterable[ParamSpec], overrides: Mapping[str, Any], *,
@@ -239,11 +172,6 @@ class ClockConfig:
     mode: ClockMode = ClockMode.LOCKSTEP
     real_time_factor: float = 1.0
     cmd_timeout_s: float = 0.5
-
-    def __post_init__(self) -> None:
-        require(0 < self.real_time_factor <= 1000, "real_time_factor", self.real_time_factor,
-                "a factor in (0, 1000]")
-        require(self.cmd_timeout_s >= 0, "cmd_timeout_s", self.cmd_timeout_s, "a time >= 0 s")
 
 
 @dataclass(frozen=True)
@@ -324,13 +252,20 @@ def build_world_choice(values: Mapping[str, Any]) -> WorldChoice:
 
 
 def build_clock(values: Mapping[str, Any]) -> ClockConfig:
-    """The clock parameters, which apply at once."""
-    return ClockConfig(ClockMode(values["clock_mode"]), values["real_time_factor"],
-                       values["cmd_timeout_s"])
+    """The clock parameters, which apply at once (checked against ``SimParams``' ranges)."""
+    core = _core(values)
+    return ClockConfig(core.clock_mode, core.real_time_factor, core.cmd_timeout_s)
+
+
+def _core(values: Mapping[str, Any]) -> SimParams:
+    """The node's own parameters of ``values``, typed and checked (open bounds included)."""
+    return from_params(SimParams, {spec.name: values[spec.name] for spec in _CORE},
+                       where="sim parameters")
 
 
 def build_config(values: Mapping[str, Any]) -> SimConfig:
     """A ``SimConfig`` from a full set of parameter values (``resolve``'s result)."""
+    _core(values)
     engine = EngineConfig(physics_dt_s=values["physics_dt_s"],
                           control_dt_s=values["control_dt_s"],
                           clearance_m=values["clearance_m"],

@@ -4,39 +4,16 @@ parameter rows as the docs write them, and reading Markdown sections, tables and
 from __future__ import annotations
 
 import re
-import typing
 from pathlib import Path
-from typing import Any
 
-from pic4rl_bridge.config import param_names
-
-TYPE_NAMES = {str: "string", int: "integer", float: "double", bool: "bool"}
-
-
-def literal(value: Any) -> str:
-    """A default as the doc writes it: YAML-like, floats as Python prints them."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(literal(v) for v in value) + "]"
-    if isinstance(value, str):
-        return value if value else '""'
-    return repr(value)
-
-
-def type_name(kind: Any) -> str:
-    """A parameter's type as ROS 2 names it (``double[]`` for a tuple of floats)."""
-    if typing.get_origin(kind) is tuple:
-        return TYPE_NAMES[typing.get_args(kind)[0]] + "[]"
-    return TYPE_NAMES[kind]
+from pic4rl_sim.schema import TYPE_NAMES, literal, specs
 
 
 def parameter_rows(cls: type) -> dict[str, tuple[str, str]]:
     """Every dotted parameter of the config dataclass ``cls`` → (type, `default`) as the code
     has them."""
-    defaults = cls().to_params()
-    return {name: (type_name(kind), f"`{literal(defaults[name])}`")
-            for name, kind in param_names(cls).items()}
+    return {spec.name: (TYPE_NAMES[spec.type], f"`{literal(spec.default)}`")
+            for spec in specs(cls)}
 
 
 def section(doc: str, heading: str) -> str:

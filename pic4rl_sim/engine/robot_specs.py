@@ -18,7 +18,10 @@ from typing import Any, TypeVar
 import yaml
 
 from ..errors import ConfigError, require, unknown_key
+from ..schema import FRACTION, NON_NEGATIVE, POSITIVE, Range, check, param
 from .geometry import Footprint
+
+_SCALE_ERROR = Range(-1.0, 1.0, lo_open=True, hi_open=True)
 
 
 class Drive(str, Enum):
@@ -28,41 +31,28 @@ class Drive(str, Enum):
     OMNI = "omni"
 
 
-def _positive(key: str, value: float) -> None:
-    require(math.isfinite(value) and value > 0, key, value, "a positive finite number")
-
-
-def _non_negative(key: str, value: float) -> None:
-    require(math.isfinite(value) and value >= 0, key, value, "a finite number >= 0")
-
-
-def _probability(key: str, value: float) -> None:
-    require(0.0 <= value < 1.0, key, value, "a probability in [0, 1)")
-
-
 @dataclass(frozen=True)
 class LidarSpec:
     """A planar LiDAR: ``beams`` rays over ``fov_deg`` centred on the mount's +x axis."""
 
-    beams: int = 360
-    fov_deg: float = 360.0
-    range_min_m: float = 0.1
-    range_max_m: float = 10.0
-    noise_std_m: float = 0.0
-    dropout_prob: float = 0.0
+    beams: int = param(360, doc="number of LiDAR beams", range=Range(1, 10_000))
+    fov_deg: float = param(360.0, doc="LiDAR field of view, centred on the mount's forward axis",
+                           unit="deg", range=Range(0.0, 360.0, lo_open=True))
+    range_min_m: float = param(0.1, doc="LiDAR minimum range; closer returns read -inf",
+                               unit="m", range=Range(0.0, 1000.0))
+    range_max_m: float = param(10.0, doc="LiDAR maximum range; farther returns read +inf",
+                               unit="m", range=Range(0.0, 1000.0, lo_open=True))
+    noise_std_m: float = param(0.0, doc="standard deviation of the Gaussian noise on each range",
+                               unit="m", range=Range(0.0, 10.0))
+    dropout_prob: float = param(0.0, doc="probability that a beam is dropped (reads +inf)",
+                                range=FRACTION)
     mount_xyz_m: tuple[float, float, float] = (0.0, 0.0, 0.3)
     mount_yaw_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        require(isinstance(self.beams, int) and 1 <= self.beams <= 10_000,
-                "lidar.beams", self.beams, "an integer in [1, 10000]")
-        require(0 < self.fov_deg <= 360, "lidar.fov_deg", self.fov_deg, "a value in (0, 360]")
-        _non_negative("lidar.range_min_m", self.range_min_m)
-        _positive("lidar.range_max_m", self.range_max_m)
+        check(self, "lidar.")
         require(self.range_min_m < self.range_max_m, "lidar.range_max_m", self.range_max_m,
                 f"more than range_min_m={self.range_min_m}")
-        _non_negative("lidar.noise_std_m", self.noise_std_m)
-        _probability("lidar.dropout_prob", self.dropout_prob)
 
     @property
     def angle_min_rad(self) -> float:
@@ -81,26 +71,23 @@ class LidarSpec:
 class DepthCameraSpec:
     """A pinhole depth camera; pixels hold depth along the optical axis (m, 32FC1)."""
 
-    width: int = 80
-    height: int = 60
-    hfov_deg: float = 87.0
-    min_depth_m: float = 0.1
-    max_depth_m: float = 10.0
-    noise_std_m: float = 0.0
+    width: int = param(80, doc="depth image width", unit="px", range=Range(1, 4096))
+    height: int = param(60, doc="depth image height", unit="px", range=Range(1, 4096))
+    hfov_deg: float = param(87.0, doc="depth camera horizontal field of view", unit="deg",
+                            range=Range(0.0, 180.0, lo_open=True, hi_open=True))
+    min_depth_m: float = param(0.1, doc="depth camera minimum depth; closer pixels read -inf",
+                               unit="m", range=Range(0.0, 1000.0))
+    max_depth_m: float = param(10.0, doc="depth camera maximum depth; farther pixels read +inf",
+                               unit="m", range=Range(0.0, 1000.0, lo_open=True))
+    noise_std_m: float = param(0.0, doc="standard deviation of the Gaussian noise on each pixel",
+                               unit="m", range=Range(0.0, 10.0))
     mount_xyz_m: tuple[float, float, float] = (0.2, 0.0, 0.4)
     mount_pitch_rad: float = 0.0
 
     def __post_init__(self) -> None:
-        for key in ("width", "height"):
-            value = getattr(self, key)
-            require(isinstance(value, int) and 1 <= value <= 4096,
-                    f"depth.{key}", value, "an integer in [1, 4096]")
-        require(0 < self.hfov_deg < 180, "depth.hfov_deg", self.hfov_deg, "a value in (0, 180)")
-        _non_negative("depth.min_depth_m", self.min_depth_m)
-        _positive("depth.max_depth_m", self.max_depth_m)
+        check(self, "depth.")
         require(self.min_depth_m < self.max_depth_m, "depth.max_depth_m", self.max_depth_m,
                 f"more than min_depth_m={self.min_depth_m}")
-        _non_negative("depth.noise_std_m", self.noise_std_m)
 
     @property
     def focal_px(self) -> float:
@@ -112,12 +99,13 @@ class DepthCameraSpec:
 class ImuSpec:
     """An IMU at the base: yaw rate and planar acceleration, with white noise."""
 
-    gyro_noise_std_rad_s: float = 0.0
-    accel_noise_std_m_s2: float = 0.0
+    gyro_noise_std_rad_s: float = param(0.0, doc="standard deviation of the gyro's white noise",
+                                        unit="rad/s", range=Range(0.0, 10.0))
+    accel_noise_std_m_s2: float = param(0.0, doc="standard deviation of the accelerometer's "
+                                        "white noise", unit="m/s^2", range=Range(0.0, 100.0))
 
     def __post_init__(self) -> None:
-        _non_negative("imu.gyro_noise_std_rad_s", self.gyro_noise_std_rad_s)
-        _non_negative("imu.accel_noise_std_m_s2", self.accel_noise_std_m_s2)
+        check(self, "imu.")
 
 
 @dataclass(frozen=True)
@@ -128,20 +116,17 @@ class OdometrySpec:
     happened); ``*_noise_std`` a relative white noise on each period's displacement.
     """
 
-    linear_scale_error: float = 0.0
-    angular_scale_error: float = 0.0
-    linear_noise_std: float = 0.0
-    angular_noise_std: float = 0.0
+    linear_scale_error: float = param(0.0, doc="systematic wheel-odometry error on distance "
+                                      "(0.02 = 2 % too far)", range=_SCALE_ERROR)
+    angular_scale_error: float = param(0.0, doc="systematic wheel-odometry error on rotation",
+                                       range=_SCALE_ERROR)
+    linear_noise_std: float = param(0.0, doc="relative noise on each period's odometry "
+                                    "displacement", range=FRACTION)
+    angular_noise_std: float = param(0.0, doc="relative noise on each period's odometry "
+                                     "rotation", range=FRACTION)
 
     def __post_init__(self) -> None:
-        for name in ("linear_scale_error", "angular_scale_error"):
-            value = getattr(self, name)
-            require(math.isfinite(value) and abs(value) < 1.0, f"odometry.{name}", value,
-                    "a fraction in (-1, 1)")
-        for name in ("linear_noise_std", "angular_noise_std"):
-            value = getattr(self, name)
-            require(math.isfinite(value) and 0.0 <= value < 1.0, f"odometry.{name}", value,
-                    "a fraction in [0, 1)")
+        check(self, "odometry.")
 
 
 @dataclass(frozen=True)
@@ -169,11 +154,12 @@ class RobotSpec:
         require(bool(self.name), "robot.name", self.name, "a non-empty name")
         for key in ("height_m", "mass_kg", "wheel_base_m", "wheel_radius_m", "max_linear_m_s",
                     "max_angular_rad_s", "max_linear_accel_m_s2", "max_angular_accel_rad_s2"):
-            _positive(f"robot.{key}", getattr(self, key))
-        _non_negative("robot.max_lateral_m_s", self.max_lateral_m_s)
-        if self.drive is Drive.OMNI:
-            _positive("robot.max_lateral_m_s", self.max_lateral_m_s)
-        else:
+            value = getattr(self, key)
+            require(value in POSITIVE, f"robot.{key}", value, POSITIVE.expected())
+        lateral = POSITIVE if self.drive is Drive.OMNI else NON_NEGATIVE
+        require(self.max_lateral_m_s in lateral, "robot.max_lateral_m_s", self.max_lateral_m_s,
+                lateral.expected())
+        if self.drive is not Drive.OMNI:
             require(self.max_lateral_m_s == 0, "robot.max_lateral_m_s", self.max_lateral_m_s,
                     "0 for a differential-drive robot")
 

@@ -18,6 +18,7 @@ import mujoco
 import numpy as np
 
 from ..errors import ConfigError, WorldError, require, unknown_key
+from ..schema import coerce, param_type
 from .geometry import Pose2D
 from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 
@@ -382,8 +383,6 @@ def world_from_mjcf(path: str | Path) -> WorldSpec:
     return WorldSpec(path.stem, bounds, tuple(boxes), tuple(cylinders), mjcf_path=path)
 
 
-_TYPE_WORDS = {int: "an integer", float: "a number", bool: "true or false"}
-
 GENERATORS: dict[str, Callable[..., WorldSpec]] = {
     "indoor": indoor, "obstacles": obstacles, "vineyard": vineyard, "person": person,
 }
@@ -410,10 +409,6 @@ def make_world(kind: str, *, seed: int = 0, **params: Any) -> WorldSpec:
     for name, value in params.items():
         if name not in known:
             raise unknown_key(name, known, where=f"world.{kind}")
-        want = known[name][0]
-        if want is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        require(isinstance(value, want) and (want is bool or not isinstance(value, bool)),
-                f"world.{kind}.{name}", value, _TYPE_WORDS[want])
+        value = coerce(f"world.{kind}.{name}", param_type(known[name][0])[0], value)
         typed[name] = value
     return GENERATORS[kind](seed, **typed)

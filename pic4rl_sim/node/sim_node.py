@@ -74,8 +74,6 @@ from ..params import (
     ROBOT,
     ClockConfig,
     ClockMode,
-    ParamSpec,
-    ParamType,
     SimConfig,
     WorldChoice,
     build_clock,
@@ -86,10 +84,13 @@ from ..params import (
 from ..engine.robot_specs import load_robot
 from ..engine.sampling import check_free
 from ..engine.world_spec import WorldSpec
+from ..schema import ParamSpec, ParamType
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
               ParamType.DOUBLE: Parameter.Type.DOUBLE, ParamType.STRING: Parameter.Type.STRING,
-              ParamType.DOUBLE_ARRAY: Parameter.Type.DOUBLE_ARRAY}
+              ParamType.DOUBLE_ARRAY: Parameter.Type.DOUBLE_ARRAY,
+              ParamType.INTEGER_ARRAY: Parameter.Type.INTEGER_ARRAY,
+              ParamType.STRING_ARRAY: Parameter.Type.STRING_ARRAY}
 _CLOCK_KEYS = frozenset({"clock_mode", "real_time_factor", "cmd_timeout_s"})
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,

@@ -20,7 +20,8 @@ import pytest
 from docs_helpers import anchors, literal, parameter_rows, section, table_rows
 
 from pic4rl_bridge import ENV_IDS
-from pic4rl_bridge.config import EnvConfig, load_env_config, param_names
+from pic4rl_bridge.config import EnvConfig, load_env_config
+from pic4rl_sim.schema import param_names
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "bridge.md"
@@ -142,7 +143,7 @@ def test_every_reward_term_is_in_its_tasks_table(doc, emitted):
         rows = set(table_rows(section(doc, f"### {TASK_SECTIONS[task]}")))
         assert terms == rows, (f"docs/bridge.md's {task} reward table has {sorted(rows)}; "
                                f"the task reports {sorted(terms)}")
-        unscaled = sorted(t for t in terms if f"reward.{t}" not in param_names())
+        unscaled = sorted(t for t in terms if f"reward.{t}" not in param_names(EnvConfig))
         assert not unscaled, f"{task}: reward terms without a reward.* scale: {unscaled}"
 
 

@@ -57,8 +57,8 @@ def _parameter_row(spec: ParamSpec, *, strip: str = "", limits: bool = True) -> 
     if limits:
         if spec.choices:
             cells.append(", ".join(f"`{c}`" for c in spec.choices))
-        elif spec.range is not None:
-            cells.append(f"`[{spec.range[0]}, {spec.range[1]}]`")
+        elif spec.bounds is not None:
+            cells.append(f"`{spec.bounds}`")  # open ends as the checks apply them
         else:
             cells.append("")
     cells.append(description)

@@ -101,7 +101,7 @@ def test_rclpy_own_parameters_are_not_unknown():
 @pytest.mark.parametrize(("name", "value", "expected"), [
     ("lidar.beams", 3.0, "an integer"),
     ("lidar.beams", True, "an integer"),
-    ("lidar.enabled", 1, "a bool"),
+    ("lidar.enabled", 1, "true or false"),
     ("world", 3, "a string"),
     ("start_pose", "here", "a list of numbers"),
     ("goal", [1.0, "x"], "a list of numbers"),

@@ -1,0 +1,98 @@
+"""ROS 2 params files: the one place that reads, merges and writes their node sections.
+
+A pic4rl params file holds one section per node, as ``--params-file`` expects::
+
+    sim:      {ros__parameters: {robot: jackal, world: indoor, ...}}      # pic4rl-sim
+    nav_env:  {ros__parameters: {task: goToPose, sensor: lidar, ...}}     # the env
+    trainer:  {ros__parameters: {algorithm: td3, max_steps: 100000, ...}} # pic4rl-train
+
+A section is found under ``node``, ``/node`` or ``/**/node``; a file with none of these but a
+``/**`` section (``config/sim_*.yaml``, which any node name may load) gives it to ``sim``.
+Several files merge key by key, later files winning, as ROS merges several ``--params-file``.
+A relative file named inside a section (``episodes.file``) is taken from the working directory
+when it exists there (ROS's rule), else beside the params file, for every caller alike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import ConfigError
+from .schema import flatten
+
+SIM_NODE = "sim"
+ENV_NODE = "nav_env"
+TRAINER_NODE = "trainer"
+#: Parameters, per section, that name a file relative to the params file.
+FILE_KEYS = {ENV_NODE: ("episodes.file",)}
+
+
+def read(path: str | Path) -> Mapping[str, Any]:
+    """The node sections of a ROS 2 parameter YAML, or ``ConfigError`` naming the file."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read the config file: {err.strerror}") from err
+    except yaml.YAMLError as err:
+        raise ConfigError(f"{path}: not valid YAML: {err}") from err
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{path}: expected a mapping of node sections "
+                          "(sim:, nav_env:, ...: ros__parameters: ...)")
+    return data
+
+
+def node_section(data: Mapping[str, Any], node: str, *, source: str) -> dict[str, Any] | None:
+    """The flat ``ros__parameters`` of the first section for ``node`` (``node``, ``/node``,
+    ``/**/node``; for ``sim`` also a lone ``/**``), or ``None`` when the file has none."""
+    keys = [node, f"/{node}", f"/**/{node}"]
+    if node == SIM_NODE and not any(k in data for k in keys):
+        keys.append("/**")
+    for key in keys:
+        if key in data:
+            section = data[key]
+            params = section.get("ros__parameters") if isinstance(section, Mapping) else None
+            if not isinstance(params, Mapping):
+                raise ConfigError(f"{source}: section {key!r} needs a 'ros__parameters' mapping")
+            return flatten(params)
+    return None
+
+
+def beside(file: str, params_file: Path) -> str:
+    """A relative path named in a params file: as given when it exists from the working
+    directory (ROS's rule), else the file beside the params file, so that a shipped config
+    works from any directory."""
+    if Path(file).is_absolute() or Path(file).exists():
+        return file
+    candidate = params_file.parent / file
+    return str(candidate.resolve()) if candidate.exists() else file
+
+
+def load(paths: Sequence[str | Path], nodes: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """The flat sections ``nodes`` of ``paths``, merged key by key (later files win); a file
+    with none of them is an error naming the file."""
+    nodes = tuple(nodes)
+    merged: dict[str, dict[str, Any]] = {node: {} for node in nodes}
+    for path in paths:
+        data = read(path)
+        sections = {node: node_section(data, node, source=str(path)) for node in nodes}
+        if all(section is None for section in sections.values()):
+            raise ConfigError(f"{path}: no section for {' or '.join(repr(n) for n in nodes)} "
+                              f"(expected '{nodes[0]}: ros__parameters: ...')")
+        for node, section in sections.items():
+            for key in FILE_KEYS.get(node, ()):
+                value = (section or {}).get(key)
+                if isinstance(value, str) and value:
+                    section[key] = beside(value, Path(path))  # type: ignore[index]
+            merged[node].update(section or {})
+    return merged
+
+
+def dump(sections: Mapping[str, Mapping[str, Any]]) -> str:
+    """A params file of ``sections`` (node → flat parameters), as ``load`` reads it back."""
+    doc = {node: {"ros__parameters": dict(params)} for node, params in sections.items()}
+    return yaml.safe_dump(doc, sort_keys=False)
