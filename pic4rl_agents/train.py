@@ -33,7 +33,7 @@ import numpy as np
 import yaml
 
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
-from pic4rl_sim.schema import param_names, to_params
+from pic4rl_sim.schema import help_text, param_names, specs, to_params
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
 
 from .config import (
@@ -325,8 +325,11 @@ class Trainer:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pic4rl-train", description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="ROS arguments after --ros-args: --params-file FILE (sim:, nav_env:, trainer: "
-               "sections), -p key:=value (a trainer or env key).")
+               "sections), -p key:=value (a trainer or env key).\n\ntrainer parameters:\n"
+               f"{help_text(specs(TrainConfig))}\n\nenv (nav_env) parameters:\n"
+               f"{help_text(specs(EnvConfig))}")
     parser.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
                         help="trainer overrides, RL-Zoo style: learning_rate:0.001 "
                              "policy.net_arch:[64,64]")

@@ -358,9 +358,8 @@ def help_text(table: tuple[ParamSpec, ...]) -> str:
         limits = f" {spec.bounds}" if spec.bounds else ""
         if spec.choices:
             limits = f" {{{', '.join(spec.choices)}}}"
-        unit = f" ({spec.unit})" if spec.unit else ""
         lines.append(f"  {spec.name} ({TYPE_NAMES[spec.type]}, default {literal(spec.default)})"
-                     f"{limits}{unit}")
+                     f"{limits}")
         lines.append(f"      {spec.description}")
     return "\n".join(lines)
 

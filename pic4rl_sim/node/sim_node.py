@@ -84,7 +84,7 @@ from ..params import (
 from ..engine.robot_specs import load_robot
 from ..engine.sampling import check_free
 from ..engine.world_spec import WorldSpec
-from ..schema import ParamSpec, ParamType
+from ..schema import ParamSpec, ParamType, help_text
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
               ParamType.DOUBLE: Parameter.Type.DOUBLE, ParamType.STRING: Parameter.Type.STRING,
@@ -352,12 +352,9 @@ class SimNode(Node):
 
 
 def _usage() -> str:
-    lines = ["usage: pic4rl-sim [--ros-args [--params-file FILE] [-p NAME:=VALUE] ...]",
-             "", "parameters (sensor defaults: the default robot's):"]
-    for spec in parameter_table(load_robot(ROBOT.default)):
-        lines.append(f"  {spec.name} ({spec.type.value.lower()}, default {spec.default!r}): "
-                     f"{spec.description}")
-    return "\n".join(lines)
+    return "\n".join(["usage: pic4rl-sim [--ros-args [--params-file FILE] [-p NAME:=VALUE] ...]",
+                      "", "parameters (sensor defaults: the default robot's):",
+                      help_text(parameter_table(load_robot(ROBOT.default)))])
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -360,3 +360,28 @@ def test_bad_sim_parameters_are_config_errors() -> None:
     with pytest.raises(ConfigError, match=r"^sim parameters: .*lidar\.beams"):
         Scenario(EnvConfig(sim_params={"lidar.beams": "many"}))
     assert math.isclose(Scenario(EnvConfig()).robot.max_linear_m_s, 2.0)
+
+
+def test_gym_make_finds_a_relative_episodes_file_beside_the_params_file(tmp_path, monkeypatch):
+    """``episodes.file`` relative to the params file is found from any working directory, by
+    ``gym.make`` as by ``pic4rl-train`` (one loader: ``pic4rl_sim.params_file``)."""
+    import gymnasium as gym
+
+    import pic4rl_bridge  # noqa: F401  (registers the ids)
+
+    folder = tmp_path / "cfg"
+    folder.mkdir()
+    pairs = Path(__file__).resolve().parents[2] / "config" / "goals_indoor_train.json"
+    (folder / "pairs.json").write_text(pairs.read_text())
+    params = folder / "env.yaml"
+    params.write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
+        "episodes": {"file": "pairs.json"}}}}))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    env = gym.make("pic4rl/GoToPoseLidar-v0", config="../cfg/env.yaml")
+    try:
+        assert Path(env.unwrapped.config.episodes.file) == (folder / "pairs.json").resolve()
+        env.reset(seed=0)
+    finally:
+        env.close()
