@@ -28,10 +28,14 @@ T = TypeVar("T")
 
 class ParamEnum(str, Enum):
     """A string-valued choice that reads, prints, hashes and compares as its value, so that a
-    typed field stays what a params file holds (``task: goToPose``)."""
+    typed field stays what a params file holds (``task: goToPose``) and error messages quote
+    it as the user wrote it."""
 
     def __str__(self) -> str:
         return str(self.value)
+
+    def __repr__(self) -> str:
+        return repr(str(self.value))
 
     def __format__(self, spec: str) -> str:
         return format(str(self.value), spec)
