@@ -89,72 +89,103 @@ def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m
             "sampling.max_detour", max_detour, "a ratio >= 1, with a planner when finite")
     require(isinstance(max_tries, int) and max_tries >= 1, "sampling.max_tries", max_tries,
             "an integer >= 1")
-    checks = [0]  # path searches run, shared by every round
+    search = _PairSearch(world, clearance_m, min_distance_m, max_distance_m, max_detour, planner)
+    spawn_xy = np.array([(p.x, p.y) for p in world.spawn_poses], dtype=float).reshape(-1, 2)
+    goal_xy = np.array(world.goal_points, dtype=float).reshape(-1, 2)
+    found = None
+    if len(spawn_xy) and len(spawn_xy) == len(goal_xy):
+        found = search.same_lane(rng, spawn_xy, goal_xy)
+    found = found or search.drawn(rng, spawn_xy, goal_xy, max_tries)
+    if found is None:
+        raise search.failure(max_tries)
+    return found
 
-    def first_fit(s_xy: np.ndarray, g_xy: np.ndarray, pairs: np.ndarray) -> int | None:
+
+@dataclass
+class _PairSearch:
+    """One ``sample_start_goal`` call: its limits, its path check and the searches it ran."""
+
+    world: WorldSpec
+    clearance_m: float
+    min_distance_m: float
+    max_distance_m: float
+    max_detour: float
+    planner: PathPlanner | None
+    checks: int = 0  # path searches run, shared by every round
+
+    def first_fit(self, s_xy: np.ndarray, g_xy: np.ndarray, pairs: np.ndarray) -> int | None:
         """The first candidate (row of ``pairs``: start, goal index) the planner accepts."""
         for k, (i, j) in enumerate(pairs):
-            if planner is None:
+            if self.planner is None:
                 return k
-            if checks[0] >= MAX_PATH_CHECKS:
+            if self.checks >= MAX_PATH_CHECKS:
                 return None
-            checks[0] += 1
-            straight = math.dist(s_xy[i], g_xy[j])
-            if planner.length(s_xy[i], g_xy[j], max_length_m=max_detour * straight) < math.inf:
+            self.checks += 1
+            limit = self.max_detour * math.dist(s_xy[i], g_xy[j])
+            if self.planner.length(s_xy[i], g_xy[j], max_length_m=limit) < math.inf:
                 return k
         return None
 
-    def apart(s_xy: np.ndarray, g_xy: np.ndarray) -> np.ndarray:
+    def apart(self, s_xy: np.ndarray, g_xy: np.ndarray) -> np.ndarray:
         d = np.hypot(s_xy[:, None, 0] - g_xy[None, :, 0], s_xy[:, None, 1] - g_xy[None, :, 1])
-        return (d >= min_distance_m) & (d <= max_distance_m)
+        return (d >= self.min_distance_m) & (d <= self.max_distance_m)
 
-    spawn_xy = np.array([(p.x, p.y) for p in world.spawn_poses], dtype=float).reshape(-1, 2)
-    goal_xy = np.array(world.goal_points, dtype=float).reshape(-1, 2)
-    if len(spawn_xy) and len(spawn_xy) == len(goal_xy):
+    def same_lane(self, rng: np.random.Generator, spawn_xy: np.ndarray,
+                  goal_xy: np.ndarray) -> tuple[Pose2D, tuple[float, float]] | None:
+        """A spawn and the goal of its own lane, lanes in a random order."""
         lanes = rng.permutation(len(spawn_xy))
         d = np.hypot(*(goal_xy[lanes] - spawn_xy[lanes]).T)
-        ok = (_valid(world, spawn_xy[lanes], clearance_m) & _valid(world, goal_xy[lanes],
-                                                                    clearance_m)
-              & (d >= min_distance_m) & (d <= max_distance_m))
-        found = first_fit(spawn_xy, goal_xy, np.repeat(lanes[ok], 2).reshape(-1, 2))
-        if found is not None:
-            lane = int(lanes[ok][found])
-            return world.spawn_poses[lane], (float(goal_xy[lane, 0]), float(goal_xy[lane, 1]))
-    # Fixed candidates in a random order; None where points are drawn each round instead.
-    starts = _shuffled_valid(world, rng, spawn_xy, clearance_m)
-    goals = _shuffled_valid(world, rng, goal_xy, clearance_m)
-    xmin, ymin, xmax, ymax = world.bounds
-    low, high = (xmin + clearance_m, ymin + clearance_m), (xmax - clearance_m, ymax - clearance_m)
-    exhausted = (starts is not None and goals is not None) or any(
-        fixed is not None and not len(fixed[0]) for fixed in (starts, goals))
-    drawn = 0
-    while drawn < max_tries and low[0] <= high[0] and low[1] <= high[1]:
-        n = min(BATCH, max_tries - drawn)
-        drawn += n * ((starts is None) + (goals is None))
-        s_xy, s_index = starts or (_draw(world, rng, low, high, n, clearance_m), None)
-        g_xy, _ = goals or (_draw(world, rng, low, high, n, clearance_m), None)
-        rows, cols = np.nonzero(apart(s_xy, g_xy))
-        if planner is not None and len(rows):  # each start's first two goals, then the rest
-            rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
-            order = np.lexsort((rows, np.minimum(rank, 2)))
-            rows, cols = rows[order], cols[order]
-        found = first_fit(s_xy, g_xy, np.stack([rows, cols], axis=1))
-        if found is not None:
-            i, j = int(rows[found]), int(cols[found])
-            goal = (float(g_xy[j, 0]), float(g_xy[j, 1]))
-            if s_index is not None:
-                return world.spawn_poses[int(s_index[i])], goal
-            yaw = float(rng.uniform(-math.pi, math.pi))
-            return Pose2D(float(s_xy[i, 0]), float(s_xy[i, 1]), yaw), goal
-        if exhausted or checks[0] >= MAX_PATH_CHECKS:
-            break  # fixed candidates only, or none of them free: drawing again changes nothing
-    wanted = f"{min_distance_m} m" + (f" to {max_distance_m} m" if max_distance_m < math.inf
-                                      else "")
-    path = ("" if planner is None else f", a collision-free path at most {max_detour} times "
-            f"the straight line ({checks[0]} paths searched)")
-    raise WorldError(f"world {world.name!r}: no start and goal with clearance {clearance_m} m "
-                     f"and {wanted} apart{path} found in {max_tries} tries; lower the "
-                     "clearance or the distance, or free some space")
+        ok = (_valid(self.world, spawn_xy[lanes], self.clearance_m)
+              & _valid(self.world, goal_xy[lanes], self.clearance_m)
+              & (d >= self.min_distance_m) & (d <= self.max_distance_m))
+        found = self.first_fit(spawn_xy, goal_xy, np.repeat(lanes[ok], 2).reshape(-1, 2))
+        if found is None:
+            return None
+        lane = int(lanes[ok][found])
+        return self.world.spawn_poses[lane], (float(goal_xy[lane, 0]), float(goal_xy[lane, 1]))
+
+    def drawn(self, rng: np.random.Generator, spawn_xy: np.ndarray, goal_xy: np.ndarray,
+              max_tries: int) -> tuple[Pose2D, tuple[float, float]] | None:
+        """A pair from the fixed candidates (in a random order) or points drawn in rounds."""
+        world, clearance_m = self.world, self.clearance_m
+        starts = _shuffled_valid(world, rng, spawn_xy, clearance_m)  # None: drawn each round
+        goals = _shuffled_valid(world, rng, goal_xy, clearance_m)
+        xmin, ymin, xmax, ymax = world.bounds
+        low = (xmin + clearance_m, ymin + clearance_m)
+        high = (xmax - clearance_m, ymax - clearance_m)
+        exhausted = (starts is not None and goals is not None) or any(
+            fixed is not None and not len(fixed[0]) for fixed in (starts, goals))
+        drawn = 0
+        while drawn < max_tries and low[0] <= high[0] and low[1] <= high[1]:
+            n = min(BATCH, max_tries - drawn)
+            drawn += n * ((starts is None) + (goals is None))
+            s_xy, s_index = starts or (_draw(world, rng, low, high, n, clearance_m), None)
+            g_xy, _ = goals or (_draw(world, rng, low, high, n, clearance_m), None)
+            rows, cols = np.nonzero(self.apart(s_xy, g_xy))
+            if self.planner is not None and len(rows):  # each start's first two goals first
+                rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
+                order = np.lexsort((rows, np.minimum(rank, 2)))
+                rows, cols = rows[order], cols[order]
+            found = self.first_fit(s_xy, g_xy, np.stack([rows, cols], axis=1))
+            if found is not None:
+                i, j = int(rows[found]), int(cols[found])
+                goal = (float(g_xy[j, 0]), float(g_xy[j, 1]))
+                if s_index is not None:
+                    return world.spawn_poses[int(s_index[i])], goal
+                yaw = float(rng.uniform(-math.pi, math.pi))
+                return Pose2D(float(s_xy[i, 0]), float(s_xy[i, 1]), yaw), goal
+            if exhausted or self.checks >= MAX_PATH_CHECKS:
+                return None  # fixed candidates only, or none free: drawing again changes nothing
+        return None
+
+    def failure(self, max_tries: int) -> WorldError:
+        wanted = f"{self.min_distance_m} m" + (
+            f" to {self.max_distance_m} m" if self.max_distance_m < math.inf else "")
+        path = ("" if self.planner is None else f", a collision-free path at most "
+                f"{self.max_detour} times the straight line ({self.checks} paths searched)")
+        return WorldError(f"world {self.world.name!r}: no start and goal with clearance "
+                          f"{self.clearance_m} m and {wanted} apart{path} found in {max_tries} "
+                          "tries; lower the clearance or the distance, or free some space")
 
 
 def sample_pairs(world: WorldSpec, count: int, rng: np.random.Generator, *, clearance_m: float,
