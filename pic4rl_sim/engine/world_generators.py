@@ -306,20 +306,10 @@ def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
     def length(offset_m: float) -> float:
         return row_length_m if row_radius_m == 0 else (middle_m + offset_m) * span_rad
 
-    boxes: list[Box] = []
-    trunks: list[Cylinder] = []
     offsets = (np.arange(rows) - 0.5 * (rows - 1)) * row_spacing_m
-    for offset in offsets:
-        pts = line(offset, max(1, round(length(offset) / trunk_spacing_m)))
-        keep = rng.random(len(pts)) >= gap_prob
-        keep[[0, -1]] = True  # row ends stay visible
-        trunks += [Cylinder(float(x), float(y), TRUNK_RADIUS_M, TRUNK_HEIGHT_M, kind="trunk")
-                   for x, y in pts[keep]]
-        for a, b in zip(pts[:-1], pts[1:]):
-            mid, d = 0.5 * (a + b), b - a
-            boxes.append(Box(float(mid[0]), float(mid[1]), float(np.hypot(*d)), CANOPY_WIDTH_M,
-                             CANOPY_HEIGHT_M, float(math.atan2(d[1], d[0])), CANOPY_Z_BASE_M,
-                             kind="canopy"))
+    rows_xy = [line(offset, max(1, round(length(offset) / trunk_spacing_m)))
+               for offset in offsets]
+    boxes, trunks = _vine_rows(rng, rows_xy, gap_prob)
     lanes = tuple(line(offset, max(2, math.ceil(length(offset) / LANE_STEP_M)))
                   for offset in offsets[:-1] + 0.5 * row_spacing_m)
     spawns = tuple(Pose2D(float(p[0, 0]), float(p[0, 1]),
@@ -333,6 +323,25 @@ def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
     return WorldSpec("vineyard", bounds, tuple(_walls(bounds) + boxes), tuple(trunks),
                      spawn_poses=spawns, goal_points=tuple(p[-1] for p in lane_xy),
                      lanes=lane_xy, seed=seed, params=params)
+
+
+def _vine_rows(rng: np.random.Generator, rows_xy: list[np.ndarray],
+               gap_prob: float) -> tuple[list[Box], list[Cylinder]]:
+    """Each row's canopy (a box between neighbouring trunk places) and its trunks, a few
+    missing at random but never a row's ends."""
+    boxes: list[Box] = []
+    trunks: list[Cylinder] = []
+    for pts in rows_xy:
+        keep = rng.random(len(pts)) >= gap_prob
+        keep[[0, -1]] = True  # row ends stay visible
+        trunks += [Cylinder(float(x), float(y), TRUNK_RADIUS_M, TRUNK_HEIGHT_M, kind="trunk")
+                   for x, y in pts[keep]]
+        for a, b in zip(pts[:-1], pts[1:]):
+            mid, d = 0.5 * (a + b), b - a
+            boxes.append(Box(float(mid[0]), float(mid[1]), float(np.hypot(*d)), CANOPY_WIDTH_M,
+                             CANOPY_HEIGHT_M, float(math.atan2(d[1], d[0])), CANOPY_Z_BASE_M,
+                             kind="canopy"))
+    return boxes, trunks
 
 
 def world_from_mjcf(path: str | Path) -> WorldSpec:
