@@ -88,6 +88,43 @@ def aggregate(
     value is NaN; a quality column of a group without a success is NaN. Index: the group
     name(s), in order of first appearance.
     """
+    by_cols = _check_request(df, by, over)
+    metrics = numeric_metric_columns(df)
+    quality = [m for m in metrics if REGISTRY.metrics[m].quality]
+    if over == "success" and quality and "success" not in metrics:
+        msg = "aggregate: over='success' needs a 'success' column; pass over='all'"
+        raise ConfigError(msg)
+    failed = _error_mask(df).to_numpy()
+    keys = _group_keys(df, by_cols)
+    values = df[metrics].apply(pd.to_numeric, errors="coerce").astype(float).reset_index(drop=True)
+    outcomes = (
+        df["outcome"].reset_index(drop=True) if "outcome" in df.columns
+        else pd.Series([None] * len(df), dtype=object)
+    )
+    groups: dict[tuple[object, ...], list[int]] = {}
+    for pos, key in enumerate(keys.itertuples(index=False, name=None)):
+        groups.setdefault(key, []).append(pos)
+    rows = []
+    for members in groups.values():
+        good = [p for p in members if not failed[p]]
+        row = _group_row(values.iloc[good], outcomes.iloc[good], metrics, quality, over)
+        rows.append({"n_episodes": len(good), "n_failed": len(members) - len(good), **row})
+    if len(by_cols) == 1:
+        index = pd.Index([key[0] for key in groups], name=by_cols[0], dtype=object)
+    else:
+        arrays = [[key[i] for key in groups] for i in range(len(by_cols))]
+        index = pd.MultiIndex.from_arrays(arrays, names=by_cols)
+    stat_cols = [f"{m}_{s}" for m in metrics for s in ("mean", "std")]
+    out = pd.DataFrame(rows, index=index, columns=list(COUNT_COLUMNS) + stat_cols)
+    int_cols = [
+        "n_episodes", "n_failed", "n_judged", "n_success",
+        *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged",
+    ]
+    return out.astype({c: "int64" for c in int_cols})
+
+
+def _check_request(df: pd.DataFrame, by: str | Sequence[str], over: str) -> list[str]:
+    """The grouping columns, or ``ConfigError`` for an unknown ``over`` or column."""
     if over not in OVER_CHOICES:
         msg = f"aggregate: over={over!r}; expected one of {', '.join(OVER_CHOICES)}"
         raise ConfigError(msg)
@@ -100,56 +137,25 @@ def aggregate(
             hint = f"; did you mean {close[0]!r}?" if close else ""
             msg = f"aggregate: by={col!r} is not a column of the results{hint}"
             raise ConfigError(msg)
+    return by_cols
 
-    metrics = numeric_metric_columns(df)
-    quality = [m for m in metrics if REGISTRY.metrics[m].quality]
-    if over == "success" and quality and "success" not in metrics:
-        msg = "aggregate: over='success' needs a 'success' column; pass over='all'"
-        raise ConfigError(msg)
-    stat_cols = [f"{m}_{s}" for m in metrics for s in ("mean", "std")]
-    failed = _error_mask(df).to_numpy()
-    keys = _group_keys(df, by_cols)
-    values = df[metrics].apply(pd.to_numeric, errors="coerce").astype(float).reset_index(drop=True)
-    outcomes = (
-        df["outcome"].reset_index(drop=True) if "outcome" in df.columns
-        else pd.Series([None] * len(df), dtype=object)
-    )
 
-    groups: dict[tuple[object, ...], list[int]] = {}
-    for pos, key in enumerate(keys.itertuples(index=False, name=None)):
-        groups.setdefault(key, []).append(pos)
-    rows: list[dict[str, object]] = []
-    for members in groups.values():
-        good = [p for p in members if not failed[p]]
-        group = values.iloc[good]
-        row: dict[str, object] = {"n_episodes": len(good), "n_failed": len(members) - len(good)}
-        judged = group["success"].dropna() if "success" in metrics else pd.Series(dtype=float)
-        n_success = int((judged == 1.0).sum())
-        row["n_judged"] = len(judged)
-        row["n_success"] = n_success
-        row["success"] = f"{n_success}/{len(judged)}" if len(judged) else DASH
-        for word in COUNTED_OUTCOMES:
-            row[f"n_{word}"] = int((outcomes.iloc[good] == word).sum())
-        averaged = group if over == "all" or not quality else group[group["success"] == 1.0]
-        row["n_averaged"] = len(averaged)
-        row["over"] = over
-        means, stds = group.mean(skipna=True), group.std(ddof=1, skipna=True)
-        q_means, q_stds = averaged.mean(skipna=True), averaged.std(ddof=1, skipna=True)
-        for m in metrics:
-            mean, std = (q_means, q_stds) if m in quality else (means, stds)
-            row[f"{m}_mean"] = float(mean[m]) if good else math.nan
-            row[f"{m}_std"] = float(std[m]) if good else math.nan
-        rows.append(row)
-
-    columns = list(COUNT_COLUMNS) + stat_cols
-    if len(by_cols) == 1:
-        index = pd.Index([key[0] for key in groups], name=by_cols[0], dtype=object)
-    else:
-        arrays = [[key[i] for key in groups] for i in range(len(by_cols))]
-        index = pd.MultiIndex.from_arrays(arrays, names=by_cols)
-    out = pd.DataFrame(rows, index=index, columns=columns)
-    int_cols = [
-        "n_episodes", "n_failed", "n_judged", "n_success",
-        *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged",
-    ]
-    return out.astype({c: "int64" for c in int_cols})
+def _group_row(group: pd.DataFrame, outcomes: pd.Series, metrics: list[str],
+               quality: list[str], over: str) -> dict[str, object]:
+    """One group's counts and statistics, from its good rows (``group``, ``outcomes``)."""
+    judged = group["success"].dropna() if "success" in metrics else pd.Series(dtype=float)
+    n_success = int((judged == 1.0).sum())
+    row: dict[str, object] = {"n_judged": len(judged), "n_success": n_success,
+                              "success": f"{n_success}/{len(judged)}" if len(judged) else DASH}
+    for word in COUNTED_OUTCOMES:
+        row[f"n_{word}"] = int((outcomes == word).sum())
+    averaged = group if over == "all" or not quality else group[group["success"] == 1.0]
+    row["n_averaged"] = len(averaged)
+    row["over"] = over
+    means, stds = group.mean(skipna=True), group.std(ddof=1, skipna=True)
+    q_means, q_stds = averaged.mean(skipna=True), averaged.std(ddof=1, skipna=True)
+    for m in metrics:
+        mean, std = (q_means, q_stds) if m in quality else (means, stds)
+        row[f"{m}_mean"] = float(mean[m]) if len(group) else math.nan
+        row[f"{m}_std"] = float(std[m]) if len(group) else math.nan
+    return row
