@@ -18,6 +18,7 @@ from tqdm import tqdm
 from pic4rl_bridge.tasks.base import Outcome
 
 from .curves import save_reward_curve
+from .runs import EVALUATIONS
 
 
 class ProgressCallback(BaseCallback):
@@ -111,7 +112,7 @@ class SeededEvalCallback(EvalCallback):
         self.every_calls = max(interval_steps // n_envs, 1) if interval_steps > 0 else 0
         self.interval_s = interval_s
         self.clock_start = clock_start
-        self.csv_path = Path(log_path) / "evaluations.csv"
+        self.csv_path = Path(log_path) / EVALUATIONS
         self.eval_s = 0.0  # seconds spent evaluating so far
         self.last_row: dict[str, float] = {}
         self._last_due_s = 0.0

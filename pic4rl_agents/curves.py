@@ -19,6 +19,8 @@ from stable_baselines3.common.monitor import LoadMonitorResultsError, load_resul
 
 from pic4rl_bridge.errors import ConfigError
 
+from . import runs
+
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:
     """Every finished episode of every env in time order: ``r`` (reward), ``l`` (steps),
@@ -84,10 +86,8 @@ def eval_curves(source: str | Path, label: str | None = None) -> dict[str, pd.Da
     clock starts at 0), by label (``label``, else the run's name)."""
     path = Path(source)
     if path.is_file():
-        run = path.parents[2].name if path.parent.parent.name == "eval" else path.parent.name
-        return {label or run: eval_table(path)}
-    files = sorted((path / "eval").glob("*/evaluations.csv"),
-                   key=lambda f: int(f.parent.name) if f.parent.name.isdigit() else -1)
+        return {label or runs.run_of_evaluations(path): eval_table(path)}
+    files = runs.evaluation_files(path)
     if not files:
         raise ConfigError(f"{path}: no evaluations (expected a run directory with "
                           "eval/<session>/evaluations.csv, or such a file)")

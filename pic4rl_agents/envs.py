@@ -17,10 +17,11 @@ import gymnasium as gym
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
-from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.env import NavEnv
+from pic4rl_sim.schema import to_params
 
-from .config import CurriculumConfig
+from .config import CurriculumConfig, EvalConfig
 from .curriculum import STAGE_KEY, Curriculum
 
 #: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
@@ -38,6 +39,15 @@ def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
     if config.transport != "ros" or n_envs == 1:
         return config
     return config.replace(**{"ros.namespace": env_namespace(config, rank, n_envs)})
+
+
+def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
+    """The evaluation env of a run whose env is ``env``: in process, not recording, and every
+    ``episodes.*`` key back at its default (no training pairs, no curriculum) but
+    ``episodes.pair_kind``, the evaluation's: pairs sampled from the seed, like a test's."""
+    defaults = {f"episodes.{k}": v for k, v in to_params(EpisodesConfig()).items()}
+    return env.replace(**{**defaults, "episodes.pair_kind": evaluation.pair_kind,
+                          "transport": "inprocess", "record.enabled": False})
 
 
 def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,

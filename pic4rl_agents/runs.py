@@ -1,8 +1,40 @@
-"""The layout of a run directory, ``<runs_dir>/<run>/``, in one place."""
+"""The layout of a run directory, ``<runs_dir>/<run>/``, in one place.
+
+    config.yaml, config-2.yaml, ...    the run's params file, one more per resume
+    model.zip, replay_buffer.pkl       the final (or interrupted) model and its experience
+    checkpoints/model_<steps>_steps.zip, model_replay_buffer_<steps>_steps.pkl
+    monitor/<session>_<rank>.monitor.csv                    one row per training episode
+    logs/<session>/    eval/<session>/evaluations.csv    best/<session>/best_model.zip
+    reward_curve.png, summary.yaml, summary-2.yaml, ...
+
+A session is one ``pic4rl-train`` process on the run: 0, then one more per resume. Files that
+every session writes anew (``config``, ``summary``) get ``-2``, ``-3``, ... rather than
+overwrite the previous session's.
+"""
 
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pic4rl_bridge.errors import ConfigError
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from .config import RunConfig
+
+CONFIG = "config.yaml"
+MODEL = "model.zip"
+REPLAY_BUFFER = "replay_buffer.pkl"
+SUMMARY = "summary.yaml"
+REWARD_CURVE = "reward_curve.png"
+EVALUATIONS = "evaluations.csv"
+CHECKPOINT_PREFIX = "model"  # SB3's CheckpointCallback name_prefix
+
+_CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
 
 
 def free_path(path: Path, *, keep_suffix: bool = False) -> Path:
@@ -16,9 +48,170 @@ def free_path(path: Path, *, keep_suffix: bool = False) -> Path:
     return candidate
 
 
+def write_new(path: Path, text: str) -> Path:
+    """Write ``text`` to ``path`` or, when it exists, to its first free ``-N`` sibling."""
+    path = free_path(path, keep_suffix=True)
+    path.write_text(text)
+    return path
+
+
 def run_config_file(folder: Path) -> Path | None:
     """A run folder's latest params file: ``config.yaml`` or its newest ``config-N.yaml``."""
     found = [p for p in folder.glob("config*.yaml")
              if p.stem == "config" or p.stem.removeprefix("config-").isdigit()]
     return max(found, key=lambda p: int(p.stem.removeprefix("config-") or 1)
                if p.stem != "config" else 1, default=None)
+
+
+def run_of(model_zip: Path) -> Path | None:
+    """The run directory a model zip belongs to: the nearest folder with a run config, the
+    zip's own or up to two above it (``checkpoints/``, ``best/<session>/``)."""
+    return next((d for d in (model_zip.parent, model_zip.parent.parent,
+                             model_zip.parent.parent.parent)
+                 if run_config_file(d) is not None), None)
+
+
+def checkpoint_steps(model_zip: Path) -> int | None:
+    """The steps in a checkpoint's name (``model_<steps>_steps.zip``); None for another zip."""
+    match = _CHECKPOINT.match(model_zip.name)
+    return int(match.group(1)) if match else None
+
+
+def replay_buffer_of(model_zip: Path) -> Path:
+    """Where the replay buffer saved with ``model_zip`` is (it may not exist)."""
+    steps = checkpoint_steps(model_zip)
+    if steps is None:
+        return model_zip.with_name(REPLAY_BUFFER)
+    return model_zip.with_name(f"{CHECKPOINT_PREFIX}_replay_buffer_{steps}_steps.pkl")
+
+
+def evaluation_files(run_dir: Path) -> list[Path]:
+    """Each session's ``eval/<session>/evaluations.csv``, in session order."""
+    return sorted((run_dir / "eval").glob(f"*/{EVALUATIONS}"),
+                  key=lambda f: int(f.parent.name) if f.parent.name.isdigit() else -1)
+
+
+def run_of_evaluations(path: Path) -> str:
+    """The run's name of an ``evaluations.csv`` (in ``<run>/eval/<session>/`` or not)."""
+    return path.parents[2].name if path.parent.parent.name == "eval" else path.parent.name
+
+
+@dataclass(frozen=True)
+class RunDir:
+    """A run directory, seen from one session of it."""
+
+    path: Path
+    session: int = 0
+
+    @classmethod
+    def new(cls, runs_dir: Path, name: str) -> RunDir:
+        """A fresh run folder ``<runs_dir>/<name>`` (``<name>-2``, ... when that is taken)."""
+        path = free_path(runs_dir / name)
+        path.mkdir(parents=True, exist_ok=True)
+        return cls(path)
+
+    @classmethod
+    def resume(cls, path: Path) -> RunDir:
+        """An existing run, in its next session (one per ``logs/<session>``)."""
+        path.mkdir(parents=True, exist_ok=True)
+        logs = path / "logs"
+        return cls(path, len(list(logs.iterdir())) if logs.is_dir() else 0)
+
+    @property
+    def model(self) -> Path:
+        return self.path / MODEL
+
+    @property
+    def replay_buffer(self) -> Path:
+        return self.path / REPLAY_BUFFER
+
+    @property
+    def checkpoints(self) -> Path:
+        return self.path / "checkpoints"
+
+    @property
+    def monitor(self) -> Path:
+        return self.path / "monitor"
+
+    @property
+    def reward_curve(self) -> Path:
+        return self.path / REWARD_CURVE
+
+    @property
+    def logs(self) -> Path:
+        """SB3's progress.csv and TensorBoard events of this session."""
+        return self.path / "logs" / str(self.session)
+
+    @property
+    def eval(self) -> Path:
+        """This session's ``evaluations.csv`` (and SB3's evaluations.npz)."""
+        return self.path / "eval" / str(self.session)
+
+    @property
+    def best(self) -> Path:
+        """This session's best evaluated model."""
+        return self.path / "best" / str(self.session)
+
+    def write_config(self, text: str) -> Path:
+        return write_new(self.path / CONFIG, text)
+
+    def write_summary(self, text: str) -> Path:
+        return write_new(self.path / SUMMARY, text)
+
+    def checkpoint_files(self) -> list[tuple[int, Path]]:
+        """The checkpoints' models and their steps."""
+        return [(steps, p) for p in self.checkpoints.glob(f"{CHECKPOINT_PREFIX}_*.zip")
+                if (steps := checkpoint_steps(p)) is not None]
+
+
+@dataclass(frozen=True)
+class Resume:
+    """A checkpoint to continue from: the model, its replay buffer (if saved), its run dir."""
+
+    model: Path
+    replay_buffer: Path | None
+    run_dir: Path
+
+
+def find_resume(path: str | Path) -> Resume:
+    """The checkpoint named by ``path``: a model zip, or a run directory (its latest
+    checkpoint, or its final ``model.zip`` when that is newer)."""
+    path = Path(path)
+    if path.is_dir():
+        candidates = RunDir(path).checkpoint_files()
+        if (path / MODEL).is_file():
+            candidates.append((steps_in(path / MODEL), path / MODEL))
+        if not candidates:
+            raise ConfigError(f"--resume {path}: no checkpoint in it (expected {MODEL} or "
+                              f"checkpoints/{CHECKPOINT_PREFIX}_<steps>_steps.zip)")
+        path = max(candidates, key=lambda c: (c[0], c[1].stat().st_mtime))[1]
+    if not path.is_file() or path.suffix != ".zip":
+        raise ConfigError(f"--resume {path}: no such checkpoint (expected a model .zip or a "
+                          "run directory)")
+    default = path.parent.parent if checkpoint_steps(path) is not None else path.parent
+    buffer = replay_buffer_of(path)
+    return Resume(path, buffer if buffer.is_file() else None, run_of(path) or default)
+
+
+def steps_in(model_zip: Path) -> int:
+    """The env steps a saved model had trained for (its ``num_timesteps``)."""
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    data, _, _ = load_from_zip_file(model_zip, load_data=True, device="cpu")
+    return int((data or {}).get("num_timesteps", 0))
+
+
+def session_summary(run: RunConfig, session: int, total_steps: int, session_steps: int,
+                    wall_s: float, episodes: pd.DataFrame) -> dict[str, Any]:
+    """``summary.yaml``: what a session did (docs/agents.md, "The run directory");
+    ``episodes``: every finished training episode of the run (``curves.episode_table``)."""
+    last = episodes.tail(100)
+    return {"run": run.name, "algorithm": run.train.algorithm, "sensor": run.env.sensor,
+            "transport": run.env.transport, "n_envs": run.train.n_envs, "session": session,
+            "total_steps": int(total_steps), "session_steps": int(session_steps),
+            "session_wall_s": round(wall_s, 1),
+            "steps_per_s": round(session_steps / wall_s, 1) if wall_s > 0 else None,
+            "episodes": len(episodes),
+            "last_100_success_rate": (round(float(last["is_success"].mean()), 3)
+                                      if len(last) else None),
+            "last_100_mean_reward": round(float(last["r"].mean()), 1) if len(last) else None}

@@ -18,7 +18,7 @@ from agents_helpers import LIDAR_TD3, PNG_MAGIC, SHORT_EPISODES, TINY
 from pic4rl_agents import curves, train
 from pic4rl_agents.callbacks import CSV_COLUMNS, OUTCOME_COLUMNS
 from pic4rl_agents.config import EvalConfig, load_run_config
-from pic4rl_agents.train import eval_env_config
+from pic4rl_agents.envs import eval_env_config
 from pic4rl_bridge.config import EpisodesConfig
 from pic4rl_bridge.errors import ConfigError
 

@@ -35,7 +35,7 @@ from pic4rl_agents import train
 from pic4rl_agents.algorithms import load_model
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.exploration import epsilon_at
-from pic4rl_agents.train import find_resume
+from pic4rl_agents.runs import find_resume
 from pic4rl_bridge.errors import ConfigError
 
 

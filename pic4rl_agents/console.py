@@ -1,0 +1,27 @@
+"""The command lines' console: what the library logs, shown to the user as the CLI prints."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import sys
+from collections.abc import Iterator
+from typing import TextIO
+
+
+@contextlib.contextmanager
+def console_logging(logger: str, fmt: str = "%(message)s", *,
+                    stream: TextIO | None = None) -> Iterator[None]:
+    """While the block runs, ``logger``'s records from INFO up are written to ``stream``
+    (``sys.stderr`` as it is then) in ``fmt``."""
+    handler = logging.StreamHandler(stream or sys.stderr)
+    handler.setFormatter(logging.Formatter(fmt))
+    target = logging.getLogger(logger)
+    level = target.level
+    target.addHandler(handler)
+    target.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        target.removeHandler(handler)
+        target.setLevel(level)
