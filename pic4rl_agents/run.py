@@ -23,11 +23,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from types import FrameType
 
-import yaml
-
+from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError
+from pic4rl_sim import params_file
 
-from .config import RunConfig
 from .envs import env_namespace
 from .rosargs import RosArgs, split_ros_args
 
@@ -35,19 +34,19 @@ COMMANDS = {"train": "pic4rl_agents.train", "test": "pic4rl_agents.tester"}
 STOP_TIMEOUT_S = 30.0  # a trainer saving its replay buffer may need a while
 
 
-def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[RunConfig, int]:
-    """The run config the child will read (for the sim section), and its number of envs."""
+def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, int]:
+    """The env the child will drive (its sim section, its ROS domain), and its number of
+    envs."""
     if command == "train":
         from .train import build_parser, resolve
 
         run, _ = resolve(build_parser().parse_args(plain), ros)
-        return run, run.train.n_envs
+        return run.env, run.train.n_envs
     from .tester import build_parser as test_parser
-    from .tester import resolve_agents
+    from .tester import build_plan
+    from .testplan import first_env
 
-    args = test_parser().parse_args(plain)
-    args.run_dir_name = "unused"
-    return resolve_agents(args, ros)[0].run, 1
+    return first_env(build_plan(test_parser().parse_args(plain), ros)), 1
 
 
 def _stop(proc: subprocess.Popen[bytes], timeout_s: float) -> int:
@@ -82,54 +81,59 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         plain, ros = split_ros_args(rest)
         ros.params["transport"] = "ros"
-        run, n_envs = _resolve(command, plain, ros)
+        run_env, n_envs = _resolve(command, plain, ros)
     except SystemExit as exit_:  # argparse's --help or usage error, printed already
         return int(exit_.code or 0)
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-run: {err}", file=sys.stderr)
         return 2
     env = dict(os.environ)
-    if run.env.ros.domain_id >= 0:
-        env["ROS_DOMAIN_ID"] = str(run.env.ros.domain_id)
+    if run_env.ros.domain_id >= 0:
+        env["ROS_DOMAIN_ID"] = str(run_env.ros.domain_id)
     with tempfile.TemporaryDirectory(prefix="pic4rl-run-") as tmp:
         sim_file = Path(tmp) / "sim.yaml"
-        sim_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": dict(
-            run.env.sim_params)}}))
+        sim_file.write_text(params_file.dump({"/**": run_env.sim_params}))
         sims: list[subprocess.Popen[bytes]] = []
         for rank in range(n_envs):
-            namespace = env_namespace(run.env, rank, n_envs) or "/"
+            namespace = env_namespace(run_env, rank, n_envs) or "/"
             cmd = [sys.executable, "-m", "pic4rl_sim.node", "--ros-args", "--params-file",
                    str(sim_file), "-r", f"__ns:={'/' + namespace.lstrip('/')}"]
             sims.append(subprocess.Popen(cmd, env=env, start_new_session=True))
         child = subprocess.Popen([sys.executable, "-m", COMMANDS[command], *plain,
                                   *ros.as_args()], env=env, start_new_session=True)
-        stopping: list[int] = []
+        return _watch(command, child, sims)
 
-        def forward(signum: int, frame: FrameType | None) -> None:
-            stopping.append(signum)
 
-        previous = {s: signal.signal(s, forward) for s in (signal.SIGINT, signal.SIGTERM)}
-        code = 0
-        try:
-            while child.poll() is None:
-                if stopping:
-                    print("pic4rl-run: stopping", file=sys.stderr)
-                    break
-                dead = [s for s in sims if s.poll() is not None]
-                if dead:
-                    print(f"pic4rl-run: a sim exited with code {dead[0].returncode}; "
-                          f"stopping the {command}er", file=sys.stderr)
-                    code = 1
-                    break
-                time.sleep(0.2)
-        finally:
-            child_code = _stop(child, STOP_TIMEOUT_S)
-            for sim in sims:
-                _stop(sim, 10.0)
-            for signum, handler in previous.items():
-                signal.signal(signum, handler)
+def _watch(command: str, child: subprocess.Popen[bytes],
+           sims: list[subprocess.Popen[bytes]]) -> int:
+    """Wait for the child, or a signal to us, or a sim's death; then stop them all, the child
+    first. The child's exit code, or 1 when a sim died under it."""
+    stopping: list[int] = []
+
+    def forward(signum: int, frame: FrameType | None) -> None:
+        stopping.append(signum)
+
+    previous = {s: signal.signal(s, forward) for s in (signal.SIGINT, signal.SIGTERM)}
+    code = 0
+    try:
+        while child.poll() is None:
+            if stopping:
+                print("pic4rl-run: stopping", file=sys.stderr)
+                break
+            dead = [s for s in sims if s.poll() is not None]
+            if dead:
+                print(f"pic4rl-run: a sim exited with code {dead[0].returncode}; "
+                      f"stopping the {command}er", file=sys.stderr)
+                code = 1
+                break
+            time.sleep(0.2)
+    finally:
+        child_code = _stop(child, STOP_TIMEOUT_S)
+        for sim in sims:
+            _stop(sim, 10.0)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     return code or child_code
-
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -10,7 +10,8 @@ An agent is a run or checkpoint directory (``model.zip`` and ``config.yaml``) or
 (its run's ``config.yaml`` is found above it; else give ``--algorithm`` and a params file).
 Its env is its training config, then the given params files key by key, then
 ``--env-kwargs`` and ``-p``; a baseline uses the first agent's env, but with the robot's full
-speed range (``min_linear_m_s`` 0 unless given), or the params files alone. Every agent drives the same episodes: the start–goal pairs named at test time
+speed range (``min_linear_m_s`` 0 unless given), or the params files alone. Every agent drives
+the same episodes: the start–goal pairs named at test time
 (``episodes.file`` in a params file or the overrides), else the paper's 5 indoor pairs when
 the world is the indoor one (variant 0), else ``--episodes`` pairs drawn from ``--seed``;
 ``--random N`` always draws N, of the kind ``--pairs`` names (``paper``: 4-8 m apart with a
@@ -18,147 +19,51 @@ collision-free path at most 1.3 times the straight line, the default; ``any``: w
 simulator samples). It prints which set it used. The training pairs are never reused for
 testing.
 Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics``'s own
-(``pic4rl-metrics compare`` on those bags prints the same).
+(``pic4rl-metrics compare`` on those bags prints the same). The command line builds a
+``TestPlan``; ``run_test(plan)`` does the test and returns a ``TestResult``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
 import signal
 import sys
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pic4rl_bridge.baselines import BASELINES, check_fits
+from pic4rl_bridge.baselines import BASELINES
+from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
-from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-from .config import (
-    ENV_NODE,
-    RunConfig,
-    load_run_config,
-    parse_overrides,
-)
+from . import runs
+from .config import parse_overrides
+from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
-from .runs import free_path, run_config_file
+from .testplan import AgentSpec, TestPlan, first_env, resolve_agents
 
-#: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
-DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"
+if TYPE_CHECKING:
+    import pandas as pd
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
-class AgentSpec:
-    """One row of the table: a trained model (``model`` set) or a baseline (``baseline``)."""
+class TestResult:
+    """What a test did: its bags, each agent's outcomes, the metrics table by agent."""
 
-    name: str
-    run: RunConfig
-    model: Path | None = None
-    baseline: str = ""
-
-
-def _agent_files(path: Path) -> tuple[Path, Path | None]:
-    """The model zip and its run's config, from a directory or a zip (the config is looked
-    for beside the zip and up to two folders above: checkpoints/, best/<session>/)."""
-    if path.is_dir():
-        model = path / "model.zip"
-        if not model.is_file():
-            raise ConfigError(f"--agent {path}: no model.zip in it")
-        return model, run_config_file(path)
-    if path.is_file() and path.suffix == ".zip":
-        for folder in (path.parent, path.parent.parent, path.parent.parent.parent):
-            if (config := run_config_file(folder)) is not None:
-                return path, config
-        return path, None
-    raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
-                      "model.zip and config.yaml, or a model .zip)")
-
-
-def _test_pairs(ros: RosArgs, env_overrides: dict[str, Any]) -> str | None:
-    """The ``episodes.file`` named at test time (params files, then overrides), if any."""
-    pairs = None
-    for path in ros.params_files:
-        section = params_file.node_section(params_file.read(path), ENV_NODE, source=path) or {}
-        if section.get("episodes.file"):
-            pairs = params_file.beside(section["episodes.file"], Path(path))
-    return env_overrides.get("episodes.file", pairs)
-
-
-def resolve_agents(args: argparse.Namespace, ros: RosArgs) -> list[AgentSpec]:
-    """The agents and baselines to test, each with its run config (env recording set up)."""
-    env_overrides = {**ros.params, **parse_overrides(args.env_kwargs, flag="--env-kwargs")}
-    args.test_pairs = _test_pairs(ros, env_overrides)
-    sim_overrides = parse_overrides(args.sim_kwargs, flag="--sim-kwargs")
-    train_overrides = {"algorithm": args.algorithm} if args.algorithm else {}
-    specs: list[AgentSpec] = []
-    for item in args.agent:
-        name, sep, location = item.partition("=")
-        path = Path(location if sep else item)
-        model, config = _agent_files(path)
-        files = ([str(config)] if config else []) + ros.params_files
-        if not files:
-            raise ConfigError(f"--agent {path}: no config.yaml beside the model; give the "
-                              "env with --ros-args --params-file FILE and --algorithm")
-        run = load_run_config(files, train=train_overrides, env=env_overrides,
-                              sim=sim_overrides)
-        if not sep:
-            name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
-                path.parent.name if path.suffix == ".zip" else path.name)
-        specs.append(AgentSpec(name, run, model=model))
-    for baseline in args.baseline:
-        if baseline not in BASELINES:
-            raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
-        if specs:
-            run = specs[0].run
-            if "min_linear_m_s" not in env_overrides:
-                # An agent's speed floor is its own training choice; a baseline drives the
-                # robot's full range unless the user says otherwise.
-                run = replace(run, env=run.env.replace(min_linear_m_s=0.0))
-        elif ros.params_files:
-            run = load_run_config(ros.params_files, env=env_overrides, sim=sim_overrides)
-        else:
-            raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
-                              "or --ros-args --params-file FILE")
-        check_fits(baseline, run.env)  # before any run directory or bag exists
-        specs.append(AgentSpec(baseline, run, baseline=baseline))
-    if not specs:
-        raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
-                          f"{'|'.join(BASELINES)}")
-    return [replace(s, run=_test_env(s, args)) for s in specs]
-
-
-def _test_env(spec: AgentSpec, args: argparse.Namespace) -> RunConfig:
-    """The agent's env set up for testing: recorded, the test episodes, no curriculum."""
-    env = spec.run.env
-    overrides: dict[str, Any] = {"agent": spec.name, "record.enabled": True,
-                                 "record.bags_dir": str(Path(args.bags_dir) / args.run_dir_name),
-                                 "record.run": spec.name,
-                                 "episodes.starting_episodes": 0}
-    sim = spec.run.env.sim_params
-    pairs = args.test_pairs
-    if pairs is None and sim.get("world", "indoor") == "indoor" and not sim.get(
-            "world_variant", 0):
-        pairs = str(DEFAULT_PAIRS)
-    if args.random or not pairs:
-        kind = args.pairs or ("paper" if args.random else "any")
-        overrides.update({"episodes.file": "", "episodes.ordered": False,
-                          "episodes.pair_kind": kind})
-        args.episode_set = (f"{args.random or args.episodes} random pairs of kind {kind!r} "
-                            f"with seed {args.seed}")
-    else:
-        if args.pairs:
-            raise ConfigError(f"--pairs {args.pairs}: the test pairs come from {pairs}; add "
-                              "--random N to draw N pairs of that kind")
-        overrides.update({"episodes.file": pairs, "episodes.ordered": True,
-                          "episodes.change_goal_and_pose": 1})
-        args.episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
-                            else "pairs file") + f" {pairs}"
-    return replace(spec.run, env=env.replace(**overrides))
+    run_dir: Path  # <bags>/<run>: <agent>/episode_NNNN/ bags, episodes.csv, table.md
+    episode_set: str  # the episodes driven, in words
+    outcomes: dict[str, list[str]]  # by agent, in episode order
+    table: pd.DataFrame  # pic4rl_metrics.aggregate by agent
+    failed: tuple[str, ...] = ()  # the errors of bags that could not be judged
 
 
 class Policy:
@@ -219,6 +124,38 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
     return outcomes
 
 
+def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """The metrics table of every bag under ``run_dir`` (grouped by agent) and the errors of
+    the bags that could not be judged; the per-episode CSV and the table (markdown) are
+    written into ``run_dir``."""
+    from pic4rl_metrics.aggregate import aggregate
+    from pic4rl_metrics.batch import compute
+    from pic4rl_metrics.report import render_comparison, render_episodes
+
+    result = compute([run_dir])
+    (run_dir / "episodes.csv").write_text(render_episodes(result.frame, "csv"))
+    table = aggregate(result.frame, by="agent")
+    (run_dir / "table.md").write_text(render_comparison(table, "markdown", with_std=with_std))
+    return table, tuple(str(failed.error) for failed in result.failed)
+
+
+def run_test(plan: TestPlan) -> TestResult:
+    """Drive every agent and baseline of ``plan`` on the same episodes, each recorded to a
+    bag in a new ``<bags>/<run>``, then judge the bags."""
+    run_dir = runs.free_path(plan.bags_dir / (plan.run or time.strftime("test_%Y%m%d-%H%M%S")))
+    specs = resolve_agents(plan, run_dir)
+    episode_set = specs[-1].episode_set
+    log.info("episodes: %s", episode_set)
+    outcomes: dict[str, list[str]] = {}
+    for spec in specs:
+        outcomes[spec.name] = run_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
+                                        progress=plan.progress)
+        log.info("%s: %d/%d goals", spec.name, outcomes[spec.name].count("goal"),
+                 len(outcomes[spec.name]))
+    table, failed = judge(run_dir, with_std=plan.with_std)
+    return TestResult(run_dir, episode_set, outcomes, table, failed)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pic4rl-test", description=__doc__.split("\n\n")[0],
@@ -249,49 +186,40 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def report(run_dir: Path, fmt: str, *, with_std: bool) -> tuple[str, int]:
-    """The metrics table of every bag under ``run_dir`` (grouped by agent), and how many bags
-    failed; the per-episode CSV and the table are also written into ``run_dir``."""
-    from pic4rl_metrics.aggregate import aggregate
-    from pic4rl_metrics.batch import compute
-    from pic4rl_metrics.report import render_comparison, render_episodes
 
-    result = compute([run_dir])
-    (run_dir / "episodes.csv").write_text(render_episodes(result.frame, "csv"))
-    table = aggregate(result.frame, by="agent")
-    (run_dir / "table.md").write_text(render_comparison(table, "markdown", with_std=with_std))
-    for failed in result.failed:
-        print(f"error: {failed.error}", file=sys.stderr)
-    return render_comparison(table, fmt, with_std=with_std), len(result.failed)
+def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
+    """The plan of a ``pic4rl-test`` command line: its parsed arguments and ROS arguments."""
+    return TestPlan(
+        agents=tuple(args.agent), baselines=tuple(args.baseline), algorithm=args.algorithm or "",
+        episodes=args.episodes, random=args.random, pairs=args.pairs, seed=args.seed,
+        bags_dir=Path(args.bags_dir), run=args.run, params_files=tuple(ros.params_files),
+        env_overrides={**ros.params, **parse_overrides(args.env_kwargs, flag="--env-kwargs")},
+        sim_overrides=parse_overrides(args.sim_kwargs, flag="--sim-kwargs"),
+        with_std=args.with_std, progress=not args.no_progress)
+
+
+def _hint_env(plan: TestPlan | None) -> EnvConfig | None:
+    with contextlib.suppress(ConfigError, BridgeError):
+        return first_env(plan) if plan is not None else None
+    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
+    from pic4rl_metrics.report import render_comparison
+
     argv = list(sys.argv[1:] if argv is None else argv)
     # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    specs: list[AgentSpec] = []
+    plan: TestPlan | None = None
     try:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
-        if args.episodes < 1 or (args.random is not None and args.random < 1):
-            raise ConfigError("--episodes/--random: expected a positive number of episodes")
-        bags_dir = Path(args.bags_dir)
-        args.run_dir_name = free_path(
-            bags_dir / (args.run or time.strftime("test_%Y%m%d-%H%M%S"))).name
-        specs = resolve_agents(args, ros)
-        episodes = args.random or args.episodes
-        print(f"episodes: {args.episode_set}", file=sys.stderr)
-        for spec in specs:
-            outcomes = run_agent(spec, episodes=episodes, seed=args.seed,
-                                 progress=not args.no_progress)
-            print(f"{spec.name}: {outcomes.count('goal')}/{len(outcomes)} goals",
-                  file=sys.stderr)
-        run_dir = bags_dir / args.run_dir_name
-        text, failed = report(run_dir, args.format, with_std=args.with_std)
+        plan = build_plan(args, ros)
+        with console_logging(__name__):
+            result = run_test(plan)
     except TransportError as err:
-        print(f"pic4rl-test: {err}\n{no_sim_hint('test', specs[0].run.env if specs else None)}",
-              file=sys.stderr)
+        print(f"pic4rl-test: {err}\n{no_sim_hint('test', _hint_env(plan))}", file=sys.stderr)
         return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-test: {err}", file=sys.stderr)
@@ -300,9 +228,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("pic4rl-test: interrupted; the finished episodes' bags are kept",
               file=sys.stderr)
         return 130
+    for error in result.failed:
+        print(f"error: {error}", file=sys.stderr)
+    text = render_comparison(result.table, args.format, with_std=plan.with_std)
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
-    print(f"bags: {run_dir}", file=sys.stderr)
-    return 1 if failed else 0
+    print(f"bags: {result.run_dir}", file=sys.stderr)
+    return 1 if result.failed else 0
 
 
 if __name__ == "__main__":

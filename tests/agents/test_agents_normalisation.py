@@ -22,7 +22,7 @@ import torch as th
 from agents_helpers import DEPTH_TD3, LIDAR_TD3, SHORT_EPISODES, TINY
 from stable_baselines3.common.preprocessing import preprocess_obs
 
-from pic4rl_agents import tester, train
+from pic4rl_agents import tester, testplan, train
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.rosargs import split_ros_args
@@ -51,13 +51,12 @@ def normalised_run(request: pytest.FixtureRequest,
     return runs / "normalised"
 
 
-def agent_as_tested(run_dir: Path, bags: Path) -> tester.AgentSpec:
+def agent_as_tested(run_dir: Path, bags: Path) -> testplan.AgentSpec:
     """The agent as ``pic4rl-test --agent RUN_DIR`` resolves it (its test env included)."""
     plain, ros = split_ros_args(["--agent", str(run_dir), "--bags", str(bags), "--run", "rt",
                                  "--no-progress"])
-    args = tester.build_parser().parse_args(plain)
-    args.run_dir_name = "rt"
-    [spec] = tester.resolve_agents(args, ros)
+    plan = tester.build_plan(tester.build_parser().parse_args(plain), ros)
+    [spec] = testplan.resolve_agents(plan, plan.bags_dir / "rt")
     return spec
 
 

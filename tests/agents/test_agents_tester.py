@@ -22,7 +22,7 @@ from agents_helpers import CONFIG, LIDAR_TD3, TrainedRun
 from pic4rl_agents import tester
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.rosargs import split_ros_args
-from pic4rl_agents.tester import DEFAULT_PAIRS, AgentSpec
+from pic4rl_agents.testplan import DEFAULT_PAIRS, AgentSpec, resolve_agents
 from pic4rl_bridge.config import load_env_config
 from pic4rl_metrics.aggregate import aggregate
 from pic4rl_metrics.batch import MetricsResult, compute
@@ -175,9 +175,8 @@ def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> 
 def resolve(argv: list[str]) -> list[AgentSpec]:
     """The agents ``pic4rl-test ARGV`` would drive, with their test envs, driving nothing."""
     plain, ros = split_ros_args(argv)
-    args = tester.build_parser().parse_args(plain)
-    args.run_dir_name = "r"
-    return tester.resolve_agents(args, ros)
+    plan = tester.build_plan(tester.build_parser().parse_args(plain), ros)
+    return resolve_agents(plan, plan.bags_dir / "r")
 
 
 @pytest.fixture

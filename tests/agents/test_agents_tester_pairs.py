@@ -68,15 +68,14 @@ def test_pairs_without_random_is_refused_when_a_file_gives_the_pairs(tmp_path: P
 
 def test_a_baseline_drives_the_robot_full_speed_range(tmp_path):
     """An agent's speed floor (min_linear_m_s) is not imposed on the baselines beside it."""
-    from pic4rl_agents.tester import build_parser, resolve_agents
     from pic4rl_agents.rosargs import split_ros_args
+    from pic4rl_agents.tester import build_parser, build_plan
+    from pic4rl_agents.testplan import resolve_agents
 
     def specs(*extra: str) -> list:
         plain, ros = split_ros_args(["--agent", str(ROOT / "checkpoints" / "td3_lidar"),
                                      "--baseline", "dwa", *extra])
-        args = build_parser().parse_args(plain)
-        args.run_dir_name = "unused"  # set by main() once the run directory is chosen
-        return resolve_agents(args, ros)
+        return resolve_agents(build_plan(build_parser().parse_args(plain), ros))
 
     agent, dwa = specs()
     assert agent.run.env.min_linear_m_s == 0.1 and dwa.run.env.min_linear_m_s == 0.0

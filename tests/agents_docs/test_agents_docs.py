@@ -23,7 +23,7 @@ import pytest
 import yaml
 from docs_helpers import anchors, parameter_rows, section, table_rows
 
-from pic4rl_agents import tester, train, tune
+from pic4rl_agents import tester, testplan, train, tune
 from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -152,9 +152,9 @@ def test_every_algorithm_and_baseline_is_documented(doc):
 
 def test_the_default_test_pairs_are_the_packaged_ones(doc):
     text = section(doc, "### The test env and its episodes")
-    path = tester.DEFAULT_PAIRS.relative_to(ROOT).as_posix()
+    path = testplan.DEFAULT_PAIRS.relative_to(ROOT).as_posix()
     assert f"`{path}`" in text
-    data = json.loads(tester.DEFAULT_PAIRS.read_text())
+    data = json.loads(testplan.DEFAULT_PAIRS.read_text())
     rows = [line for line in text.splitlines() if re.match(r"\| \d+ \|", line)]
     assert len(rows) == len(data["poses"]) == len(data["goals"])
     for i, (line, pose, goal) in enumerate(zip(rows, data["poses"], data["goals"])):

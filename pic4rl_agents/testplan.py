@@ -1,0 +1,177 @@
+"""What ``pic4rl-test`` tests: a ``TestPlan`` (agents, baselines, episodes, where the bags
+go), and the agents it names, each with its test env (``resolve_agents``).
+
+An agent's env is its training config, then the plan's params files key by key, then its
+overrides; a baseline's is the first agent's at the robot's full speed range, or the params
+files alone. All drive the same test episodes (``pic4rl_agents.tester`` says which).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from pic4rl_bridge.baselines import BASELINES, check_fits
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.errors import ConfigError
+from pic4rl_sim import params_file
+
+from . import runs
+from .config import ENV_NODE, RunConfig, load_run_config
+
+#: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
+DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"
+
+
+@dataclass(frozen=True)
+class TestPlan:
+    """What to test and how: the agents and baselines, the episodes, where the bags go."""
+
+    agents: tuple[str, ...] = ()  # [NAME=]PATH: a run/checkpoint directory or a model zip
+    baselines: tuple[str, ...] = ()
+    algorithm: str = ""  # of a bare model zip (its run's config names it otherwise)
+    episodes: int = 5
+    random: int | None = None  # draw this many pairs instead of a pairs file
+    pairs: str | None = None  # the kind of the drawn pairs (PAIR_KINDS)
+    seed: int = 0
+    bags_dir: Path = Path("bags")
+    run: str = ""  # the bags' run name; empty: test_<date>-<time>
+    params_files: tuple[str, ...] = ()  # applied over each agent's config
+    env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    sim_overrides: Mapping[str, Any] = field(default_factory=dict)
+    with_std: bool = False  # mean ± std cells in table.md
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1 or (self.random is not None and self.random < 1):
+            raise ConfigError("--episodes/--random: expected a positive number of episodes")
+
+    @property
+    def n_episodes(self) -> int:
+        return self.random or self.episodes
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """One row of the table: a trained model (``model`` set) or a baseline (``baseline``)."""
+
+    name: str
+    run: RunConfig
+    model: Path | None = None
+    baseline: str = ""
+    episode_set: str = ""  # its test episodes, in words
+
+
+def _agent_files(path: Path) -> tuple[Path, Path | None]:
+    """The model zip and its run's config, from a directory or a zip (the config is looked
+    for beside the zip and up to two folders above: checkpoints/, best/<session>/)."""
+    if path.is_dir():
+        model = path / runs.MODEL
+        if not model.is_file():
+            raise ConfigError(f"--agent {path}: no {runs.MODEL} in it")
+        return model, runs.run_config_file(path)
+    if path.is_file() and path.suffix == ".zip":
+        run_dir = runs.run_of(path)
+        return path, runs.run_config_file(run_dir) if run_dir is not None else None
+    raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
+                      f"{runs.MODEL} and {runs.CONFIG}, or a model .zip)")
+
+
+def _test_pairs(plan: TestPlan) -> str | None:
+    """The ``episodes.file`` named at test time (params files, then overrides), if any."""
+    pairs = None
+    for path in plan.params_files:
+        section = params_file.node_section(params_file.read(path), ENV_NODE, source=path) or {}
+        if section.get("episodes.file"):
+            pairs = params_file.beside(section["episodes.file"], Path(path))
+    return plan.env_overrides.get("episodes.file", pairs)
+
+
+def _agents(plan: TestPlan) -> list[AgentSpec]:
+    """The trained agents, each with its run's config and the plan's files and overrides."""
+    train_overrides = {"algorithm": plan.algorithm} if plan.algorithm else {}
+    specs: list[AgentSpec] = []
+    for item in plan.agents:
+        name, sep, location = item.partition("=")
+        path = Path(location if sep else item)
+        model, config = _agent_files(path)
+        files = ([str(config)] if config else []) + list(plan.params_files)
+        if not files:
+            raise ConfigError(f"--agent {path}: no {runs.CONFIG} beside the model; give the "
+                              "env with --ros-args --params-file FILE and --algorithm")
+        run = load_run_config(files, train=train_overrides, env=plan.env_overrides,
+                              sim=plan.sim_overrides)
+        if not sep:
+            name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
+                path.parent.name if path.suffix == ".zip" else path.name)
+        specs.append(AgentSpec(name, run, model=model))
+    return specs
+
+
+def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec]) -> AgentSpec:
+    """A baseline in the first agent's env (at the robot's full speed range), or in the
+    plan's params files."""
+    if baseline not in BASELINES:
+        raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
+    if agents:
+        run = agents[0].run
+        if "min_linear_m_s" not in plan.env_overrides:
+            # An agent's speed floor is its own training choice; a baseline drives the
+            # robot's full range unless the user says otherwise.
+            run = replace(run, env=run.env.replace(min_linear_m_s=0.0))
+    elif plan.params_files:
+        run = load_run_config(plan.params_files, env=plan.env_overrides,
+                              sim=plan.sim_overrides)
+    else:
+        raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
+                          "or --ros-args --params-file FILE")
+    check_fits(baseline, run.env)  # before any run directory or bag exists
+    return AgentSpec(baseline, run, baseline=baseline)
+
+
+def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:
+    """The agents and baselines to test, each in its test env (the test episodes, no
+    curriculum), recorded under ``run_dir`` when one is given."""
+    pairs = _test_pairs(plan)
+    agents = _agents(plan)
+    specs = agents + [_baseline(plan, b, agents) for b in plan.baselines]
+    if not specs:
+        raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
+                          f"{'|'.join(BASELINES)}")
+    return [_test_env(s, plan, pairs, run_dir) for s in specs]
+
+
+def first_env(plan: TestPlan) -> EnvConfig:
+    """The env the plan's first agent drives in (its sim section, its ROS domain)."""
+    return resolve_agents(plan)[0].run.env
+
+
+def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None,
+              run_dir: Path | None) -> AgentSpec:
+    """``spec`` set up for testing: the test episodes, no curriculum, recorded in
+    ``run_dir``."""
+    overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
+    if run_dir is not None:
+        overrides.update({"record.enabled": True, "record.bags_dir": str(run_dir),
+                          "record.run": spec.name})
+    sim = spec.run.env.sim_params
+    if pairs is None and sim.get("world", "indoor") == "indoor" and not sim.get(
+            "world_variant", 0):
+        pairs = str(DEFAULT_PAIRS)
+    if plan.random or not pairs:
+        kind = plan.pairs or ("paper" if plan.random else "any")
+        overrides.update({"episodes.file": "", "episodes.ordered": False,
+                          "episodes.pair_kind": kind})
+        episode_set = f"{plan.n_episodes} random pairs of kind {kind!r} with seed {plan.seed}"
+    else:
+        if plan.pairs:
+            raise ConfigError(f"--pairs {plan.pairs}: the test pairs come from {pairs}; add "
+                              "--random N to draw N pairs of that kind")
+        overrides.update({"episodes.file": pairs, "episodes.ordered": True,
+                          "episodes.change_goal_and_pose": 1})
+        episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
+                       else "pairs file") + f" {pairs}"
+    return replace(spec, run=replace(spec.run, env=spec.run.env.replace(**overrides)),
+                   episode_set=episode_set)
