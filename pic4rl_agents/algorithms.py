@@ -13,6 +13,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import sb3_contrib
 import stable_baselines3 as sb3
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.noise import NormalActionNoise
@@ -38,28 +39,22 @@ class SAC(EpsilonGreedy, sb3.SAC):
     """SB3's SAC with the paper's ε-greedy exploration."""
 
 
+class TQC(EpsilonGreedy, sb3_contrib.TQC):
+    """sb3-contrib's TQC with the paper's ε-greedy exploration."""
+
+
 PPO = sb3.PPO
 
-ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"ddpg": DDPG, "td3": TD3, "sac": SAC, "ppo": PPO}
-
-try:  # TQC lives in sb3-contrib, an optional extra
-    import sb3_contrib
-
-    class TQC(EpsilonGreedy, sb3_contrib.TQC):
-        """sb3-contrib's TQC with the paper's ε-greedy exploration."""
-
-    ALGORITHMS["tqc"] = TQC
-except ImportError:  # pragma: no cover - depends on the install
-    pass
+ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"ddpg": DDPG, "td3": TD3, "sac": SAC, "tqc": TQC,
+                                              "ppo": PPO}
 
 _ACTIVATIONS: dict[str, type[nn.Module]] = {"relu": nn.ReLU, "tanh": nn.Tanh, "elu": nn.ELU}
 
 
 def algorithm_class(name: str) -> type[BaseAlgorithm]:
     if name not in ALGORITHMS:
-        hint = " (install sb3-contrib for tqc)" if name == "tqc" else ""
         raise ConfigError(f"algorithm: {name!r} is not available; expected one of "
-                          f"{', '.join(sorted(ALGORITHMS))}{hint}")
+                          f"{', '.join(sorted(ALGORITHMS))}")
     return ALGORITHMS[name]
 
 

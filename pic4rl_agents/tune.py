@@ -18,91 +18,30 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import math
 import multiprocessing
-import os
 import sys
 import time
-import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import optuna
-import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
 from .callbacks import SeededEvalCallback
 from .config import RunConfig, load_run_config, parse_overrides
+from .console import console_logging
+from .samplers import suggest
+from .tune_summary import write_summary
 
-#: Hidden layers of the actor and of each critic, by the sampler's name for them.
-NET_ARCHS = {"small": [64, 64], "medium": [128, 128], "big": [256, 256]}
+log = logging.getLogger(__name__)
+
 OBJECTIVES = ("success_rate", "mean_reward")
-
-
-def _common(trial: Any) -> dict[str, Any]:
-    arch = NET_ARCHS[trial.suggest_categorical("net_arch", list(NET_ARCHS))]
-    return {"learning_rate": trial.suggest_float("learning_rate", 1e-5, 2e-3, log=True),
-            "gamma": trial.suggest_categorical("gamma", [0.95, 0.98, 0.99, 0.995, 0.999]),
-            "policy.net_arch": arch, "policy.critic_arch": arch}
-
-
-def sample_off_policy(trial: Any) -> dict[str, Any]:
-    """SAC and TQC (and the common part of TD3 and DDPG). ``gradient_steps`` is a fraction of
-    ``train_freq``: the update-to-data ratio, the wall-clock lever (a gradient step costs
-    more than an env step)."""
-    train_freq = trial.suggest_categorical("train_freq", [1, 2, 4, 8, 16, 32, 64])
-    ratio = trial.suggest_categorical("gradient_steps_ratio", [0.25, 0.5, 1.0])
-    return {**_common(trial),
-            "batch_size": trial.suggest_categorical("batch_size", [64, 128, 256, 512]),
-            "buffer_size": trial.suggest_categorical("buffer_size",
-                                                     [50_000, 200_000, 1_000_000]),
-            "learning_starts": trial.suggest_categorical("learning_starts",
-                                                         [1_000, 5_000, 10_000]),
-            "tau": trial.suggest_categorical("tau", [0.001, 0.005, 0.01, 0.02, 0.05]),
-            "train_freq": train_freq,
-            "gradient_steps": max(1, round(train_freq * ratio)),
-            "epsilon.initial": trial.suggest_categorical("epsilon_initial", [0.0, 0.1, 0.2])}
-
-
-def sample_td3(trial: Any) -> dict[str, Any]:
-    """TD3 and DDPG: the off-policy parameters and the Gaussian action noise."""
-    return {**sample_off_policy(trial),
-            "action_noise_std": trial.suggest_float("action_noise_std", 0.0, 0.5)}
-
-
-def sample_ppo(trial: Any, n_envs: int = 1) -> dict[str, Any]:
-    """PPO; the minibatch is at most one rollout (``ppo.n_steps`` × ``n_envs``)."""
-    n_steps = trial.suggest_categorical("n_steps", [128, 256, 512, 1024, 2048])
-    batch = trial.suggest_categorical("batch_size", [32, 64, 128, 256, 512])
-    return {**_common(trial), "epsilon.initial": 0.0,
-            "batch_size": min(batch, n_steps * n_envs), "ppo.n_steps": n_steps,
-            "ppo.n_epochs": trial.suggest_categorical("n_epochs", [1, 5, 10, 20]),
-            "ppo.ent_coef": trial.suggest_float("ent_coef", 1e-8, 0.1, log=True),
-            "ppo.gae_lambda": trial.suggest_categorical("gae_lambda", [0.9, 0.95, 0.98, 0.99]),
-            "ppo.clip_range": trial.suggest_categorical("clip_range", [0.1, 0.2, 0.3]),
-            "policy.activation": trial.suggest_categorical("activation", ["tanh", "relu"])}
-
-
-#: The sampler of each algorithm: a trial → dotted trainer parameters.
-SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
-    "td3": sample_td3, "ddpg": sample_td3, "sac": sample_off_policy,
-    "tqc": sample_off_policy, "ppo": sample_ppo}
-
-
-def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
-    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
-    kept in the trial's user attribute ``hyperparams`` for the best params file."""
-    algorithm = base.train.algorithm
-    sampler = SAMPLERS[algorithm]
-    sampled = sampler(trial, base.train.n_envs) if algorithm == "ppo" else sampler(trial)
-    params = {**sampled, "algorithm": algorithm, **fixed}
-    trial.set_user_attr("hyperparams", params)
-    return params
-
 
 @dataclass(frozen=True)
 class TuneSettings:
@@ -193,7 +132,7 @@ def objective(trial: optuna.Trial, settings: TuneSettings) -> float:
     return float(last[settings.objective])
 
 
-def _print_trial(study: Any, trial: Any) -> None:
+def _log_trial(study: Any, trial: Any) -> None:
     attrs = trial.user_attrs
     state = trial.state.name.lower()
     if "success_rate" in attrs:
@@ -206,64 +145,7 @@ def _print_trial(study: Any, trial: Any) -> None:
         best = f"; best so far: trial {study.best_trial.number} ({study.best_value:.3g})"
     except ValueError:  # no completed trial yet
         best = ""
-    print(f"pic4rl-tune: trial {trial.number} {state}: {what}{best}", flush=True)
-
-
-def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) -> None:
-    """The study folder's summary (rewritten): trials.csv, best_trial.yaml, best_params.yaml;
-    with ``final``, importances.yaml (when Optuna can compute them) and eval_curves.png."""
-    from optuna.trial import TrialState
-
-    folder = settings.study_dir
-    _write(folder / "trials.csv", study.trials_dataframe().to_csv(index=False))
-    complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
-    if not complete:
-        return
-    best = study.best_trial
-    _write(folder / "best_trial.yaml", yaml.safe_dump(
-        {"study": settings.study_name, "objective": settings.objective, "number": best.number,
-         "value": best.value, "params": best.params, "user_attrs": best.user_attrs},
-        sort_keys=False))
-    hyperparams = best.user_attrs.get("hyperparams")
-    if hyperparams is not None:
-        _write(folder / "best_params.yaml", settings.best_run(hyperparams).to_yaml())
-    if final:
-        _write_importances(study, folder)
-        _write_curves(complete, folder)
-
-
-def _write_importances(study: Any, folder: Path) -> None:
-    try:  # PED-ANOVA: numpy only (fANOVA needs scikit-learn); too few trials warn: none then
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", UserWarning)
-            importances = optuna.importance.get_param_importances(
-                study, evaluator=optuna.importance.PedAnovaImportanceEvaluator())
-    except (ValueError, RuntimeError, UserWarning) as err:
-        print(f"pic4rl-tune: no parameter importances ({err})", file=sys.stderr)
-        return
-    _write(folder / "importances.yaml",
-           yaml.safe_dump({k: round(float(v), 4) for k, v in importances.items()},
-                          sort_keys=False))
-
-
-def _write_curves(complete: list[Any], folder: Path, top: int = 8) -> None:
-    from .curves import eval_curves, save_eval_curves
-
-    curves = {}
-    for trial in sorted(complete, key=lambda t: t.value, reverse=True)[:top]:
-        run_dir = Path(trial.user_attrs.get("run_dir", ""))
-        if (run_dir / "eval").is_dir():
-            curves.update(eval_curves(run_dir, f"trial {trial.number} ({trial.value:.3g})"))
-    if curves:
-        save_eval_curves(curves, folder / "eval_curves.png",
-                         title=f"{folder.name}: the best {len(curves)} trials")
-
-
-def _write(path: Path, text: str) -> None:
-    """Write through a temporary file, so a reader (or another worker) never sees half."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
+    log.info("trial %d %s: %s%s", trial.number, state, what, best)
 
 
 def create_study(settings: TuneSettings, *, pruner: str = "median", n_startup_trials: int = 5,
@@ -291,7 +173,7 @@ def optimize(settings: TuneSettings, *, n_trials: int, timeout_s: float | None =
     study = create_study(settings, pruner=pruner, n_startup_trials=n_startup_trials, seed=seed)
 
     def after(study: Any, trial: Any) -> None:
-        _print_trial(study, trial)
+        _log_trial(study, trial)
         write_summary(study, settings)
 
     study.optimize(lambda trial: objective(trial, settings), n_trials=n_trials,
@@ -300,8 +182,18 @@ def optimize(settings: TuneSettings, *, n_trials: int, timeout_s: float | None =
 
 
 def _worker(settings: TuneSettings, options: dict[str, Any]) -> None:
-    with contextlib.suppress(KeyboardInterrupt):  # the parent reports the interruption
+    with _console(), contextlib.suppress(KeyboardInterrupt):  # the parent reports it
         optimize(settings, **options)
+
+
+@contextlib.contextmanager
+def _console() -> Iterator[None]:
+    """The trials on stdout; each trial's training summary and the summary's warnings on
+    stderr."""
+    with console_logging(__name__, "pic4rl-tune: %(message)s", stream=sys.stdout), \
+            console_logging("pic4rl_agents.tune_summary", "pic4rl-tune: %(message)s"), \
+            console_logging("pic4rl_agents.train", "pic4rl-train: %(message)s"):
+        yield
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -373,6 +265,11 @@ def settings_from(args: argparse.Namespace) -> TuneSettings:
 def main(argv: Sequence[str] | None = None) -> int:
     """Tune; exit 0 when done, 2 for bad arguments, 130 after Ctrl-C (the summary written)."""
     args = build_parser().parse_args(argv)
+    with _console():
+        return _tune(args)
+
+
+def _tune(args: argparse.Namespace) -> int:
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     settings: TuneSettings | None = None
     try:

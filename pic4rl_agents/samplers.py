@@ -1,0 +1,73 @@
+"""The hyperparameter samplers of ``pic4rl-tune``, one per algorithm, as RL Zoo's: an Optuna
+trial → dotted trainer parameters."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .config import RunConfig
+
+#: Hidden layers of the actor and of each critic, by the sampler's name for them.
+NET_ARCHS = {"small": [64, 64], "medium": [128, 128], "big": [256, 256]}
+
+
+def _common(trial: Any) -> dict[str, Any]:
+    arch = NET_ARCHS[trial.suggest_categorical("net_arch", list(NET_ARCHS))]
+    return {"learning_rate": trial.suggest_float("learning_rate", 1e-5, 2e-3, log=True),
+            "gamma": trial.suggest_categorical("gamma", [0.95, 0.98, 0.99, 0.995, 0.999]),
+            "policy.net_arch": arch, "policy.critic_arch": arch}
+
+
+def sample_off_policy(trial: Any) -> dict[str, Any]:
+    """SAC and TQC (and the common part of TD3 and DDPG). ``gradient_steps`` is a fraction of
+    ``train_freq``: the update-to-data ratio, the wall-clock lever (a gradient step costs
+    more than an env step)."""
+    train_freq = trial.suggest_categorical("train_freq", [1, 2, 4, 8, 16, 32, 64])
+    ratio = trial.suggest_categorical("gradient_steps_ratio", [0.25, 0.5, 1.0])
+    return {**_common(trial),
+            "batch_size": trial.suggest_categorical("batch_size", [64, 128, 256, 512]),
+            "buffer_size": trial.suggest_categorical("buffer_size",
+                                                     [50_000, 200_000, 1_000_000]),
+            "learning_starts": trial.suggest_categorical("learning_starts",
+                                                         [1_000, 5_000, 10_000]),
+            "tau": trial.suggest_categorical("tau", [0.001, 0.005, 0.01, 0.02, 0.05]),
+            "train_freq": train_freq,
+            "gradient_steps": max(1, round(train_freq * ratio)),
+            "epsilon.initial": trial.suggest_categorical("epsilon_initial", [0.0, 0.1, 0.2])}
+
+
+def sample_td3(trial: Any) -> dict[str, Any]:
+    """TD3 and DDPG: the off-policy parameters and the Gaussian action noise."""
+    return {**sample_off_policy(trial),
+            "action_noise_std": trial.suggest_float("action_noise_std", 0.0, 0.5)}
+
+
+def sample_ppo(trial: Any, n_envs: int = 1) -> dict[str, Any]:
+    """PPO; the minibatch is at most one rollout (``ppo.n_steps`` × ``n_envs``)."""
+    n_steps = trial.suggest_categorical("n_steps", [128, 256, 512, 1024, 2048])
+    batch = trial.suggest_categorical("batch_size", [32, 64, 128, 256, 512])
+    return {**_common(trial), "epsilon.initial": 0.0,
+            "batch_size": min(batch, n_steps * n_envs), "ppo.n_steps": n_steps,
+            "ppo.n_epochs": trial.suggest_categorical("n_epochs", [1, 5, 10, 20]),
+            "ppo.ent_coef": trial.suggest_float("ent_coef", 1e-8, 0.1, log=True),
+            "ppo.gae_lambda": trial.suggest_categorical("gae_lambda", [0.9, 0.95, 0.98, 0.99]),
+            "ppo.clip_range": trial.suggest_categorical("clip_range", [0.1, 0.2, 0.3]),
+            "policy.activation": trial.suggest_categorical("activation", ["tanh", "relu"])}
+
+
+#: The sampler of each algorithm: a trial → dotted trainer parameters.
+SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
+    "td3": sample_td3, "ddpg": sample_td3, "sac": sample_off_policy,
+    "tqc": sample_off_policy, "ppo": sample_ppo}
+
+
+def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
+    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
+    kept in the trial's user attribute ``hyperparams`` for the best params file."""
+    algorithm = base.train.algorithm
+    sampler = SAMPLERS[algorithm]
+    sampled = sampler(trial, base.train.n_envs) if algorithm == "ppo" else sampler(trial)
+    params = {**sampled, "algorithm": algorithm, **fixed}
+    trial.set_user_attr("hyperparams", params)
+    return params

@@ -1,0 +1,76 @@
+"""The summary of a ``pic4rl-tune`` study, in its folder, rewritten after every trial:
+``trials.csv``, ``best_trial.yaml``, ``best_params.yaml`` (a params file ``pic4rl-train``
+takes as it is), and at the end ``importances.yaml`` and ``eval_curves.png``."""
+
+from __future__ import annotations
+
+import logging
+import os
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import optuna
+import yaml
+
+if TYPE_CHECKING:
+    from .tune import TuneSettings
+
+log = logging.getLogger(__name__)
+
+
+def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) -> None:
+    """The study folder's summary (rewritten): trials.csv, best_trial.yaml, best_params.yaml;
+    with ``final``, importances.yaml (when Optuna can compute them) and eval_curves.png."""
+    from optuna.trial import TrialState
+
+    folder = settings.study_dir
+    _write(folder / "trials.csv", study.trials_dataframe().to_csv(index=False))
+    complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+    if not complete:
+        return
+    best = study.best_trial
+    _write(folder / "best_trial.yaml", yaml.safe_dump(
+        {"study": settings.study_name, "objective": settings.objective, "number": best.number,
+         "value": best.value, "params": best.params, "user_attrs": best.user_attrs},
+        sort_keys=False))
+    hyperparams = best.user_attrs.get("hyperparams")
+    if hyperparams is not None:
+        _write(folder / "best_params.yaml", settings.best_run(hyperparams).to_yaml())
+    if final:
+        _write_importances(study, folder)
+        _write_curves(complete, folder)
+
+
+def _write_importances(study: Any, folder: Path) -> None:
+    try:  # PED-ANOVA: numpy only (fANOVA needs scikit-learn); too few trials warn: none then
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", UserWarning)
+            importances = optuna.importance.get_param_importances(
+                study, evaluator=optuna.importance.PedAnovaImportanceEvaluator())
+    except (ValueError, RuntimeError, UserWarning) as err:
+        log.warning("no parameter importances (%s)", err)
+        return
+    _write(folder / "importances.yaml",
+           yaml.safe_dump({k: round(float(v), 4) for k, v in importances.items()},
+                          sort_keys=False))
+
+
+def _write_curves(complete: list[Any], folder: Path, top: int = 8) -> None:
+    from .curves import eval_curves, save_eval_curves
+
+    curves = {}
+    for trial in sorted(complete, key=lambda t: t.value, reverse=True)[:top]:
+        run_dir = Path(trial.user_attrs.get("run_dir", ""))
+        if (run_dir / "eval").is_dir():
+            curves.update(eval_curves(run_dir, f"trial {trial.number} ({trial.value:.3g})"))
+    if curves:
+        save_eval_curves(curves, folder / "eval_curves.png",
+                         title=f"{folder.name}: the best {len(curves)} trials")
+
+
+def _write(path: Path, text: str) -> None:
+    """Write through a temporary file, so a reader (or another worker) never sees half."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
