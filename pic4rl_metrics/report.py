@@ -258,20 +258,8 @@ def render_comparison(
     first = " / ".join(str(n) for n in agg.index.names if n is not None) or "agent"
     note = footnote(agg, columns)
     if fmt == "json":
-        records: list[dict[str, object]] = []
-        for name, (_, row) in zip(names, agg.iterrows()):
-            rec: dict[str, object] = {first: name}
-            for col in columns:
-                if col == "success":
-                    rec[col] = _success_cell(row["success"])
-                    continue
-                rec[col] = _json_value(row[f"{col}_mean"])
-                if with_std:
-                    rec[f"{col}_std"] = _json_value(row.get(f"{col}_std"))
-            if note is not None:
-                rec["over"], rec["n_averaged"] = row["over"], int(row["n_averaged"])
-            records.append(rec)
-        return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+        return _comparison_json(agg, names, first, columns, with_std=with_std,
+                                averaged=note is not None)
 
     pm = r" $\pm$ " if fmt == "latex" else " ± "
     rows = [
@@ -293,6 +281,31 @@ def render_comparison(
             rows = [[*r, str(o), str(int(n))] for r, o, n in zip(rows, agg["over"], agg["n_averaged"])]
         return _csv(header, rows)
 
+    return _comparison_latex(rows, columns, caption=caption, label=label, note=note)
+
+
+def _comparison_json(agg: pd.DataFrame, names: list[str], first: str, columns: list[str], *,
+                     with_std: bool, averaged: bool) -> str:
+    """``render_comparison``'s json: records with unrounded means, null for NaN."""
+    records: list[dict[str, object]] = []
+    for name, (_, row) in zip(names, agg.iterrows()):
+        rec: dict[str, object] = {first: name}
+        for col in columns:
+            if col == "success":
+                rec[col] = _success_cell(row["success"])
+                continue
+            rec[col] = _json_value(row[f"{col}_mean"])
+            if with_std:
+                rec[f"{col}_std"] = _json_value(row.get(f"{col}_std"))
+        if averaged:
+            rec["over"], rec["n_averaged"] = row["over"], int(row["n_averaged"])
+        records.append(rec)
+    return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+
+def _comparison_latex(rows: list[list[str]], columns: list[str], *, caption: str | None,
+                      label: str | None, note: str | None) -> str:
+    """``render_comparison``'s latex: a ``table*`` with a label row and a unit row."""
     tex_rows = [[latex_escape(r[0]), *r[1:]] for r in rows]
     headers = [
         ["", *(METRICS[c].label for c in columns)],
