@@ -25,6 +25,15 @@ from typing import Any
 
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
+from pic4rl_sim.interfaces import (
+    CMD_VEL,
+    DEPTH_IMAGE,
+    GOAL_POSE,
+    ODOM,
+    PERSON_POSE,
+    RECORDED,
+    SCAN,
+)
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE
 from pic4rl_sim.schema import (
     NON_NEGATIVE,
@@ -39,10 +48,6 @@ from pic4rl_sim.schema import (
 )
 
 from .errors import ConfigError, require
-
-#: Topics recorded to each episode's bag by default (the bag contract; absent ones are skipped).
-CONTRACT_TOPICS = ("clock", "ground_truth", "odom", "scan", "cmd_vel", "goal_pose",
-                   "camera/depth/image_raw", "camera/depth/camera_info", "person/pose")
 
 
 class TaskName(ParamEnum):
@@ -225,14 +230,14 @@ class EpisodesConfig:
 class TopicsConfig:
     """Topic names, relative to ``ros.namespace`` unless absolute."""
 
-    cmd_vel: str = param("cmd_vel", doc="velocity commands (geometry_msgs/Twist or "
+    cmd_vel: str = param(CMD_VEL.name, doc="velocity commands (geometry_msgs/Twist or "
                          "TwistStamped)")
-    pose: str = param("odom", doc="odom (wheel odometry) | ground_truth, or any "
+    pose: str = param(ODOM.name, doc="odom (wheel odometry) | ground_truth, or any "
                       "nav_msgs/Odometry topic")
-    scan: str = param("scan", doc="sensor_msgs/LaserScan")
-    depth: str = param("camera/depth/image_raw", doc="sensor_msgs/Image (32FC1)")
-    goal: str = param("goal_pose", doc="geometry_msgs/PoseStamped")
-    person: str = param("person/pose", doc="geometry_msgs/PoseStamped (personMonitoring)")
+    scan: str = param(SCAN.name, doc="sensor_msgs/LaserScan")
+    depth: str = param(DEPTH_IMAGE.name, doc="sensor_msgs/Image (32FC1)")
+    goal: str = param(GOAL_POSE.name, doc="geometry_msgs/PoseStamped")
+    person: str = param(PERSON_POSE.name, doc="geometry_msgs/PoseStamped (personMonitoring)")
 
 
 @dataclass(frozen=True)
@@ -263,7 +268,7 @@ class RecordConfig:
     bags_dir: str = param("bags", doc="where runs of bags go")
     run: str = param("", doc="empty: <task>_<date>_<time>")
     storage: Storage = param(Storage.SQLITE3, doc="sqlite3 | mcap")
-    topics: tuple[str, ...] = param(CONTRACT_TOPICS, doc="topics recorded (absent ones are "
+    topics: tuple[str, ...] = param(RECORDED, doc="topics recorded (absent ones are "
                                     "skipped)")
     flush_interval_s: float = param(1.0, doc="sqlite3: commit this often, so a killed recorder "
                                     "keeps data", unit="s", range=NON_NEGATIVE)

@@ -17,6 +17,7 @@ import numpy as np
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, INTERFACES, STEP_TOPICS, interface
 
 from . import decode
 from .config import EnvConfig
@@ -26,14 +27,11 @@ from .robot_info import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")
-_SENSOR_DATA = OfferedQos(reliable=False, depth=5)  # rclpy's qos_profile_sensor_data
-#: The QoS the sim node offers its topics with (``pic4rl_sim.node``), and the ROS transport
-#: its ``cmd_vel``; the rest: reliable, volatile, depth 10.
-_NODE_QOS = {"scan": _SENSOR_DATA, "imu/data": _SENSOR_DATA,
-             "camera/depth/camera_info": _SENSOR_DATA, "camera/depth/image_raw": _SENSOR_DATA,
-             "goal_pose": OfferedQos(transient_local=True, depth=1),
-             "world/markers": OfferedQos(transient_local=True, depth=1),
-             "cmd_vel": OfferedQos(depth=100)}
+#: The QoS the sim node offers its topics with (``pic4rl_sim.interfaces``), and the ROS
+#: transport its ``cmd_vel`` (history 100); the rest: reliable, volatile, depth 10.
+_NODE_QOS = {i.name: OfferedQos(i.qos.value.reliable, i.qos.value.transient_local,
+                                i.qos.value.depth) for i in INTERFACES if i.qos is not None}
+_NODE_QOS[CMD_VEL.name] = OfferedQos(depth=100)
 
 
 def _f32(value: float) -> float:
@@ -137,27 +135,23 @@ class _MessageWriter:
         self._twist_type = Twist
         self._goal_pose = goal_pose
         self.state_messages = StateMessages(engine)
-        m = self.state_messages
-        wanted = {"clock": m.clock, "ground_truth": m.ground_truth, "odom": m.odom,
-                  "imu/data": m.imu, "person/pose": m.person,
-                  "camera/depth/camera_info": m.camera_info,
-                  "camera/depth/image_raw": m.depth_image, "scan": m.scan}
-        self._names = {t: f"{namespace}/{t}" for t in (*wanted, "goal_pose", "cmd_vel")}
-        self._outputs = [(t, msg) for t, msg in wanted.items() if msg is not None and t in topics]
+        self._names = {t.name: f"{namespace}/{t.name}" for t in (*STEP_TOPICS, GOAL_POSE, CMD_VEL)}
+        self._outputs = [(t.name, msg) for t, msg in self.state_messages.published
+                         if t.name in topics]
         self._topics = topics
 
     def _emit(self, topic: str, msg: Any, stamp_ns: int, tap: Tap) -> None:
         if topic in self._topics:
-            msgtype = type(msg).__module__.split(".")[0] + "/msg/" + type(msg).__name__
-            tap(RawMessage(self._names[topic], msgtype, self._serialize(msg), stamp_ns))
+            tap(RawMessage(self._names[topic], interface(topic).type, self._serialize(msg),
+                           stamp_ns))
 
     def goal(self, goal: tuple[float, float], stamp_ns: int, tap: Tap) -> None:
-        self._emit("goal_pose", self._goal_pose(goal, stamp_ns), stamp_ns, tap)
+        self._emit(GOAL_POSE.name, self._goal_pose(goal, stamp_ns), stamp_ns, tap)
 
     def command(self, command: Twist2D, stamp_ns: int, tap: Tap) -> None:
         msg = self._twist_type()
         msg.linear.x, msg.linear.y, msg.angular.z = command.vx, command.vy, command.wz
-        self._emit("cmd_vel", msg, stamp_ns, tap)
+        self._emit(CMD_VEL.name, msg, stamp_ns, tap)
 
     def state(self, stamp_ns: int, exact_pose: bool, sensors: frozenset[str], mount: Pose2D,
               tap: Tap) -> SensorFrame:

@@ -33,6 +33,7 @@ import numpy as np
 import yaml
 from pic4rl_metrics.contract import FACT_KEYS, FACTS_TOPIC, OUTCOME_TOPIC
 from pic4rl_metrics.facts import Outcome
+from pic4rl_sim.interfaces import QosKind, find
 from rosbags.interfaces import (
     Connection,
     Qos,
@@ -61,13 +62,12 @@ CONFIG_NAME = "config"
 EPISODE_PREFIX = "episode_"
 
 _UNSET = QosTime(0, 0)  # rmw's "unspecified": the default (infinite) deadline, lifespan, lease
-#: Offered QoS of latched topics (goals, markers), so that ``ros2 bag play`` re-latches them.
+#: Offered QoS of the sim's latched topics (goal, markers), so ``ros2 bag play`` re-latches them.
 LATCHED_QOS = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
                   _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
 #: Offered QoS of every other topic (when the transport does not know better).
 DEFAULT_QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE,
                   _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
-LATCHED_SUFFIXES = ("goal_pose", "markers")
 #: How a transport tells how a topic was offered (``Transport.offered_qos``).
 QosSource = Callable[[str], OfferedQos | None]
 
@@ -110,9 +110,12 @@ def custom_data(facts: Mapping[str, Any]) -> dict[str, str]:
 
 def offered_qos(topic: str, offered: OfferedQos | None = None) -> Qos:
     """The bag's QoS record of ``topic``: as ``offered`` (what its publisher really offered),
-    else transient-local for goals and markers (re-latched on replay), else reliable."""
+    else transient-local for the sim's latched topics (``pic4rl_sim.interfaces``: re-latched on
+    replay), else reliable."""
     if offered is None:
-        return LATCHED_QOS if topic.endswith(LATCHED_SUFFIXES) else DEFAULT_QOS
+        sim_topic = find(topic)
+        latched = sim_topic is not None and sim_topic.qos is QosKind.LATCHED
+        return LATCHED_QOS if latched else DEFAULT_QOS
     return Qos(QosHistory.KEEP_LAST if offered.depth > 0 else QosHistory.UNKNOWN, offered.depth,
                QosReliability.RELIABLE if offered.reliable else QosReliability.BEST_EFFORT,
                QosDurability.TRANSIENT_LOCAL if offered.transient_local

@@ -48,9 +48,21 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
-from visualization_msgs.msg import MarkerArray
 
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.interfaces import (
+    DEPTH_IMAGE,
+    DIAGNOSTICS,
+    GOAL_POSE,
+    INTERFACES,
+    ODOM,
+    PERSON_POSE,
+    SCAN,
+    Cadence,
+    Interface,
+    QosKind,
+)
+from pic4rl_sim.node.ros_interfaces import ros_type
 
 from . import decode
 from .config import EnvConfig, StepMode
@@ -67,13 +79,8 @@ _BEST_EFFORT = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.BEST_EFFOR
 _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
-#: Message types of the topics the sim node publishes, by relative name (recording).
-_KNOWN_TYPES: dict[str, type] = {
-    "clock": Clock, "ground_truth": Odometry, "odom": Odometry, "scan": LaserScan,
-    "imu/data": Imu, "camera/depth/image_raw": Image, "camera/depth/camera_info": CameraInfo,
-    "person/pose": PoseStamped, "goal_pose": PoseStamped, "world/markers": MarkerArray,
-}
-_SENSOR_TYPES = (LaserScan, Image, CameraInfo, Imu)
+#: The sim node's state and episode topics by relative name, recordable by name alone.
+_KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
 
 
 #: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
@@ -85,6 +92,12 @@ def _cdr_stamp(data: bytes) -> int:
     encapsulation (byte 1: 1 = little endian), then ``int32 sec``, ``uint32 nanosec``."""
     sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
     return sec * 1_000_000_000 + nanosec
+
+
+def _like(sim_topic: Interface, sensor_qos: QoSProfile) -> tuple[type, QoSProfile]:
+    """A sim topic's type, and ``sensor_qos`` (``ros.sensor_qos``) if it is sensor data."""
+    return ros_type(sim_topic.type), (sensor_qos if sim_topic.qos is QosKind.SENSOR_DATA
+                                      else _RELIABLE)
 
 
 def _type_name(kind: type) -> str:
@@ -166,13 +179,13 @@ class RosTransport(Transport):
         # The sim latches its goal; an operator's tool (rviz2's "2D Goal Pose") publishes
         # volatile, which a transient-local subscription would not match.
         goal_qos = _LATCHED if config.ros.sim_node else _RELIABLE
-        wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (Odometry, _RELIABLE),
-                                                      t.goal: (PoseStamped, goal_qos)}
+        wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (ros_type(ODOM.type), _RELIABLE),
+                                                      t.goal: (ros_type(GOAL_POSE.type), goal_qos)}
         self._roles = {"pose": t.pose, "goal": t.goal}
-        for role, topic, kind in (("scan", t.scan, LaserScan), ("depth", t.depth, Image),
-                                  ("person", t.person, PoseStamped)):
+        for role, topic, sim_topic in (("scan", t.scan, SCAN), ("depth", t.depth, DEPTH_IMAGE),
+                                       ("person", t.person, PERSON_POSE)):
             if role in sensors:
-                wanted[topic] = (kind, sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
+                wanted[topic] = _like(sim_topic, sensor_qos)
                 self._roles[role] = topic
         resolve = self.node.resolve_topic_name
         self._record_cmd = False
@@ -185,13 +198,12 @@ class RosTransport(Transport):
                 if resolve(topic) in taken:
                     continue
                 taken.add(resolve(topic))
-                kind = _KNOWN_TYPES.get(topic) or _KNOWN_TYPES.get(topic.strip("/"))
-                if kind is None:
+                sim_topic = _KNOWN_TOPICS.get(topic) or _KNOWN_TOPICS.get(topic.strip("/"))
+                if sim_topic is None:
                     raise ConfigError(f"record.topics: {topic!r} has no known message type; "
-                                      f"expected one of {', '.join(_KNOWN_TYPES)}")
-                qos = (_LATCHED if kind in (PoseStamped,) and topic.endswith("goal_pose")
-                       else sensor_qos if kind in _SENSOR_TYPES else _RELIABLE)
-                wanted[topic] = (kind, qos)
+                                      f"expected one of {', '.join(_KNOWN_TOPICS)}")
+                wanted[topic] = ((ros_type(GOAL_POSE.type), _LATCHED) if sim_topic is GOAL_POSE
+                                 else _like(sim_topic, sensor_qos))
         listed = ({resolve(name) for name in config.record.topics} if config.record.enabled
                   else set())
         for topic, (kind, qos) in wanted.items():
@@ -208,7 +220,7 @@ class RosTransport(Transport):
         physics diverged and the robot was put back at its start."""
         from pic4rl_sim.node.messages import PHYSICS_STATUS
 
-        entry = _Topic("diagnostics", DiagnosticArray)
+        entry = _Topic(DIAGNOSTICS.name, DiagnosticArray)
 
         def on_status(msg: DiagnosticArray) -> None:
             for status in msg.status:
@@ -217,7 +229,8 @@ class RosTransport(Transport):
                     if status.level == DiagnosticStatus.ERROR:
                         self._faults[entry.stamp_ns] = status.message
 
-        sub = self.node.create_subscription(DiagnosticArray, "diagnostics", on_status, _RELIABLE)
+        sub = self.node.create_subscription(DiagnosticArray, DIAGNOSTICS.name, on_status,
+                                            _RELIABLE)
         entry.name = sub.topic_name
         self._status = entry
 

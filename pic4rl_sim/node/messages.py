@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import array
 import sys
+from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -28,6 +29,18 @@ from ..engine.core import Engine
 from ..engine.geometry import Pose2D, yaw_to_quaternion
 from ..engine.sensors import EXACT_VARIANCE
 from ..engine.world_spec import WorldSpec
+from ..interfaces import (
+    CAMERA_INFO,
+    CLOCK,
+    DEPTH_IMAGE,
+    GROUND_TRUTH,
+    IMU,
+    ODOM,
+    PERSON_POSE,
+    SCAN,
+    STEP_TOPICS,
+    Interface,
+)
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
@@ -111,6 +124,12 @@ class StateMessages:
                 header=header, height=cam.height, width=cam.width, distortion_model="plumb_bob",
                 d=[0.0] * 5, k=cam.k_matrix, r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
                 p=cam.p_matrix)
+        held = {CLOCK: self.clock, GROUND_TRUTH: self.ground_truth, ODOM: self.odom,
+                IMU: self.imu, PERSON_POSE: self.person, CAMERA_INFO: self.camera_info,
+                DEPTH_IMAGE: self.depth_image, SCAN: self.scan}
+        #: (topic, message) of each step topic this engine has, in publishing order.
+        self.published: tuple[tuple[Interface, Any], ...] = tuple(
+            (topic, held[topic]) for topic in STEP_TOPICS if held[topic] is not None)
 
     def fill(self, engine: Engine, stamp_ns: int) -> None:
         """Stamp every message with ``stamp_ns`` (ns) and fill it from ``engine`` now."""

@@ -1,23 +1,17 @@
 """The ROS 2 node ``sim``: one simulated robot that any ROS 2 tool can drive and record.
 
-Interfaces (relative names, so ``--ros-args -r __ns:=/robot1`` runs several sims side by
-side): sub ``cmd_vel`` (Twist; holonomic robots use ``linear.y``); pub ``clock``,
-``ground_truth`` and ``odom`` (Odometry: ``world``/``base_link`` exact, ``odom``/``base_link``
-wheel odometry), ``imu/data``, ``person/pose`` (person worlds), ``camera/depth/camera_info`` and
-``camera/depth/image_raw`` (32FC1, robots with a depth camera), ``scan``, ``goal_pose``
-(transient-local) and ``world/markers`` (transient-local); services ``reset_world``,
-``pause_physics``, ``unpause_physics`` (std_srvs/Empty, Gazebo's names).
+Interfaces: the table of ``pic4rl_sim.interfaces`` (relative names, so ``--ros-args -r
+__ns:=/robot1`` runs several sims side by side; services with Gazebo's names).
 
 Sim time is an integer nanosecond counter owned by this node: it starts at 0 and each control
-step adds ``control_dt_s``. Every message of a step carries that stamp, published in the order
-clock, ground_truth, odom, imu/data, person/pose, camera_info, image_raw, scan: the scan (or,
-without a LiDAR, the depth image) is a step's last message. In ``lockstep`` mode each
-``cmd_vel`` advances one control period; in ``realtime`` mode a wall-clock timer steps with the
-latest command, or a stop once it is older than ``cmd_timeout_s`` of sim time. Each step first
-publishes ``diagnostics`` (``diagnostic_msgs/DiagnosticArray``, the step's stamp): status
-``sim: physics`` is OK, or ERROR with the reason when the physics diverged, which the engine
-logs (through this node's logger) and answers by putting the robot back at its start: the
-episode is void, and the bridge ends it as ``diverged``.
+step adds ``control_dt_s``. Every message of a step carries that stamp, published in the
+table's order: the scan (or, without a LiDAR, the depth image) is a step's last message. In
+``lockstep`` mode each ``cmd_vel`` advances one control period; in ``realtime`` mode a
+wall-clock timer steps with the latest command, or a stop once it is older than
+``cmd_timeout_s`` of sim time. Each step first publishes ``diagnostics`` (the step's stamp):
+its status ``sim: physics`` is OK, or ERROR with the reason when the physics diverged, which
+the engine logs (through this node's logger) and answers by putting the robot back at its
+start: the episode is void, and the bridge ends it as ``diverged``.
 
 Episodes: set ``seed``, ``world_variant``, ``start_pose``, ``goal`` (or any parameter) with the
 parameter services, whose result is the acknowledgement, then call ``reset_world``. The reset
@@ -42,8 +36,7 @@ from typing import Any
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, Twist
-from nav_msgs.msg import Odometry
+from geometry_msgs.msg import Twist
 from rcl_interfaces.msg import (
     FloatingPointRange,
     IntegerRange,
@@ -57,18 +50,28 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.publisher import Publisher
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.timer import Timer
 from rclpy.utilities import remove_ros_args
-from rosgraph_msgs.msg import Clock as ClockMsg
-from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
-from visualization_msgs.msg import MarkerArray
 
 from ..engine.core import Engine, StepResult, limit_command
 from ..errors import ConfigError, WorldError
 from ..engine.geometry import Twist2D
+from ..interfaces import (
+    CMD_VEL,
+    DIAGNOSTICS,
+    GOAL_POSE,
+    INTERFACES,
+    PAUSE_PHYSICS,
+    RESET_WORLD,
+    STEP_TOPICS,
+    UNPAUSE_PHYSICS,
+    WORLD_MARKERS,
+    Direction,
+    Interface,
+)
 from .messages import PHYSICS_STATUS, StateMessages, goal_pose, world_markers
+from .ros_interfaces import qos_profile, ros_type
 from ..params import (
     MAX_SEED,
     ROBOT,
@@ -92,9 +95,6 @@ _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.
               ParamType.INTEGER_ARRAY: Parameter.Type.INTEGER_ARRAY,
               ParamType.STRING_ARRAY: Parameter.Type.STRING_ARRAY}
 _CLOCK_KEYS = frozenset({"clock_mode", "real_time_factor", "cmd_timeout_s"})
-_RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _THROTTLE_S = 5.0
 _STOP = Twist2D()
 
@@ -153,17 +153,14 @@ class SimNode(Node):
                               seed=episode.seed)
         self._engine.reset(seed=episode.seed, start=episode.start, goal=episode.goal)
         self._messages = StateMessages(self._engine)
-        self._goal_pub = self.create_publisher(PoseStamped, "goal_pose", _LATCHED)
-        self._markers_pub = self.create_publisher(MarkerArray, "world/markers", _LATCHED)
-        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "diagnostics", _RELIABLE)
+        self._goal_pub = self._publisher(GOAL_POSE)
+        self._markers_pub = self._publisher(WORLD_MARKERS)
+        self._diagnostics_pub = self._publisher(DIAGNOSTICS)
         self._status = DiagnosticArray(status=[DiagnosticStatus(
             name=PHYSICS_STATUS, hardware_id=self._config.robot.name)])
         self._use_engine()
         self._publish_episode()
-        self.create_subscription(Twist, "cmd_vel", self._on_cmd_vel, _RELIABLE)
-        self.create_service(Empty, "reset_world", self._on_reset)
-        self.create_service(Empty, "pause_physics", self._on_pause)
-        self.create_service(Empty, "unpause_physics", self._on_unpause)
+        self._serve()
         self.add_on_set_parameters_callback(self._validate_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
@@ -258,27 +255,34 @@ class SimNode(Node):
         self._markers_pub.publish(world_markers(engine.world, engine.goal, self._stamp_ns))
         self._publish_state()
 
+    def _publisher(self, topic: Interface) -> Publisher:
+        return self.create_publisher(ros_type(topic.type), topic.name, qos_profile(topic))
+
+    def _serve(self) -> None:
+        """The table's subscription and services, each to its handler."""
+        handlers = {CMD_VEL: self._on_cmd_vel, RESET_WORLD: self._on_reset,
+                    PAUSE_PHYSICS: self._on_pause, UNPAUSE_PHYSICS: self._on_unpause}
+        for interface in INTERFACES:
+            if interface.direction is Direction.SUB:
+                self.create_subscription(ros_type(interface.type), interface.name,
+                                         handlers[interface], qos_profile(interface))
+            elif interface.direction is Direction.SRV:
+                self.create_service(ros_type(interface.type), interface.name,
+                                    handlers[interface])
+
     def _wire(self) -> None:
-        """Publishers for what this engine's messages hold, in publishing order."""
-        m = self._messages
-        wanted = (("clock", ClockMsg, _RELIABLE, m.clock),
-                  ("ground_truth", Odometry, _RELIABLE, m.ground_truth),
-                  ("odom", Odometry, _RELIABLE, m.odom),
-                  ("imu/data", Imu, qos_profile_sensor_data, m.imu),
-                  ("person/pose", PoseStamped, _RELIABLE, m.person),
-                  ("camera/depth/camera_info", CameraInfo, qos_profile_sensor_data,
-                   m.camera_info),
-                  ("camera/depth/image_raw", Image, qos_profile_sensor_data, m.depth_image),
-                  ("scan", LaserScan, qos_profile_sensor_data, m.scan))
+        """Publishers for the step topics this engine's messages hold, in publishing order."""
+        held = dict(self._messages.published)
         self._outputs = []
-        for topic, msg_type, qos, msg in wanted:
+        for topic in STEP_TOPICS:
+            msg = held.get(topic)
             if msg is None:
-                if topic in self._pubs:
-                    self.destroy_publisher(self._pubs.pop(topic))
+                if topic.name in self._pubs:
+                    self.destroy_publisher(self._pubs.pop(topic.name))
                 continue
-            if topic not in self._pubs:
-                self._pubs[topic] = self.create_publisher(msg_type, topic, qos)
-            self._outputs.append((self._pubs[topic], msg))
+            if topic.name not in self._pubs:
+                self._pubs[topic.name] = self._publisher(topic)
+            self._outputs.append((self._pubs[topic.name], msg))
 
     def _on_reset(self, request: Empty.Request, response: Empty.Response) -> Empty.Response:
         try:

@@ -14,9 +14,9 @@ import pytest
 import yaml
 from pic4rl_sim.engine.geometry import Footprint, Pose2D
 
+from pic4rl_sim.interfaces import RECORDED
 from pic4rl_sim.schema import param_names
 from pic4rl_bridge.config import (
-    CONTRACT_TOPICS,
     EnvConfig,
     env_config_from_params,
     load_env_config,
@@ -279,7 +279,7 @@ def test_replace_checks_its_overrides() -> None:
     assert config.reward.goal == 1.0 and EnvConfig().reward.goal == 1000.0
     with pytest.raises(ConfigError, match="did you mean 'reward.goal'"):
         EnvConfig().replace(**{"reward.gaol": 1.0})
-    assert EnvConfig().record.topics == CONTRACT_TOPICS
+    assert EnvConfig().record.topics == RECORDED
 
 
 # --- Scenario ---------------------------------------------------------------------------------

@@ -1,14 +1,14 @@
 """docs/sim.md against the code: every parameter, topic, service, config file and built-in
 robot is documented, and the tables generated from the code are current. Starts no ROS graph.
 
-After changing a parameter or a robot, print the tables and paste them into docs/sim.md:
+After changing a parameter, a robot or an interface, print the tables and paste them into
+docs/sim.md:
 
     .venv/bin/python tests/sim/test_docs.py
 """
 
 from __future__ import annotations
 
-import ast
 import re
 from pathlib import Path
 from typing import Any
@@ -20,14 +20,12 @@ from pic4rl_sim.params import ParamSpec, parameter_table
 from pic4rl_sim.engine.robot_specs import BUILT_IN, JACKAL, Drive, RobotSpec
 from pic4rl_sim.engine.sensors import STANDARD_GRAVITY_M_S2
 from pic4rl_sim.engine.world_generators import GENERATORS
+from pic4rl_sim.interfaces import INTERFACES, Interface
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "sim.md"
-NODE_SOURCE = ROOT / "pic4rl_sim" / "node" / "sim_node.py"
-CREATE_CALLS = frozenset({"create_publisher", "create_subscription", "create_service",
-                          "create_client"})
-# The sim's interfaces as /work/shared/DESIGN.md lists them. The names parsed from node.py must
-# include these, so that a parser that finds nothing cannot pass the test.
+# The sim's interfaces as /work/shared/DESIGN.md lists them. The interface table must include
+# these, so that an empty table cannot pass the test.
 DESIGN_NAMES = frozenset({
     "cmd_vel", "scan", "odom", "ground_truth", "camera/depth/image_raw",
     "camera/depth/camera_info", "imu/data", "goal_pose", "person/pose", "clock",
@@ -132,27 +130,35 @@ ROBOT_HEADERS = {
 }
 
 
+def interface_cells(interface: Interface) -> list[str]:
+    """docs/sim.md's interface row of ``interface``, but for its hand-written frame cell."""
+    qos = str(interface.qos.value) if interface.qos is not None else "services default"
+    return [interface.direction.value, f"`{interface.name}`", f"`{interface.type}`", qos,
+            interface.content, interface.published]
+
+
+INTERFACE_HEADER = ("| dir | name | type | QoS (reliability, durability, depth) "
+                    "| frame_id → child_frame_id | content | published |\n"
+                    "|---|---|---|---|---|---|---|")
+FRAME = 4  # the frame cell's index in a row
+
+
+def doc_interface_rows(doc: str) -> dict[str, list[str]]:
+    """docs/sim.md's interface table: the cells of each row, by name cell."""
+    rows = {}
+    for line in doc.splitlines():
+        if line.startswith(("| pub |", "| sub |", "| srv |")):
+            cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
+            rows[cells[1]] = cells
+    return rows
+
+
 # -- what the code declares ------------------------------------------------------------------
 
 
 def node_interface_names() -> set[str]:
-    """Every topic and service name node.py creates: the name argument of each
-    ``create_publisher/subscription/service/client`` call with a literal name, and the first
-    item of each entry of ``_wire``'s ``wanted`` table."""
-    tree = ast.parse(NODE_SOURCE.read_text())
-    names: set[str] = set()
-    for node in ast.walk(tree):
-        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                and node.func.attr in CREATE_CALLS and len(node.args) >= 2
-                and isinstance(node.args[1], ast.Constant) and isinstance(node.args[1].value, str)):
-            names.add(node.args[1].value)
-        if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "wanted"
-                                                  for t in node.targets)
-                and isinstance(node.value, ast.Tuple)):
-            for entry in node.value.elts:
-                assert isinstance(entry, ast.Tuple) and isinstance(entry.elts[0], ast.Constant)
-                names.add(entry.elts[0].value)
-    return names
+    """Every topic and service name of the node: its interface table's."""
+    return {interface.name for interface in INTERFACES}
 
 
 @pytest.fixture(scope="module")
@@ -178,9 +184,19 @@ def test_the_parameter_tables_are_current(doc):
 
 def test_every_topic_and_service_of_the_node_is_in_the_doc(doc):
     names = node_interface_names()
-    assert names >= DESIGN_NAMES, f"node.py lacks {sorted(DESIGN_NAMES - names)}"
+    assert names >= DESIGN_NAMES, f"interfaces.py lacks {sorted(DESIGN_NAMES - names)}"
     missing = sorted(n for n in names if f"`{n}`" not in doc)
     assert not missing, f"docs/sim.md does not name these interfaces: {missing}"
+
+
+def test_the_interface_table_is_current(doc):
+    rows = doc_interface_rows(doc)
+    expected = {f"`{i.name}`": interface_cells(i) for i in INTERFACES}
+    assert list(rows) == list(expected), "docs/sim.md's interface rows differ from interfaces.py"
+    stale = [name for name, cells in rows.items()
+             if cells[:FRAME] + cells[FRAME + 1:] != expected[name]]
+    assert not stale, ("docs/sim.md's interface table differs from interfaces.py; regenerate "
+                       f"it with `python tests/sim/test_docs.py`. Rows: {stale}")
 
 
 def test_every_config_file_is_in_the_doc(doc):
@@ -216,3 +232,10 @@ if __name__ == "__main__":
         print(f"<!-- robots: {name} -->")
         print(ROBOT_HEADERS[name])
         print("\n".join(rows), end="\n\n")
+    frames = {name: cells[FRAME] for name, cells in doc_interface_rows(DOC.read_text()).items()}
+    print("<!-- interfaces (frame cells from the doc) -->")
+    print(INTERFACE_HEADER)
+    for interface in INTERFACES:
+        cells = interface_cells(interface)
+        cells.insert(FRAME, frames.get(cells[1], "?"))
+        print("| " + " | ".join(cells) + " |")
