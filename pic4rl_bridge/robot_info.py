@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 from pic4rl_sim.engine.geometry import Footprint, Pose2D
 from pic4rl_sim.engine.robot_specs import Drive, RobotSpec, load_robot
+from pic4rl_sim.errors import SimError
 
 from .config import EnvConfig
 from .errors import ConfigError
@@ -57,7 +58,6 @@ class Scenario:
         self.config = config
         self.sim: SimConfig | None = None
         if config.sim_params or config.transport == "inprocess":
-            from pic4rl_sim.errors import SimError
             from pic4rl_sim.params import build_config, parameter_table, resolve
 
             try:
@@ -75,7 +75,7 @@ class Scenario:
                                   "when the config has no sim section")
             try:
                 self.spec = load_robot(config.robot)
-            except Exception as err:  # pic4rl_sim's ConfigError
+            except SimError as err:
                 raise ConfigError(f"robot: {err}") from err
         self.robot = self._robot_info()
 
