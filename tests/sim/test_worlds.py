@@ -19,8 +19,8 @@ from pic4rl_sim.engine.world_generators import (
     obstacles,
     person,
     vineyard,
-    world_from_mjcf,
 )
+from pic4rl_sim.engine.mjcf_world import world_from_mjcf
 
 ROBOT_RADIUS_M = 0.25
 KINDS = sorted(GENERATORS)
