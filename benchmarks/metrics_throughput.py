@@ -40,7 +40,7 @@ ARENA = Obstacles(
     circles=((6.0, 6.0, 0.5), (1.5, 1.5, 0.3), (10.5, 1.5, 0.3), (1.5, 10.5, 0.3)),
     segments=((0, 0, 12, 0), (12, 0, 12, 12), (12, 12, 0, 12), (0, 12, 0, 0)),
 )
-FOOTPRINT = {"length_m": 0.508, "width_m": 0.430}  # Clearpath Jackal, as in examples.py
+FOOTPRINT = {"length_m": 0.508, "width_m": 0.430}  # Clearpath Jackal, as in pic4rl_sim.engine.robot_specs
 
 
 class BenchmarkError(Exception):

@@ -213,7 +213,7 @@ def test_every_built_in_robot_and_world_is_in_the_doc(doc):
 
 def test_the_robot_tables_are_current(doc):
     stale = [row for rows in robot_tables().values() for row in _missing(doc, rows)]
-    assert not stale, ("docs/sim.md's robot tables differ from robots.py; regenerate them "
+    assert not stale, ("docs/sim.md's robot tables differ from robot_specs.py; regenerate them "
                        f"with `python tests/sim/test_docs.py`. Rows not found: {stale}")
 
 
