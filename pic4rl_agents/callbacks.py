@@ -15,7 +15,7 @@ from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 from stable_baselines3.common.vec_env import VecEnv
 from tqdm import tqdm
 
-from pic4rl_bridge.tasks.base import Outcome
+from pic4rl_metrics.contract import OUTCOMES, Outcome
 
 from .curves import save_reward_curve
 from .runs import EVALUATIONS
@@ -182,7 +182,7 @@ class SeededEvalCallback(EvalCallback):
 
 
 #: Outcomes counted in their own column of ``evaluations.csv`` (a goal is ``success_rate``).
-OUTCOME_COLUMNS = tuple(o.value for o in Outcome if o is not Outcome.GOAL)
+OUTCOME_COLUMNS = tuple(o for o in OUTCOMES if o != Outcome.GOAL.value)
 #: The columns of ``evaluations.csv``: one row per evaluation.
 CSV_COLUMNS = ("steps", "wall_s", "train_wall_s", "eval_s", "episodes", "success_rate",
                "mean_reward", "mean_length", *(f"{o}_rate" for o in OUTCOME_COLUMNS))

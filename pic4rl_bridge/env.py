@@ -25,6 +25,9 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+
+from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
+from pic4rl_metrics.facts import Footprint, Mount
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
@@ -35,7 +38,7 @@ from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .robot_info import Scenario
 from .tasks import make_task
-from .tasks.base import EpisodeContext, Judgement, Outcome
+from .tasks.base import EpisodeContext, Judgement
 from .transport import EpisodeRequest, RawMessage, Transport
 
 log = logging.getLogger(__name__)
@@ -164,7 +167,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                                         config=self._run_config())
         self._episode = 0
         self._bag: EpisodeBag | None = None
-        self._facts: dict[str, Any] = {}
+        self._facts = EpisodeFacts()
         self._frame: SensorFrame | None = None
         self._context: EpisodeContext | None = None
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
@@ -326,31 +329,32 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     # -- recording ----------------------------------------------------------------------------
 
     def _episode_facts(self, frame: SensorFrame, context: EpisodeContext,
-                       seed: int) -> dict[str, Any]:
+                       seed: int) -> EpisodeFacts:
+        """The episode's bag facts. The env's ``warning_tolerance_m`` (closer is unsafe) is the
+        contract's ``safety_margin_m``; the task's facts are decoded by the contract."""
         robot, c = self.scenario.robot, self.config
         fp = robot.footprint
-        footprint = ({"radius_m": fp.radius_m} if fp.radius_m is not None
-                     else {"length_m": fp.length_m, "width_m": fp.width_m})
-        facts: dict[str, Any] = {
-            "agent": c.agent, "task": c.task if c.task != "goToPose" else f"goToPose/{c.sensor}",
-            "world": self.transport.world_name, "robot": robot.name,
-            "run": self.recorder.run_dir.name if self.recorder is not None else "",
-            "episode": self._bag.path.name if self._bag is not None else str(self._episode),
-            "seed": seed, "footprint": footprint, "start": list(context.start),
-            "goal_tolerance_m": c.goal_tolerance_m,
-            "collision_tolerance_m": c.collision_tolerance_m,
-            "safety_margin_m": c.warning_tolerance_m, "max_speed_mps": robot.max_linear_m_s,
-        }
-        if frame.scan is not None:  # where the collision test puts the scan's points
-            mount = frame.scan.mount
-            facts["scan_mount"] = {"x_m": mount.x, "y_m": mount.y, "yaw_rad": mount.yaw}
-        if context.goal is not None:
-            facts["goal"] = list(context.goal)
-            if self._sampler is not None and self._bag is not None:
-                shortest, straight = self._sampler.path_lengths(context.start, context.goal)
-                facts["shortest_path_m"], facts["straight_line_m"] = shortest, straight
-        facts.update(self.task.facts(context))
-        return facts
+        shortest = straight = None
+        if context.goal is not None and self._sampler is not None and self._bag is not None:
+            shortest, straight = self._sampler.path_lengths(context.start, context.goal)
+        mount = frame.scan.mount if frame.scan is not None else None  # the collision test's
+        facts = EpisodeFacts(
+            agent=c.agent, task=c.task if c.task != "goToPose" else f"goToPose/{c.sensor}",
+            world=self.transport.world_name, robot=robot.name,
+            run=self.recorder.run_dir.name if self.recorder is not None else "",
+            episode=self._bag.path.name if self._bag is not None else str(self._episode),
+            seed=seed,
+            footprint=(Footprint(radius_m=fp.radius_m) if fp.radius_m is not None
+                       else Footprint(length_m=fp.length_m, width_m=fp.width_m)),
+            start=tuple(context.start),
+            goal=context.goal,
+            goal_tolerance_m=c.goal_tolerance_m, collision_tolerance_m=c.collision_tolerance_m,
+            safety_margin_m=c.warning_tolerance_m, max_speed_mps=robot.max_linear_m_s,
+            shortest_path_m=shortest, straight_line_m=straight,
+            scan_mount=None if mount is None else Mount(mount.x, mount.y, mount.yaw),
+        )
+        task_facts, given = parse_facts(self.task.facts(context), source=f"task {c.task}")
+        return facts.merged(task_facts, given=given)
 
     def _end_bag(self, outcome: Outcome | None) -> None:
         """Close the episode's bag: with its outcome, or, cut short, without one."""
@@ -363,4 +367,4 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             bag.abort()
         else:
             stamp = self._frame.stamp_ns if self._frame is not None else 0
-            bag.close(outcome.value, stamp, {**self._facts, "outcome": outcome.value})
+            bag.close(outcome, stamp)

@@ -1,8 +1,9 @@
 """Write each episode to its own rosbag2 (with rosbags), as the bag contract says.
 
-Bags are the contract between running a robot and judging it, so the recorder writes exactly
-what ``pic4rl_metrics`` reads (``pic4rl_metrics.contract``): the messages as on the wire, the
-episode facts on ``/episode/facts`` and in ``custom_data``, the outcome on ``/episode/outcome``.
+Bags are the contract between running a robot and judging it, so the recorder writes through
+``pic4rl_metrics.contract``, whose reader judges them: the messages as on the wire, the typed
+``EpisodeFacts`` on ``/episode/facts`` and in ``custom_data``, the outcome on
+``/episode/outcome``, with the contract's storages and typestore.
 Layout: ``<bags_dir>/<run>/<episode>/`` with the run's config beside the episodes. Nothing
 already on disk is ever overwritten: a run recorded twice into one directory appends episodes
 and keeps every config it was run with.
@@ -15,7 +16,6 @@ recorder killed mid-episode would lose it all; ``EpisodeBag`` commits every
 
 from __future__ import annotations
 
-import json
 import logging
 import re
 import sqlite3
@@ -23,17 +23,12 @@ import struct
 import time
 import zlib
 from collections.abc import Callable, Mapping
-from enum import Enum
-from functools import cache
+from dataclasses import replace
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-import numpy as np
 import yaml
-from pic4rl_metrics.contract import FACT_KEYS, FACTS_TOPIC, OUTCOME_TOPIC
-from pic4rl_metrics.facts import Outcome
-from pic4rl_sim.interfaces import QosKind, find
 from rosbags.interfaces import (
     Connection,
     Qos,
@@ -43,20 +38,27 @@ from rosbags.interfaces import (
     QosReliability,
     QosTime,
 )
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
+from rosbags.rosbag2 import Writer, WriterError
+
+from pic4rl_metrics.contract import (
+    FACTS_TOPIC,
+    OUTCOME_TOPIC,
+    OUTCOMES,
+    ROS_DISTRO,
+    STORAGES,
+    EpisodeFacts,
+    Outcome,
+    outcome_event,
+    plain,
+    typestore,
+)
+from pic4rl_sim.interfaces import QosKind, find
 
 from .errors import RecorderError
 from .transport import OfferedQos, RawMessage
 
 log = logging.getLogger(__name__)
 
-STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
-#: The ROS 2 distribution whose message definitions and bag format the bags hold.
-ROS_DISTRO = "jazzy"
-#: The outcome words of the contract (``close``'s ``outcome``).
-OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
 STRING = "std_msgs/msg/String"
 CONFIG_NAME = "config"
 EPISODE_PREFIX = "episode_"
@@ -70,42 +72,6 @@ DEFAULT_QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurabili
                   _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
 #: How a transport tells how a topic was offered (``Transport.offered_qos``).
 QosSource = Callable[[str], OfferedQos | None]
-
-
-@cache
-def typestore() -> Typestore:
-    """The message types the recorder serializes and describes in the bags (ROS 2 Jazzy's,
-    as ``pic4rl_metrics`` reads them)."""
-    return get_typestore(Stores.ROS2_JAZZY)
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` with numpy values, enums and tuples turned into plain JSON-able Python."""
-    if isinstance(value, Enum):
-        return jsonable(value.value)
-    if isinstance(value, np.generic | np.ndarray):
-        return value.tolist()
-    if isinstance(value, Mapping):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [jsonable(v) for v in value]
-    return value
-
-
-def fact_text(value: Any) -> str:
-    """A ``custom_data`` value: strings as they are, numbers as ``str``, the rest as JSON
-    (the rule of ``pic4rl_metrics.synthetic``, so recorded and synthetic bags read alike)."""
-    value = jsonable(value)
-    if isinstance(value, str):
-        return value
-    return json.dumps(value) if isinstance(value, dict | list) else str(value)
-
-
-def custom_data(facts: Mapping[str, Any]) -> dict[str, str]:
-    """``facts`` as ``custom_data``: the contract's keys in ``FACT_KEYS`` order, then any
-    others as given; ``None`` values (not known) left out."""
-    keys = [k for k in FACT_KEYS if k in facts] + [k for k in facts if k not in FACT_KEYS]
-    return {k: fact_text(facts[k]) for k in keys if facts[k] is not None}
 
 
 def offered_qos(topic: str, offered: OfferedQos | None = None) -> Qos:
@@ -189,7 +155,7 @@ class EpisodeBag:
         self._qos = qos
         #: Messages written per topic (facts and outcome included).
         self.counts: dict[str, int] = {}
-        self._facts: dict[str, Any] = {"run": self.path.parent.name, "episode": self.path.name}
+        self._facts = EpisodeFacts(run=self.path.parent.name, episode=self.path.name)
         self._connections: dict[tuple[str, str], Connection] = {}
         self._writer: Writer | None = Writer(self.path, version=9,
                                              storage_plugin=STORAGES[storage])
@@ -221,30 +187,28 @@ class EpisodeBag:
         if self._db is not None and time.monotonic() - self._last_commit >= self.flush_interval_s:
             self._commit()
 
-    def facts(self, facts: Mapping[str, Any], stamp_ns: int) -> None:
-        """Publish ``facts`` (keys of ``FACT_KEYS``; ``run`` and ``episode`` default to the
-        bag's directories) on ``/episode/facts`` at ``stamp_ns`` and keep them for
-        ``custom_data``. Committed at once, so a killed recorder's bag still has them."""
-        self._facts.update(facts)
-        try:
-            text = json.dumps(jsonable(self._facts))
-        except (TypeError, ValueError) as err:
-            raise RecorderError(f"{self.path}: facts are not JSON-able: {err}") from err
-        self._write(FACTS_TOPIC, STRING, _string_cdr(text), stamp_ns)
+    def facts(self, facts: EpisodeFacts, stamp_ns: int) -> None:
+        """Publish ``facts`` (``run`` and ``episode`` default to the bag's directories) on
+        ``/episode/facts`` at ``stamp_ns`` and keep them for ``custom_data``. Committed at
+        once, so a killed recorder's bag still has them."""
+        self._facts = replace(
+            facts, run=self._facts.run if facts.run is None else facts.run,
+            episode=self._facts.episode if facts.episode is None else facts.episode)
+        self._write(FACTS_TOPIC, STRING, _string_cdr(self._facts.facts_json()), stamp_ns)
         if self._db is not None:
             self._commit()
 
-    def close(self, outcome: str, stamp_ns: int, facts: Mapping[str, Any] | None = None) -> Path:
-        """End the episode: publish the ``outcome`` (one of ``OUTCOMES``) at
+    def close(self, outcome: Outcome | str, stamp_ns: int) -> Path:
+        """End the episode: publish the ``outcome`` (one of the contract's ``OUTCOMES``) at
         ``stamp_ns`` (ns), store every fact and the outcome in ``custom_data``, write
         ``metadata.yaml``; return the bag directory."""
-        word = jsonable(outcome)
+        word = plain(outcome)
         if word not in OUTCOMES:
             raise RecorderError(f"{self.path}: outcome {outcome!r} is not one of "
                                 f"{', '.join(OUTCOMES)}")
-        event = json.dumps({"outcome": word, "stamp_ns": int(stamp_ns)})
+        event = outcome_event(word, stamp_ns)
         self._write(OUTCOME_TOPIC, STRING, _string_cdr(event), stamp_ns)
-        self._finish({**self._facts, **(facts or {}), "outcome": word})
+        self._finish(replace(self._facts, outcome=Outcome(word)))
         log.info("episode bag %s: %s, %d messages", self.path, word, sum(self.counts.values()))
         return self.path
 
@@ -296,9 +260,9 @@ class EpisodeBag:
             raise RecorderError(f"{self.path}: cannot commit: {err}") from err
         self._last_commit = time.monotonic()
 
-    def _finish(self, facts: Mapping[str, Any]) -> None:
+    def _finish(self, facts: EpisodeFacts) -> None:
         writer = self._open_writer()
-        for key, value in custom_data(facts).items():
+        for key, value in facts.custom_data().items():
             writer.set_custom_data(key, value)
         self._writer = self._db = None
         try:
@@ -367,7 +331,7 @@ class RunRecorder:
     def _write_config(self, config: Mapping[str, Any]) -> Path:
         """Write ``config`` to the first of config.yaml, config-2.yaml, ... that is free or
         already holds the same text; return that file."""
-        text = yaml.safe_dump(jsonable(config), sort_keys=False)
+        text = yaml.safe_dump(plain(config), sort_keys=False)
         n = 1
         while True:
             path = self.run_dir / (f"{CONFIG_NAME}.yaml" if n == 1 else f"{CONFIG_NAME}-{n}.yaml")

@@ -10,8 +10,9 @@ needs no ROS, MuJoCo or torch. Typical use::
 from __future__ import annotations
 
 from .batch import BagResult, MetricsResult, compute, judge_bag
+from .contract import EpisodeFacts, Outcome
 from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
-from .facts import EpisodeFacts, Footprint, Outcome
+from .facts import Footprint
 from .metrics import Derived, compute_metrics
 from .reader import read_episode
 from .registry import METRICS, REGISTRY, Metric, metric

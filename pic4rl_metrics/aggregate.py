@@ -19,8 +19,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from .contract import Outcome
 from .errors import ConfigError
-from .facts import Outcome
 from .registry import REGISTRY
 from .results import ERROR_COLUMN
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
+from .contract import EpisodeFacts
 from .errors import ConfigError, MetricsError
-from .facts import EpisodeFacts
 from .inputs import discover
 from .metrics import compute_metrics
 from .reader import read_episode

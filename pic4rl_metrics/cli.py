@@ -13,8 +13,8 @@ from pathlib import Path
 
 from .aggregate import aggregate
 from .batch import MetricsResult, compute
+from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError, MetricsError
-from .facts import EpisodeFacts, parse_facts
 from .registry import METRICS, REGISTRY
 from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, TABLE1_COLUMNS

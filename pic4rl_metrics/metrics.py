@@ -14,7 +14,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .facts import EpisodeFacts, Mount, Outcome
+from .contract import EpisodeFacts, Outcome
+from .facts import Mount
 from .kinematics import (
     Derivative,
     PathTurning,
@@ -133,7 +134,7 @@ class Derived:
 
     def __init__(self, episode: Episode) -> None:
         self.episode = episode
-        self.facts = episode.facts
+        self.facts = episode.facts.with_defaults()
         self.pose = episode.pose
         self.scan = episode.scan if episode.scan is not None and len(episode.scan) else None
 

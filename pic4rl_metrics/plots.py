@@ -20,8 +20,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
+from .contract import EpisodeFacts, Outcome
 from .errors import ConfigError
-from .facts import EpisodeFacts, Outcome
 from .kinematics import differentiate, seconds, velocity_series
 from .registry import METRICS
 from .results import EpisodeMetrics
@@ -108,8 +108,9 @@ def plot_trajectory(
                 gid="start")
     if facts.goal is not None:
         gx, gy = facts.goal
-        ax.add_patch(Circle((gx, gy), facts.goal_tolerance_m, fill=False, ls="--", lw=1,
-                            ec="tab:green", zorder=2, gid="goal_region"))
+        radius = facts.with_defaults().goal_tolerance_m
+        ax.add_patch(Circle((gx, gy), radius, fill=False, ls="--", lw=1, ec="tab:green",
+                            zorder=2, gid="goal_region"))
         ax.plot([gx], [gy], "P", color="tab:green", mec="black", mew=0.5, ms=9, zorder=3,
                 gid="goal")
     if len(pose):

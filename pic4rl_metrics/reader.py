@@ -34,9 +34,9 @@ from rosbags.typesys import (
 )
 from rosbags.typesys.store import Typestore
 
-from .contract import TF_STATIC_TOPIC
+from .contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event, typestore
 from .errors import BagError, ConfigError, EpisodeError, TopicError
-from .facts import EpisodeFacts, Mount, Outcome, parse_facts
+from .facts import Mount
 from .series import CmdSeries, Episode, PointSeries, PoseSeries, ScanSeries
 from .topics import TopicMap
 
@@ -60,21 +60,19 @@ _DAMAGE = (
     AssertionError, ValueError, IndexError, KeyError,
 )
 
-#: Message definitions for bags that embed none (rosbag2 before Iron): the layouts of the
-#: types above are the same in every ROS 2 distribution.
-_TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-
-
 @lru_cache(maxsize=64)
 def _typestore_for(msgtype: str, msgdef_format: MessageDefinitionFormat, msgdef: str) -> Typestore:
     """The typestore that decodes ``msgtype`` as the bag defines it.
 
-    ``_TYPESTORE`` (whose decoders are generated once per process) unless the bag embeds a
-    definition that differs from Jazzy's; cached on the definition text, so opening many bags
+    The contract's ``typestore()`` (whose decoders are generated once per process; also for
+    bags that embed no definitions, rosbag2 before Iron: the layouts of the types above are the
+    same in every ROS 2 distribution) unless the bag embeds a definition that differs from
+    Jazzy's; cached on the definition text, so opening many bags
     does not rebuild types and decoders for each (rosbags' ``AnyReader`` does).
     """
+    jazzy = typestore()
     if msgdef_format == MessageDefinitionFormat.NONE:
-        return _TYPESTORE
+        return jazzy
     if msgdef_format == MessageDefinitionFormat.MSG:
         types = get_types_from_msg(msgdef, msgtype)
     else:
@@ -85,9 +83,9 @@ def _typestore_for(msgtype: str, msgdef_format: MessageDefinitionFormat, msgdef:
             types.update(get_types_from_idl(idl))
     own = get_typestore(Stores.EMPTY)
     own.register(types)
-    known = msgtype in _TYPESTORE.fielddefs
-    same = known and own.hash_rihs01(msgtype) == _TYPESTORE.hash_rihs01(msgtype)
-    return _TYPESTORE if same else own
+    known = msgtype in jazzy.fielddefs
+    same = known and own.hash_rihs01(msgtype) == jazzy.hash_rihs01(msgtype)
+    return jazzy if same else own
 
 
 def _stamp_ns(header: Any) -> int:
@@ -369,7 +367,8 @@ def _facts(
 ) -> EpisodeFacts:
     """Merge facts: facts topic < custom_data < goal/outcome topics (if still unknown) < CLI.
 
-    A fact that cannot be read is left out and warned about (``warnings``)."""
+    A fact that cannot be read is left out and warned about (``warnings``); a tolerance that
+    none gives takes the metrics' default (``EpisodeFacts.with_defaults``)."""
     facts = EpisodeFacts()
     for payload in bag.topics["facts"].rows[:1]:
         try:
@@ -389,7 +388,7 @@ def _facts(
     outcome = bag.topics["outcome"]
     if outcome.rows:
         try:
-            word, stamp = _outcome(outcome.rows[-1])
+            word, stamp = parse_outcome_event(outcome.rows[-1])
         except ConfigError as err:
             warnings.append(f"{err}; outcome ignored")
         else:
@@ -404,24 +403,7 @@ def _facts(
         mount = _mount_from_tf(bag, warnings)
         if mount is not None:
             facts = facts.merged(EpisodeFacts(scan_mount=mount), given=frozenset({"scan_mount"}))
-    return facts.merged(cli, given=cli_given)
-
-
-def _outcome(payload: str) -> tuple[Outcome, int | None]:
-    """The outcome word and its stamp (ns, None when not given); ``ConfigError`` if unreadable."""
-    text = payload.strip()
-    source = "outcome topic"
-    if text.startswith("{"):
-        try:
-            data = json.loads(text)
-            stamp = data.get("stamp_ns")
-            return Outcome.parse(data["outcome"], source=source), (
-                None if stamp is None else int(stamp)
-            )
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError) as err:
-            msg = f"{source}: cannot read {text[:80]!r}: {type(err).__name__}: {err}"
-            raise ConfigError(msg) from err
-    return Outcome.parse(text, source=source), None
+    return facts.merged(cli, given=cli_given).with_defaults()
 
 
 #: Frames tried as the robot's base when the pose topic names none (PoseStamped).

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .facts import EpisodeFacts
+from .contract import EpisodeFacts
 
 
 @dataclass(frozen=True)

@@ -1,28 +1,25 @@
-"""Synthetic episode bags whose metrics are known by hand.
+"""Synthetic episode bags for tests and benchmarks, whose metrics are known by hand.
 
-Tests need bags with analytic answers (a circle has curvature ``1/r``, a wall at 2 m gives a
-2 m clearance), ``make demo`` needs example episodes before any simulator exists, and the
-benchmark needs bags of a chosen size. Everything here writes bags exactly as the recorder
-does (the topics and facts of ``contract``), so the reader meets no special case.
+Test support, not a recorder: tests need bags with analytic answers (a circle has curvature
+``1/r``, a wall at 2 m gives a 2 m clearance, a bag with odd facts as real robots write them)
+and the benchmark needs bags of a chosen size. The bags are written through the bag contract
+(``contract``: topics, ``EpisodeFacts``, ``custom_data``, storages, typestore) exactly as
+``pic4rl_bridge``'s recorder writes them, so the reader meets no special case.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
+from rosbags.rosbag2 import Writer
 
 from . import contract
-from .facts import Outcome
+from .contract import OUTCOMES, STORAGES, EpisodeFacts, typestore
 from .topics import normalize_topic
 
 #: Header stamp of ``t_s = 0`` (ns): 2023-11-14, far from zero so that no code can confuse
@@ -34,8 +31,6 @@ POSE_TYPES = {
     "pose_stamped": "geometry_msgs/msg/PoseStamped",
     "pose_cov": "geometry_msgs/msg/PoseWithCovarianceStamped",
 }
-STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
-OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
 
 
 @dataclass(frozen=True)
@@ -237,35 +232,11 @@ def cast_scan(
     return np.where(ranges < range_min, -np.inf, ranges).astype(np.float32)
 
 
-@cache
-def _typestore() -> Typestore:
-    return get_typestore(Stores.ROS2_JAZZY)
-
-
-def _jsonable(value: object) -> object:
-    """``value`` with numpy scalars and arrays turned into plain Python (for JSON)."""
-    if isinstance(value, np.generic | np.ndarray):
-        return value.tolist()
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    return value
-
-
-def _fact_text(value: object) -> str:
-    """A ``custom_data`` value: strings as they are, numbers as ``str``, the rest as JSON."""
-    value = _jsonable(value)
-    if isinstance(value, str):
-        return value
-    return json.dumps(value) if isinstance(value, dict | list) else str(value)
-
-
 class _Messages:
     """Builds the ROS 2 messages of one track from the typestore's classes."""
 
     def __init__(self, track: Track, stamp_ns: np.ndarray) -> None:
-        self.t = _typestore().types
+        self.t = typestore().types
         self.track, self.stamp_ns = track, stamp_ns
 
     def header(self, ns: int, frame: str) -> Any:
@@ -309,6 +280,10 @@ class _Messages:
         return self.t["std_msgs/msg/String"](data)
 
 
+#: A bag's messages: (header time ns, order among equal times, topic, message).
+_Record = tuple[int, int, str, Any]
+
+
 def write_episode_bag(
     path: Path,
     track: Track,
@@ -324,7 +299,7 @@ def write_episode_bag(
     cmd_stamped: bool = False,
     goal: tuple[float, float] | None = None,
     person: Track | None = None,
-    facts: Mapping[str, object] | None = None,
+    facts: EpisodeFacts | Mapping[str, object] | None = None,
     outcome: str | None = None,
     t0_ns: int = DEFAULT_T0_NS,
     receive_offset_ns: int = 0,
@@ -335,13 +310,44 @@ def write_episode_bag(
 
     Header stamps are ``t0_ns + t_s`` (ns); bag log times add ``receive_offset_ns``, as a
     recorder's wall clock differs from sim time. Headerless ``Twist`` commands carry only the
-    log time. ``write_metadata=False`` leaves the bag as a killed recorder does: no
-    ``metadata.yaml``, only the storage file.
+    log time. ``facts`` are typed, or plain values by key (a test's odd or broken facts, as
+    real robots' bags carry them). ``write_metadata=False`` leaves the bag as a killed recorder
+    does: no ``metadata.yaml``, only the storage file.
     """
     path, pose_topic = Path(path), normalize_topic(pose_topic)
     if path.exists():
         msg = f"{str(path)!r} exists already; synthetic bags never overwrite"
         raise FileExistsError(msg)
+    _check(track, pose_topic, pose_type, also_odom, storage, outcome, scan_every, scans,
+           obstacles)
+    values = facts.values() if isinstance(facts, EpisodeFacts) else dict(facts or {})
+    stamp_ns = t0_ns + np.round(track.t_s * 1e9).astype(np.int64)
+    make = _Messages(track, stamp_ns)
+    first, last = int(stamp_ns[0]), int(stamp_ns[-1])
+    records: list[_Record] = []
+    if facts is not None:
+        records.append((first, 0, contract.FACTS_TOPIC,
+                        make.string(contract.encode_facts_json(values))))
+    if goal is not None:
+        records.append((first, 1, contract.GOAL_TOPIC, make.pose_stamped(first, *goal, 0.0)))
+    records += _track_records(make, pose_topic, pose_type, also_odom, obstacles, scan_every,
+                              scans, n_beams, cmd, cmd_stamped)
+    if person is not None:
+        records += _person_records(make, person, t0_ns)
+    if outcome is not None:
+        event = contract.outcome_event(outcome, last)
+        records.append((last, 9, contract.OUTCOME_TOPIC, make.string(event)))
+        values["outcome"] = outcome
+    _write(path, records, storage, receive_offset_ns, contract.encode_custom_data(values))
+    if not write_metadata:
+        (path / "metadata.yaml").unlink()
+    return path
+
+
+def _check(track: Track, pose_topic: str, pose_type: str, also_odom: bool, storage: str,
+           outcome: str | None, scan_every: int, scans: Sequence[np.ndarray] | None,
+           obstacles: Obstacles | None) -> None:
+    """``ValueError`` naming the first of ``write_episode_bag``'s arguments that is wrong."""
     clash = also_odom and pose_topic == contract.ODOM_TOPIC and pose_type != "odometry"
     bad_scans = scans is not None and (obstacles is not None or len(scans) != len(track))
     for failed, msg in (
@@ -358,17 +364,15 @@ def write_episode_bag(
         if failed:
             raise ValueError(msg)
 
-    stamp_ns = t0_ns + np.round(track.t_s * 1e9).astype(np.int64)
-    make = _Messages(track, stamp_ns)
-    first, last = int(stamp_ns[0]), int(stamp_ns[-1])
-    # (header time ns, order among equal times, topic, message); log time adds the offset.
-    records: list[tuple[int, int, str, Any]] = []
-    if facts is not None:
-        records.append((first, 0, contract.FACTS_TOPIC, make.string(json.dumps(_jsonable(facts)))))
-    if goal is not None:
-        records.append((first, 1, contract.GOAL_TOPIC, make.pose_stamped(first, *goal, 0.0)))
+
+def _track_records(make: _Messages, pose_topic: str, pose_type: str, also_odom: bool,
+                   obstacles: Obstacles | None, scan_every: int,
+                   scans: Sequence[np.ndarray] | None, n_beams: int, cmd: bool,
+                   cmd_stamped: bool) -> list[_Record]:
+    """Per pose of the track: the pose, its odometry copy, the scan and the command."""
+    track, records = make.track, []
     odom_copy = also_odom and pose_topic != contract.ODOM_TOPIC
-    for i, ns in enumerate(stamp_ns.tolist()):
+    for i, ns in enumerate(make.stamp_ns.tolist()):
         records.append((ns, 2, pose_topic, make.robot(i, pose_type)))
         if odom_copy:
             records.append((ns, 3, contract.ODOM_TOPIC, make.robot(i, "odometry")))
@@ -385,17 +389,23 @@ def write_episode_bag(
                     make.header(ns, "base_link"), twist
                 )
             records.append((ns, 5, contract.CMD_VEL_TOPIC, twist))
-    if person is not None:
-        person_ns = t0_ns + np.round(person.t_s * 1e9).astype(np.int64)
-        for i, ns in enumerate(person_ns.tolist()):
-            seen = make.pose_stamped(ns, person.x[i], person.y[i], person.yaw[i])
-            records.append((ns, 6, contract.PERSON_TOPIC, seen))
-    if outcome is not None:
-        event = json.dumps({"outcome": outcome, "stamp_ns": last})
-        records.append((last, 9, contract.OUTCOME_TOPIC, make.string(event)))
+    return records
 
+
+def _person_records(make: _Messages, person: Track, t0_ns: int) -> list[_Record]:
+    """The walking person's poses, stamped on the episode's clock."""
+    person_ns = t0_ns + np.round(person.t_s * 1e9).astype(np.int64)
+    return [(ns, 6, contract.PERSON_TOPIC,
+             make.pose_stamped(ns, person.x[i], person.y[i], person.yaw[i]))
+            for i, ns in enumerate(person_ns.tolist())]
+
+
+def _write(path: Path, records: list[_Record], storage: str, receive_offset_ns: int,
+           custom: Mapping[str, str]) -> None:
+    """Write ``records`` in time order (log time: header time + ``receive_offset_ns``) and
+    ``custom`` as the ``custom_data``."""
     records.sort(key=lambda r: (r[0], r[1]))
-    ts = _typestore()
+    ts = typestore()
     with Writer(path, version=9, storage_plugin=STORAGES[storage]) as writer:
         connections: dict[str, Any] = {}
         for ns, _, topic, message in records:
@@ -404,9 +414,5 @@ def write_episode_bag(
                 connections[topic] = writer.add_connection(topic, msgtype, typestore=ts)
             data = ts.serialize_cdr(message, msgtype)
             writer.write(connections[topic], ns + receive_offset_ns, data)
-        custom = {key: _fact_text(value) for key, value in (facts or {}).items()}
-        for key, value in (custom | ({"outcome": outcome} if outcome else {})).items():
+        for key, value in custom.items():
             writer.set_custom_data(key, value)
-    if not write_metadata:
-        (path / "metadata.yaml").unlink()
-    return path

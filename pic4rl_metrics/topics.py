@@ -25,8 +25,8 @@ from typing import Any
 import yaml
 
 from . import contract
+from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError
-from .facts import EpisodeFacts, parse_facts
 
 
 def normalize_topic(name: str) -> str:

@@ -7,12 +7,12 @@ from typing import TYPE_CHECKING
 from ..config import EnvConfig, SensorName, TaskName
 from ..errors import ConfigError
 from ..robot_info import RobotInfo
-from .base import EpisodeContext, Judgement, Outcome, Task
+from .base import EpisodeContext, Judgement, Task
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.world_spec import WorldSpec
 
-__all__ = ["EpisodeContext", "Judgement", "Outcome", "Task", "make_task"]
+__all__ = ["EpisodeContext", "Judgement", "Task", "make_task"]
 
 
 def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:

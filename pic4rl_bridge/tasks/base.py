@@ -11,26 +11,17 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import Enum
 from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
+
+from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
-
-
-class Outcome(str, Enum):
-    """How an episode ended (the bag contract's words). ``DIVERGED``: the simulator's physics
-    blew up, so the episode was cut; it judges no navigation."""
-
-    GOAL = "goal"
-    COLLISION = "collision"
-    TIMEOUT = "timeout"
-    DIVERGED = "diverged"
 
 
 @dataclass(frozen=True)

@@ -14,12 +14,14 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+
+from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
-from .base import EpisodeContext, Judgement, Outcome, Task
+from .base import EpisodeContext, Judgement, Task
 from .collision import assess
 from .observations import (
     MAX_TARGET_DISTANCE_M,

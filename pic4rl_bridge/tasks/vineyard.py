@@ -13,13 +13,15 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+
+from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..errors import ConfigError
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
-from .base import EpisodeContext, Judgement, Outcome, Task
+from .base import EpisodeContext, Judgement, Task
 from .collision import assess
 from .goto import planar_action_space, planar_command
 from .observations import depth_observation, depth_space

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pic4rl_bridge.recorder import RunRecorder, typestore
+from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_bridge.transport import RawMessage
+from pic4rl_metrics.contract import parse_facts, typestore
 
 T0_NS = 1_700_000_000_000_000_000
 DT_NS = 100_000_000  # 10 Hz
@@ -43,8 +44,9 @@ def odometry(ns: int, x: float) -> RawMessage:
 def main() -> None:
     bags_dir, run, n_poses = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3])
     bag = RunRecorder(bags_dir, run, flush_interval_s=0.0).begin()
-    bag.facts({"start": [0.0, 0.0, 0.0], "goal": [2.0, 0.0], "footprint": {"radius_m": 0.2}},
-              T0_NS)
+    facts, _ = parse_facts({"start": [0.0, 0.0, 0.0], "goal": [2.0, 0.0],
+                            "footprint": {"radius_m": 0.2}}, source="victim")
+    bag.facts(facts, T0_NS)
     for i in range(n_poses):
         bag.write(odometry(T0_NS + i * DT_NS, SPEED_MPS * i * DT_NS * 1e-9))
     print(bag.path, flush=True)

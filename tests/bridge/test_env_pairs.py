@@ -20,7 +20,7 @@ from pic4rl_bridge.episodes import (
     save_goals_and_poses,
 )
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_metrics.facts import parse_facts
+from pic4rl_metrics.contract import parse_facts
 from pic4rl_sim.engine.paths import planner_for
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
@@ -58,7 +58,7 @@ def test_plain_any_leaves_sampling_to_the_simulator_and_searches_no_path() -> No
         for i in range(3):
             env.reset(seed=1 if i == 0 else None)
         assert env._sampler is not None and env._sampler._planner is None
-        assert "shortest_path_m" not in env._facts
+        assert "shortest_path_m" not in env._facts.values()
     finally:
         env.close()
 

@@ -24,9 +24,10 @@ from rosbags.interfaces import QosDurability
 from rosbags.rosbag2 import Reader
 
 from pic4rl_bridge.errors import RecorderError
-from pic4rl_bridge.recorder import EpisodeBag, RunRecorder, fact_text, typestore
+from pic4rl_bridge.recorder import EpisodeBag, RunRecorder
 from pic4rl_bridge.transport import RawMessage
 from pic4rl_metrics import Outcome, compute, read_episode
+from pic4rl_metrics.contract import fact_text, parse_facts, typestore
 
 REPO = Path(__file__).resolve().parents[2]
 VICTIM = Path(__file__).with_name("recorder_victim.py")
@@ -103,7 +104,7 @@ def record_line(bag: EpisodeBag, *, speed_mps: float = 0.5, n: int = 41,
         ns, x = T0_NS + i * DT_NS, speed_mps * i * DT_NS * 1e-9
         sent += [odometry("/ground_truth", ns, x, speed_mps), odometry("/odom", ns, x, speed_mps),
                  scan(ns), _raw("/cmd_vel", _twist(speed_mps), ns)]
-    bag.facts(FACTS, T0_NS)
+    bag.facts(parse_facts(FACTS, source="test")[0], T0_NS)
     for msg in sent:
         bag.write(msg)
     if outcome is not None:

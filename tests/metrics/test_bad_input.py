@@ -33,7 +33,7 @@ from pic4rl_metrics import (
     read_episode,
 )
 from pic4rl_metrics.cli import main
-from pic4rl_metrics.facts import parse_facts
+from pic4rl_metrics.contract import parse_facts
 from pic4rl_metrics.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,

@@ -1,5 +1,5 @@
 """``pic4rl-metrics`` end to end: real bags written into a temporary directory, judged through
-``cli.main`` (stdout/stderr captured), the example generator and the installed console script.
+``cli.main`` (stdout/stderr captured), and the installed console script.
 
 Numbers that come back through text are compared at the precision the format keeps: full
 float precision in CSV/JSON (``EXACT``, as in test_analytic), two decimals in table,
@@ -20,8 +20,8 @@ import pytest
 from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from pic4rl_metrics import cli, examples
-from pic4rl_metrics.synthetic import Obstacles, straight_line, write_episode_bag
+from pic4rl_metrics import cli
+from pic4rl_metrics.synthetic import DEFAULT_T0_NS, Obstacles, straight_line, write_episode_bag
 
 EXACT = 1e-12
 F32 = 1e-6  # scan ranges travel as float32
@@ -61,10 +61,31 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
+#: A walled room with three cylinders; a Jackal's footprint.
+ROOM = Obstacles(
+    circles=((4.0, 3.0, 0.4), (2.0, 4.3, 0.3), (6.0, 1.9, 0.3)),
+    segments=((0, 0, 8, 0), (8, 0, 8, 6), (8, 6, 0, 6), (0, 6, 0, 0)),
+)
+JACKAL = {"length_m": 0.508, "width_m": 0.430}
+
+
 @pytest.fixture(scope="module")
 def example_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two agents, three episodes each along free lanes of ``ROOM`` (goal reached), except
+    wobbly's third: straight into the cylinder at (4, 3), stopping 0.04 m from it."""
     run_dir = tmp_path_factory.mktemp("examples") / "example"
-    assert examples.main([str(run_dir)]) == 0
+    lanes = {"smooth": (1.0, 5.0, 1.0), "wobbly": (1.0, 5.0, 3.0)}
+    for a, (agent, ys) in enumerate(lanes.items()):
+        for k, y in enumerate(ys):
+            crash = agent == "wobbly" and k == 2
+            speed = 0.35 if agent == "wobbly" else 0.45
+            duration = 6.6 if crash else 6.0 / speed  # crash: x = 1 + 0.35 * 6.6 = 3.31 m
+            track = straight_line(speed, duration, start=(1.0, y, 0.0))
+            facts = {"agent": agent, "run": run_dir.name, "episode": str(k), "footprint": JACKAL,
+                     "start": [1.0, y, 0.0], "goal": [7.0, y], "collision_tolerance_m": 0.05}
+            write_episode_bag(run_dir / f"{agent}_ep{k}", track, obstacles=ROOM, goal=(7.0, y),
+                              facts=facts, outcome="collision" if crash else "goal",
+                              t0_ns=DEFAULT_T0_NS + (3 * a + k) * 60_000_000_000)
     return run_dir
 
 
@@ -295,7 +316,7 @@ def test_plot_writes_one_png_per_episode_and_keeps_existing(
     assert out == ""
 
 
-# --- examples and the console script -------------------------------------------------------
+# --- a run of several agents and the console script ---------------------------------------
 
 
 def test_examples_are_all_judged(capsys, example_run: Path) -> None:
@@ -310,12 +331,6 @@ def test_examples_are_all_judged(capsys, example_run: Path) -> None:
     wobbly = next(r for r in rows if Path(r["bag"]).name == "wobbly_ep2")
     assert wobbly["collision_count"] >= 1 and wobbly["success"] == 0.0
     assert all(not math.isnan(r["path_length_m"]) for r in rows)
-
-
-def test_examples_keep_existing_bags(capsys, example_run: Path) -> None:
-    assert examples.main([str(example_run)]) == 0
-    out = capsys.readouterr().out
-    assert out.count("kept ") == 6 and "wrote" not in out
 
 
 def test_console_script_runs(runs: Path) -> None:

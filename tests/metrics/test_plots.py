@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.facts import EpisodeFacts, Footprint, Outcome
+from pic4rl_metrics.facts import Footprint
 from pic4rl_metrics.plots import (
     comparison_figure,
     episode_figure,

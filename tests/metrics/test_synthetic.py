@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 
-from pic4rl_metrics import contract, examples
-from pic4rl_metrics.facts import parse_facts
+from pic4rl_metrics import contract
+from pic4rl_metrics.contract import parse_facts
 from pic4rl_metrics.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
@@ -164,23 +164,3 @@ def test_bad_arguments_name_the_value(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="pose_type='twist'"):
         write_episode_bag(tmp_path / "ep", straight_line(0.5, 1.0), pose_type="twist")
     assert not (tmp_path / "ep").exists()
-
-
-def test_examples_write_the_run_and_keep_what_exists(tmp_path: Path, capsys) -> None:
-    run_dir = tmp_path / "example"
-    assert examples.main([str(run_dir)]) == 0
-    names = {f"{a}_ep{k}" for a in ("smooth", "wobbly") for k in range(3)}
-    assert {p.name for p in run_dir.iterdir()} == names | {"run.yaml"}
-    assert len(capsys.readouterr().out.splitlines()) == 6
-    outcomes = {}
-    for name in names:
-        with AnyReader([run_dir / name]) as reader:
-            outcomes[name] = reader.readers[0].storage.metadata.custom["outcome"]
-    assert sorted(outcomes.values()) == ["collision"] + ["goal"] * 5
-    assert outcomes["wobbly_ep2"] == "collision"
-
-    before = (run_dir / "smooth_ep0" / "metadata.yaml").stat().st_mtime_ns
-    assert examples.main([str(run_dir)]) == 0
-    out = capsys.readouterr().out
-    assert out.count("kept") == 6 and "wrote" not in out
-    assert (run_dir / "smooth_ep0" / "metadata.yaml").stat().st_mtime_ns == before

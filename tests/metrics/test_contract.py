@@ -1,0 +1,135 @@
+"""The bag contract as code: ``EpisodeFacts`` survives its encoders and the decoder, and both
+writers (the bridge's recorder and the synthetic bags) write the same facts the same way."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rosbags.rosbag2 import Reader
+
+from pic4rl_bridge.recorder import RunRecorder
+from pic4rl_metrics import contract
+from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
+from pic4rl_metrics.facts import Footprint, Mount
+from pic4rl_metrics.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
+
+FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
+POSITIVE = st.floats(min_value=1e-6, max_value=1e6, allow_nan=False)
+NON_NEGATIVE = st.floats(min_value=0.0, max_value=1e6, allow_nan=False)
+TEXT = st.text(st.characters(codec="utf-8", exclude_categories=("Cs",)), min_size=1, max_size=12)
+POINT = st.tuples(FINITE, FINITE)
+
+
+def _optional(strategy: st.SearchStrategy) -> st.SearchStrategy:
+    return st.one_of(st.none(), strategy)
+
+
+FOOTPRINTS = st.one_of(
+    st.builds(Footprint, radius_m=POSITIVE),
+    st.builds(Footprint, length_m=POSITIVE, width_m=POSITIVE),
+)
+FACTS = st.builds(
+    EpisodeFacts,
+    agent=_optional(TEXT), task=_optional(TEXT), world=_optional(TEXT), robot=_optional(TEXT),
+    run=_optional(TEXT), episode=_optional(TEXT),
+    seed=_optional(st.integers(-(2**63), 2**63 - 1)),
+    footprint=_optional(FOOTPRINTS),
+    start=_optional(st.tuples(FINITE, FINITE, FINITE)),
+    goal=_optional(POINT),
+    goal_tolerance_m=_optional(NON_NEGATIVE),
+    collision_tolerance_m=_optional(NON_NEGATIVE),
+    safety_margin_m=_optional(NON_NEGATIVE),
+    max_speed_mps=_optional(POSITIVE),
+    row_centerline=_optional(st.lists(POINT, min_size=2, max_size=5).map(tuple)),
+    shortest_path_m=_optional(st.one_of(POSITIVE, st.just(math.inf))),
+    straight_line_m=_optional(POSITIVE),
+    scan_mount=_optional(st.builds(Mount, FINITE, FINITE, FINITE)),
+    outcome=_optional(st.sampled_from(list(Outcome))),
+    extra=st.dictionaries(TEXT.filter(lambda k: k not in FACT_KEYS), TEXT, max_size=3),
+)
+
+#: Facts as the env writes them (a Jackal after a goToPose episode).
+ENV_FACTS = EpisodeFacts(
+    agent="sac", task="goToPose/lidar", world="indoor:0", robot="jackal", run="run1",
+    episode="episode_0000", seed=7, footprint=Footprint(length_m=0.508, width_m=0.43),
+    start=(0.0, 0.0, 0.0), goal=(2.0, 0.0), goal_tolerance_m=0.3, collision_tolerance_m=0.05,
+    safety_margin_m=0.1, max_speed_mps=2.0, shortest_path_m=math.inf, straight_line_m=2.0,
+    scan_mount=Mount(0.12, 0.0, 0.0),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(FACTS)
+def test_facts_round_trip_through_custom_data(facts: EpisodeFacts) -> None:
+    custom = facts.custom_data()
+    assert all(isinstance(v, str) for v in custom.values())
+    decoded, given_ = parse_facts(custom, source="custom_data")
+    assert decoded == facts
+    assert given_ == frozenset(custom) - set(facts.extra) | ({"extra"} if facts.extra else set())
+
+
+@settings(max_examples=200, deadline=None)
+@given(FACTS)
+def test_facts_round_trip_through_the_facts_topic_json(facts: EpisodeFacts) -> None:
+    decoded, _ = parse_facts(json.loads(facts.facts_json()), source="facts topic")
+    assert decoded == facts
+
+
+def test_custom_data_keeps_the_contract_order_and_format() -> None:
+    custom = ENV_FACTS.custom_data()
+    assert list(custom) == [k for k in FACT_KEYS if k in custom]
+    assert custom["seed"] == "7" and custom["start"] == "[0.0, 0.0, 0.0]"
+    assert custom["footprint"] == '{"length_m": 0.508, "width_m": 0.43}'
+    assert custom["scan_mount"] == '{"x_m": 0.12, "y_m": 0.0, "yaw_rad": 0.0}'
+    assert custom["shortest_path_m"] == "inf" and custom["safety_margin_m"] == "0.1"
+    assert "outcome" not in custom and "row_centerline" not in custom
+
+
+def test_unknown_tolerances_are_not_written_and_read_as_the_defaults() -> None:
+    facts = EpisodeFacts(agent="a")
+    assert facts.custom_data() == {"agent": "a"}
+    assert facts.with_defaults().goal_tolerance_m == 0.3
+    assert facts.with_defaults().collision_tolerance_m == 0.05
+    assert facts.with_defaults().safety_margin_m == 0.3
+
+
+def test_the_outcome_event_reads_back() -> None:
+    assert contract.parse_outcome_event(contract.outcome_event(Outcome.GOAL, 12)) == (
+        Outcome.GOAL, 12)
+    assert contract.parse_outcome_event("timeout") == (Outcome.TIMEOUT, None)
+
+
+def _metadata_custom(bag: Path) -> list[tuple[str, str]]:
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    return list(info["custom_data"].items())
+
+
+def _facts_message(bag: Path) -> str:
+    ts = contract.typestore()
+    with Reader(bag) as reader:
+        conns = [c for c in reader.connections if c.topic == contract.FACTS_TOPIC]
+        (_, _, raw), = list(reader.messages(connections=conns))
+    return ts.deserialize_cdr(raw, "std_msgs/msg/String").data
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_the_recorder_and_the_synthetic_writer_write_the_same_facts(
+    tmp_path: Path, storage: str
+) -> None:
+    facts = EpisodeFacts(**{**vars(ENV_FACTS), "row_centerline": ((0.0, 0.0), (2.0, 0.5))})
+    recorded = RunRecorder(tmp_path / "rec", "run1", storage=storage).begin("episode_0000")
+    recorded.facts(facts, DEFAULT_T0_NS)
+    recorded_path = recorded.close(Outcome.COLLISION, DEFAULT_T0_NS)
+    synthetic = write_episode_bag(tmp_path / "syn" / "run1" / "episode_0000",
+                                  straight_line(0.5, 1.0), facts=facts, outcome="collision",
+                                  storage=storage)
+    assert _metadata_custom(recorded_path) == _metadata_custom(synthetic)
+    assert dict(_metadata_custom(synthetic)) == (
+        EpisodeFacts(**{**vars(facts), "outcome": Outcome.COLLISION}).custom_data())
+    assert _facts_message(recorded_path) == _facts_message(synthetic) == facts.facts_json()
