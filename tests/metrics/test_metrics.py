@@ -1,38 +1,25 @@
-"""Metrics of synthetic bags against values known by hand (docs/metrics.md's definitions).
+"""``metrics``: the metrics of synthetic bags against values known by hand (docs/metrics.md's
+definitions): success, clearance time, outcome inference, BARN score, heading error, scan
+clearance, collisions and footprints, row crop and person following, path optimality.
 
-Every bag here is written by ``synthetic.write_episode_bag`` into a temporary directory, read
-back through the public API (``compute`` or ``read_episode`` + ``compute_metrics``) and
-compared with a value worked out from the geometry, not from the code under test.
-
-Tolerances (absolute unless stated):
-
-* ``EXACT = 1e-12``: quantities that are exact in real arithmetic and only pick up float64
-  rounding of O(1..10) values summed over ~100 samples (a few ulps each, ~1e-14 in all).
-* ``DIFF = 1e-9``: finite differences of float64 samples: ``Δv/Δt`` divides a rounding error
-  of ~1e-16 by ``Δt = 0.1`` s (twice for jerk), far below 1e-9.
-* ``F32 = 1e-6``: scan ranges travel as float32 (relative error 6e-8, ranges <= 10 m), so
-  anything read from a scan is compared to 1e-6 m.
-* Chord-vs-arc: a circle sampled every ``Δφ`` has a path ``N·2r·sin(Δφ/2)``, shorter than
-  the arc ``N·r·Δφ`` by a relative ``Δφ²/24``; the code is compared with the exact chord sum
-  at ``DIFF`` and with the arc within that discretisation error.
+Every bag is written by ``synthetic.write_episode_bag`` into a temporary directory, read back
+through the public API and compared with a value worked out from the geometry, not from the
+code under test (tolerances: ``metrics_helpers``).
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
-from rosbags.rosbag2 import Reader, Writer
-from rosbags.typesys import Stores, get_typestore
+from metrics_helpers import DIFF, EXACT, F32, JACKAL, LINE, NS
+from metrics_helpers import rewrite as _rewrite
+from metrics_helpers import row as _row
 
 from pic4rl_metrics import (
     EpisodeFacts,
-    Footprint,
-    TopicMap,
-    compute,
     compute_metrics,
     read_episode,
 )
@@ -40,62 +27,12 @@ from pic4rl_metrics.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     Track,
-    circle,
-    speed_ramp,
     straight_line,
     write_episode_bag,
 )
 
-EXACT = 1e-12
-DIFF = 1e-9
-F32 = 1e-6
-NS = 1_000_000_000
-
-JACKAL = {"length_m": 0.508, "width_m": 0.430}  # half-length 0.254, half-width 0.215
-
-
-def _row(bag: Path | str, **kwargs: object) -> dict[str, object]:
-    """The one metrics row of ``bag`` (asserting that it was judged without error)."""
-    frame = compute([bag], **kwargs).frame  # type: ignore[arg-type]
-    assert len(frame) == 1, frame
-    row = frame.iloc[0].to_dict()
-    assert row["error"] == "", row["error"]
-    return row
-
-
-def _same(a: object, b: object) -> bool:
-    """Equal, with NaN equal to NaN (and None to None)."""
-    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
-        return True
-    return a == b
-
-
-def _rewrite(src: Path, dst: Path, *, outcome_stamp_ns: int | None = None,
-             outcome_word_recv_ns: int | None = None) -> Path:
-    """Copy bag ``src`` to ``dst`` message by message (a real rosbag2 bag again), changing
-    the outcome event: its ``stamp_ns``, or a bare word (no stamp) received at a given bag
-    time. custom_data is not copied (the facts and outcome topics carry what it held)."""
-    ts = get_typestore(Stores.ROS2_JAZZY)
-    with Reader(src) as reader, Writer(dst, version=9) as writer:
-        conns = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=ts)
-                 for c in reader.connections}
-        for conn, t_ns, raw in reader.messages():
-            data = bytes(raw)
-            if conn.topic == "/episode/outcome":
-                msg = ts.deserialize_cdr(data, conn.msgtype)
-                event = json.loads(msg.data)
-                if outcome_stamp_ns is not None:
-                    text = json.dumps(event | {"stamp_ns": outcome_stamp_ns})
-                else:
-                    text, t_ns = event["outcome"], outcome_word_recv_ns or t_ns
-                data = ts.serialize_cdr(ts.types[conn.msgtype](text), conn.msgtype)
-            writer.write(conns[conn.id], t_ns, data)
-    return dst
-
-
 # --- straight line ---------------------------------------------------------------------------
 
-LINE = straight_line(0.5, 10.0)  # 0.5 m/s along +x for 10 s at 10 Hz: 101 poses, x 0..5 m
 
 
 @pytest.fixture(scope="module")
@@ -158,16 +95,6 @@ def test_clearance_time_ends_at_the_recorded_outcome_stamp(
     assert m["clearance_time_s"] == pytest.approx(expected_s, abs=EXACT)
 
 
-def test_headerless_outcome_word_is_placed_by_the_pose_offset(tmp_path: Path) -> None:
-    # Receive times run 1000 s ahead of the header stamps; the bare word "goal" arrives at
-    # receive time t0 + 1000 s + 7 s, i.e. 7 s into the episode on the header time base.
-    offset = 1000 * NS
-    src = write_episode_bag(tmp_path / "src", LINE, goal=(5.0, 0.0), outcome="goal",
-                            receive_offset_ns=offset)
-    bag = _rewrite(src, tmp_path / "word", outcome_word_recv_ns=DEFAULT_T0_NS + offset + 7 * NS)
-    m = _row(bag)
-    assert m["outcome"] == "goal"
-    assert m["clearance_time_s"] == pytest.approx(7.0, abs=EXACT)
 
 
 def test_recorded_start_sets_the_start_goal_distance(tmp_path: Path) -> None:
@@ -269,165 +196,6 @@ def test_distance_path_ratio_of_a_robot_that_barely_moved(tmp_path: Path) -> Non
                                    goal=(3.0, 0.0)))
     assert moved["distance_path_ratio"] == pytest.approx(3.0 / 0.05, rel=1e-6)
 
-
-# --- circle -----------------------------------------------------------------------------------
-
-R, V, T_CIRCLE, DT = 1.0, 0.5, 10.0, 0.1  # 5 rad of arc: crosses the +-pi yaw wrap
-DPHI = V / R * DT  # turn between samples (rad)
-N_SEG = round(T_CIRCLE / DT)  # 100 chords
-CHORD = 2 * R * math.sin(DPHI / 2)
-
-
-@pytest.fixture(scope="module")
-def circle_bags(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    root = tmp_path_factory.mktemp("circle")
-    track = circle(R, V, T_CIRCLE, DT)
-    return {
-        "odometry": write_episode_bag(root / "odom", track),
-        "pose_only": write_episode_bag(
-            root / "pose", track, pose_type="pose_stamped", also_odom=False
-        ),
-    }
-
-
-@pytest.mark.parametrize("source", ["odometry", "pose_only"])
-def test_circle_path_and_turning(circle_bags, source: str) -> None:
-    m = _row(circle_bags[source])
-    arc = V * T_CIRCLE  # 2 pi r x (fraction covered = 5 / 2 pi)
-    assert arc == pytest.approx(2 * math.pi * R * (V / R * T_CIRCLE) / (2 * math.pi))
-    assert m["path_length_m"] == pytest.approx(N_SEG * CHORD, abs=DIFF)
-    assert m["path_length_m"] == pytest.approx(arc, rel=DPHI**2 / 24 * 1.01)
-    # Every interior vertex turns by DPHI between two chords of equal length.
-    assert m["path_curvature_mean_radpm"] == pytest.approx(DPHI / CHORD, abs=DIFF)
-    assert m["path_curvature_mean_radpm"] == pytest.approx(1 / R, rel=DPHI**2 / 24 * 1.01)
-    # 99 turns over 100 chords.
-    expected_aol = (N_SEG - 1) * DPHI / (N_SEG * CHORD)
-    assert m["angle_over_length_radpm"] == pytest.approx(expected_aol, abs=DIFF)
-    assert m["angle_over_length_radpm"] == pytest.approx(1 / R, rel=1.5 / N_SEG)
-
-
-def test_slow_circle_turning_is_measured_after_merging_close_positions(tmp_path: Path) -> None:
-    # r = 1 m at 0.05 m/s, 10 Hz: samples 5 mm apart (dphi = 0.005 rad). Two steps make a
-    # chord 2 sin(0.005) = 9.99996 mm < 1 cm, three steps 2 sin(0.0075) = 15 mm: the 1 cm
-    # merge keeps every third pose, indices 0, 3, ..., 99 (34 points, 32 interior vertices).
-    dphi = 0.005
-    m = _row(write_episode_bag(tmp_path / "slow", circle(1.0, 0.05, 10.0)))
-    chord3 = 2 * math.sin(1.5 * dphi)
-    assert m["path_curvature_mean_radpm"] == pytest.approx(3 * dphi / chord3, abs=DIFF)
-    # The path length is over all poses (no smoothing): 100 chords of 2 sin(dphi / 2).
-    raw_length = 100 * 2 * math.sin(dphi / 2)
-    assert m["path_length_m"] == pytest.approx(raw_length, abs=DIFF)
-    assert m["angle_over_length_radpm"] == pytest.approx(32 * 3 * dphi / raw_length, abs=DIFF)
-
-
-@pytest.mark.parametrize("source", ["odometry", "pose_only"])
-def test_circle_yaw_rate_is_constant(circle_bags, source: str) -> None:
-    m = _row(circle_bags[source])
-    assert m["ang_vel_mean_radps"] == pytest.approx(V / R, abs=DIFF)
-    assert m["ang_vel_std_radps"] == pytest.approx(0.0, abs=DIFF)
-    assert m["yaw_acc_max_radps2"] == pytest.approx(0.0, abs=DIFF)
-    assert m["yaw_acc_mean_radps2"] == pytest.approx(0.0, abs=DIFF)
-    assert m["yaw_jerk_max_radps3"] == pytest.approx(0.0, abs=DIFF)
-    # Odometry reports the tangential speed V; poses give chord / dt, the mean speed along
-    # each chord (both constant, so no linear acceleration).
-    speed = V if source == "odometry" else CHORD / DT
-    assert m["lin_vel_mean_mps"] == pytest.approx(speed, abs=DIFF)
-    assert m["lin_vel_std_mps"] == pytest.approx(0.0, abs=DIFF)
-    assert m["lin_acc_max_mps2"] == pytest.approx(0.0, abs=DIFF)
-
-
-def test_circle_pose_differences_rotate_into_the_body_frame(circle_bags) -> None:
-    from pic4rl_metrics.kinematics import velocity_series
-
-    ep = read_episode(circle_bags["pose_only"])
-    assert ep.pose.vx is None  # pose-only source
-    vel = velocity_series(ep.pose)
-    # The chord of each interval points along the interval's mean heading: vy = 0.
-    np.testing.assert_allclose(vel.vx, CHORD / DT, atol=DIFF)
-    np.testing.assert_allclose(vel.vy, 0.0, atol=DIFF)
-    np.testing.assert_allclose(vel.wz, V / R, atol=DIFF)
-    # Placed at interval midpoints.
-    np.testing.assert_array_equal(vel.t_ns, ep.pose.t_ns[:-1] + np.diff(ep.pose.t_ns) // 2)
-
-
-# --- speed ramp (constant jerk) --------------------------------------------------------------
-
-JERK, T_RAMP = 0.2, 3.0
-
-
-@pytest.fixture(scope="module")
-def ramp_bags(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    root = tmp_path_factory.mktemp("ramp")
-    track = speed_ramp(JERK, T_RAMP, DT)
-    return {
-        "odometry": write_episode_bag(root / "odom", track),
-        "pose_only": write_episode_bag(
-            root / "pose", track, pose_type="pose_stamped", also_odom=False
-        ),
-    }
-
-
-def test_speed_ramp_from_twist(ramp_bags) -> None:
-    m = _row(ramp_bags["odometry"])
-    # v = j t^2 / 2 at t = 0, dt, ..., T: a at the interval midpoints = j t_mid exactly.
-    t_mid_last = T_RAMP - DT / 2
-    assert m["lin_acc_max_mps2"] == pytest.approx(JERK * t_mid_last, abs=DIFF)
-    assert m["lin_acc_mean_mps2"] == pytest.approx(JERK * T_RAMP / 2, abs=DIFF)  # mean t_mid
-    assert m["lin_jerk_max_mps3"] == pytest.approx(JERK, abs=DIFF)
-    assert m["lin_jerk_mean_mps3"] == pytest.approx(JERK, abs=DIFF)
-    # Trapezoid mean of j t^2 / 2: (j/2) (T^2/3 + dt^2/6).
-    assert m["lin_vel_mean_mps"] == pytest.approx(JERK / 2 * (T_RAMP**2 / 3 + DT**2 / 6), abs=DIFF)
-    assert m["path_length_m"] == pytest.approx(JERK * T_RAMP**3 / 6, abs=EXACT)
-
-
-def test_speed_ramp_from_pose_differences(ramp_bags) -> None:
-    m = _row(ramp_bags["pose_only"])
-    # Δx/Δt of x = j t^3/6 is (j/2)(t_mid^2 + dt^2/12) at the interval midpoints; its
-    # difference over the midpoints is j times the sample time between them: 0.1 .. T - dt.
-    assert m["lin_acc_max_mps2"] == pytest.approx(JERK * (T_RAMP - DT), abs=DIFF)
-    assert m["lin_acc_mean_mps2"] == pytest.approx(JERK * T_RAMP / 2, abs=DIFF)
-    assert m["lin_jerk_max_mps3"] == pytest.approx(JERK, abs=DIFF)
-    assert m["lin_jerk_mean_mps3"] == pytest.approx(JERK, abs=DIFF)
-
-
-# --- pose-only and PoseWithCovarianceStamped sources ------------------------------------------
-
-
-@pytest.mark.parametrize("yaw", [0.0, math.radians(30)])
-def test_pose_only_straight_line_speeds_match_the_analytic_ones(tmp_path: Path, yaw: float) -> None:
-    track = straight_line(0.5, 10.0, start=(1.0, -2.0, yaw))
-    bag = write_episode_bag(tmp_path / "pose", track, pose_type="pose_stamped", also_odom=False)
-    ep = read_episode(bag)
-    assert ep.pose.vx is None
-    m = compute_metrics(ep)
-    assert m.lin_vel_mean_mps == pytest.approx(0.5, abs=DIFF)
-    assert m.lin_vel_std_mps == pytest.approx(0.0, abs=DIFF)
-    assert m.lin_acc_max_mps2 == pytest.approx(0.0, abs=DIFF)
-    assert m.ang_vel_mean_radps == pytest.approx(0.0, abs=DIFF)
-    assert m.path_length_m == pytest.approx(5.0, abs=EXACT)
-    from pic4rl_metrics.kinematics import velocity_series
-
-    vel = velocity_series(ep.pose)
-    np.testing.assert_allclose(vel.vx, 0.5, atol=DIFF)  # body frame: all forward
-    np.testing.assert_allclose(vel.vy, 0.0, atol=DIFF)
-
-
-def test_pose_with_covariance_source_via_topic_map(tmp_path: Path) -> None:
-    bag = write_episode_bag(
-        tmp_path / "amcl", LINE, pose_topic="/amcl_pose", pose_type="pose_cov", also_odom=False
-    )
-    # Not a default pose topic and not Odometry: without a map the bag is an error row.
-    frame = compute([bag]).frame
-    assert "/amcl_pose" in frame.loc[0, "error"]
-    m = _row(bag, topic_map=TopicMap(pose=("/amcl_pose",)))
-    assert m["pose_topic"] == "/amcl_pose"
-    assert m["path_length_m"] == pytest.approx(5.0, abs=EXACT)
-    assert m["lin_vel_mean_mps"] == pytest.approx(0.5, abs=DIFF)
-    # Same through the override the CLI's --pose-topic uses.
-    via_override = _row(bag, topic_map=TopicMap().with_overrides(pose=("amcl_pose",)))
-    assert via_override["path_length_m"] == pytest.approx(5.0, abs=EXACT)
-
-
 # --- scans -------------------------------------------------------------------------------------
 
 # 360 beams from -pi in steps of 1 deg: beams at exactly +-90 deg and 0 deg exist.
@@ -503,7 +271,6 @@ def test_scan_without_valid_beam_does_not_end_a_safety_violation(dropout_bag: Pa
     """Same reading of "contributes nothing": the scan before the dropout holds until the next
     scan that has data, so the margin is violated for the whole 0.4 s."""
     assert _row(dropout_bag)["safety_violation_time_s"] == pytest.approx(0.4, abs=EXACT)
-
 
 # --- collisions and footprints ----------------------------------------------------------------
 
@@ -590,7 +357,6 @@ def test_rectangular_footprint_margins(
     # Every margin is <= 0.3 (the default safety margin) for the whole second.
     assert m.safety_violation_time_s == pytest.approx(1.0, abs=EXACT)
 
-
 # --- row crop and person following --------------------------------------------------------
 
 
@@ -636,100 +402,7 @@ def test_person_interpolation_is_exact_for_linear_motion(tmp_path: Path) -> None
     # Exact to rounding, as the docs' "linearly interpolated" gives for linear motion.
     assert m["follow_heading_max_rad"] == pytest.approx(abs(bearing), abs=EXACT)
 
-
-# --- time base -----------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("stamped", [False, True])
-def test_headerless_cmd_vel_lands_on_the_header_time_base(tmp_path: Path, stamped: bool) -> None:
-    bag = write_episode_bag(
-        tmp_path / "offset", LINE, cmd_stamped=stamped, receive_offset_ns=1000 * NS
-    )
-    ep = read_episode(bag)
-    assert ep.cmd is not None and len(ep.cmd) == len(ep.pose)
-    assert abs(int(ep.cmd.t_ns[0]) - int(ep.pose.t_ns[0])) <= 1_000_000  # within 1 ms
-    assert abs(int(ep.cmd.t_ns[-1]) - int(ep.pose.t_ns[-1])) <= 1_000_000
-    assert int(ep.pose.t_ns[0]) == DEFAULT_T0_NS  # header stamps, not receive times
-    assert compute_metrics(ep).clearance_time_s == pytest.approx(10.0, abs=EXACT)
-
-
-# --- storage: killed recorder, MCAP ------------------------------------------------------------
-
-FACTS = {"agent": "td3", "run": "r1", "episode": "3", "footprint": {"radius_m": 0.2}}
-SCENE = Obstacles(circles=((2.5, 0.8, 0.3),), segments=((-1.0, -1.0, 8.0, -1.0),))
-
-
-def _episode_kwargs() -> dict[str, object]:
-    return {"obstacles": SCENE, "goal": (5.0, 0.0), "facts": FACTS, "outcome": "goal"}
-
-
-def _assert_same_rows(a: dict[str, object], b: dict[str, object]) -> None:
-    differ = {k: (a[k], b[k]) for k in a if k != "bag" and not _same(a[k], b[k])}
-    assert differ == {}
-
-
-def test_killed_recorder_gives_the_same_row(tmp_path: Path) -> None:
-    full = write_episode_bag(tmp_path / "full", LINE, **_episode_kwargs())
-    killed = write_episode_bag(
-        tmp_path / "bags" / "killed", LINE, write_metadata=False, **_episode_kwargs()
-    )
-    files = sorted(p.name for p in killed.iterdir())
-    assert files == ["killed.db3"]
-    reference = _row(full)
-    assert reference["outcome"] == "goal"
-    assert not math.isnan(reference["collision_count"])  # the footprint was there
-    _assert_same_rows(reference, _row(killed / "killed.db3"))
-    globbed = compute([str(tmp_path / "bags" / "*" / "*.db3")]).frame
-    assert len(globbed) == 1
-    _assert_same_rows(reference, globbed.iloc[0].to_dict())
-    # The facts came from the facts topic (custom_data lived in the lost metadata.yaml).
-    ep = read_episode(killed / "killed.db3")
-    assert ep.facts.agent == "td3" and ep.facts.run == "r1"
-    assert ep.facts.goal == (5.0, 0.0)
-    assert ep.facts.footprint == Footprint(radius_m=0.2)
-
-
-def test_mcap_gives_the_same_metrics_as_sqlite3(tmp_path: Path) -> None:
-    sqlite = write_episode_bag(tmp_path / "sqlite", LINE, **_episode_kwargs())
-    mcap = write_episode_bag(tmp_path / "mcap", LINE, storage="mcap", **_episode_kwargs())
-    assert any(p.suffix == ".mcap" for p in mcap.iterdir())
-    a, b = _row(sqlite), _row(mcap)
-    _assert_same_rows(a, b)
-    # The cylinder (2.5, 0.8, r 0.3) passes 0.8 - 0.3 = 0.5 m to the left at x = 2.5.
-    assert a["obstacle_dist_min_m"] == pytest.approx(0.5, abs=F32)
-
-
-# --- inputs ------------------------------------------------------------------------------------
-
-
-def _bags(inputs: list[object]) -> list[Path]:
-    frame = compute(inputs).frame  # type: ignore[arg-type]
-    assert (frame["error"] == "").all(), frame["error"].tolist()
-    return [Path(b).resolve() for b in frame["bag"]]
-
-
-def test_inputs_all_name_the_same_bags_once(tmp_path: Path) -> None:
-    root = tmp_path / "runs"
-    short = straight_line(0.5, 1.0)
-    a = write_episode_bag(root / "a", short)
-    b = write_episode_bag(root / "deep" / "er" / "b", short)
-    k = write_episode_bag(root / "deep" / "k", short, write_metadata=False)
-    every = sorted(p.resolve() for p in (a, b, k / "k.db3"))
-
-    assert _bags([root]) == every  # a directory, searched recursively
-    assert _bags([a / "metadata.yaml"]) == [a.resolve()]
-    assert _bags([a / "a.db3"]) == [a.resolve()]  # the .db3 beside its metadata is that bag
-    assert _bags([a, a / "metadata.yaml", a / "a.db3"]) == [a.resolve()]  # once, not thrice
-    assert _bags([str(root / "**" / "metadata.yaml")]) == sorted([a.resolve(), b.resolve()])
-    assert _bags([str(root / "**" / "*.db3")]) == every
-    assert _bags([root, str(root / "*"), a, k / "k.db3", b / "metadata.yaml"]) == every
-
-
-def test_input_naming_nothing_is_an_error_row(tmp_path: Path) -> None:
-    frame = compute([tmp_path / "missing", str(tmp_path / "*.db3")]).frame
-    assert len(frame) == 2
-    assert all(frame["error"] != "")
-    assert frame["outcome"].isna().all()
+# --- track constants ----------------------------------------------------------------------
 
 
 def test_track_constants() -> None:
