@@ -265,12 +265,11 @@ def _core(values: Mapping[str, Any]) -> SimParams:
 
 def build_config(values: Mapping[str, Any]) -> SimConfig:
     """A ``SimConfig`` from a full set of parameter values (``resolve``'s result)."""
-    _core(values)
-    engine = EngineConfig(physics_dt_s=values["physics_dt_s"],
-                          control_dt_s=values["control_dt_s"],
-                          clearance_m=values["clearance_m"],
-                          min_goal_distance_m=values["min_goal_distance_m"])
-    episode = EpisodeConfig(values["seed"], parse_start(values["start_pose"]),
-                            parse_goal(values["goal"]))
+    core = _core(values)
+    engine = EngineConfig(physics_dt_s=core.physics_dt_s, control_dt_s=core.control_dt_s,
+                          clearance_m=core.clearance_m,
+                          min_goal_distance_m=core.min_goal_distance_m)
+    episode = EpisodeConfig(core.seed, parse_start(list(core.start_pose)),
+                            parse_goal(list(core.goal)))
     return SimConfig(build_robot(values), build_world_choice(values), engine, episode,
-                     build_clock(values))
+                     ClockConfig(core.clock_mode, core.real_time_factor, core.cmd_timeout_s))

@@ -336,11 +336,6 @@ def _choice(key: str, enum: type[Enum], value: Any) -> Enum:
     return enum(value)
 
 
-def replace(obj: T, overrides: Mapping[str, Any], *, where: str) -> T:
-    """A copy of the config ``obj`` with dotted ``overrides`` applied (checked as a file's)."""
-    return from_params(type(obj), {**to_params(obj), **overrides}, where=where)
-
-
 # -- documentation ---------------------------------------------------------------------------
 
 
