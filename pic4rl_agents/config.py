@@ -142,6 +142,34 @@ class CheckpointConfig:
 
 
 @dataclass(frozen=True)
+class ImitationConfig:
+    """Expert-guided training before RL (``pic4rl_agents.imitation``): behaviour cloning from
+    ``bc_steps`` env steps the expert drives, then ``dagger_rounds`` rounds of DAgger (the
+    student drives ``dagger_steps`` env steps, the expert labels every state, the labels are
+    aggregated and the actor regressed on all of them), then RL from the imitation-initialised
+    actor for the rest of ``max_steps`` / ``max_wall_s``, after ``critic_warmup_steps``
+    gradient steps on the critic alone. Every env step of imitation counts in ``max_steps``,
+    and the expert's time in every clock."""
+
+    enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
+    expert: str = param("planner", doc="the expert that labels states: planner (the "
+                        "privileged planner, pic4rl_bridge.planner)", choices=("planner",))
+    bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
+                          "data)", range=NON_NEGATIVE)
+    dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",
+                               range=NON_NEGATIVE)
+    dagger_steps: int = param(5_000, doc="env steps driven by the student per round",
+                              range=POSITIVE)
+    gradient_steps: int = param(2_000, doc="actor regression steps after each round (and after "
+                                "behaviour cloning)", range=POSITIVE)
+    learning_rate: float = param(1e-3, doc="the regression's Adam step size", range=POSITIVE)
+    replay: bool = param(True, doc="off-policy: imitation's transitions (with their rewards) "
+                         "go to the replay buffer and stay there for RL")
+    critic_warmup_steps: int = param(5_000, doc="before RL: critic gradient steps on the "
+                                     "replay buffer with the actor frozen", range=NON_NEGATIVE)
+
+
+@dataclass(frozen=True)
 class PpoConfig:
     n_steps: int = param(1024, doc="rollout length per env", range=POSITIVE)
     n_epochs: int = param(10, doc="passes over each rollout", range=POSITIVE)
@@ -188,6 +216,7 @@ class TrainConfig:
     eval: EvalConfig = section(EvalConfig)
     checkpoint: CheckpointConfig = section(CheckpointConfig)
     curriculum: CurriculumConfig = section(CurriculumConfig)
+    imitation: ImitationConfig = section(ImitationConfig)
     tensorboard: bool = param(True, doc="write TensorBoard logs")
     reward_window: int = param(50, doc="episodes in the reward curve's moving average",
                                range=POSITIVE)
@@ -209,6 +238,9 @@ class TrainConfig:
                     "distances (m) above each stage's min_distance_m")
             require(detour >= 1, "curriculum.max_detour", list(cur.max_detour),
                     "ratios >= 1 (shortest path / straight line)")
+        require(not self.imitation.enabled or self.off_policy, "imitation.enabled", True,
+                f"false for {self.algorithm} (imitation initialises an off-policy actor: ddpg, "
+                "td3, sac, tqc)")
         require(0 <= cur.down < cur.up <= 1, "curriculum.up", cur.up,
                 f"a success rate in (curriculum.down={cur.down}, 1]")
         require(cur.window > 0, "curriculum.window", cur.window, "a positive number of episodes")

@@ -86,7 +86,8 @@ class Policy:
         else:
             from pic4rl_bridge.baselines import make_baseline
 
-            self.controller = make_baseline(spec.baseline, env.config, env.scenario.robot)
+            self.controller = make_baseline(spec.baseline, env.config, env.scenario.robot,
+                                            env.scenario.world)
 
     def begin(self) -> None:
         if self.controller is not None:

@@ -134,8 +134,31 @@ class Trainer:
             model = self._model(env)
             callbacks = self._callbacks(stack, env_cfg, started)
             stack.callback(self._save_if_trained, model, started, model.num_timesteps)
-            self._learn(model, callbacks)
+            if self._imitate(model, env, env_cfg, callbacks):
+                self._learn(model, callbacks)
         return self.run_dir
+
+    def _imitate(self, model: Any, env: Any, env_cfg: EnvConfig, callbacks: list[Any]) -> bool:
+        """Imitation before RL when ``imitation.enabled`` (not on a resume: the resumed model
+        has imitated already); False when a callback (the clock) ended training during it."""
+        from stable_baselines3.common.callbacks import CallbackList
+
+        from .imitation import Imitation
+
+        cfg = self.config.train
+        if not cfg.imitation.enabled or self.resume is not None:
+            return True
+        callback = CallbackList(callbacks)
+        callback.init_callback(model)
+        with _sigterm_as_interrupt():
+            try:
+                return Imitation(cfg.imitation, env, env_cfg, model, callback,
+                                 batch_size=cfg.batch_size, seed=cfg.seed).run()
+            except KeyboardInterrupt:
+                self.interrupted = True
+                log.warning("interrupted during imitation at %d steps; saving",
+                            model.num_timesteps)
+                return False
 
     def _session_env(self) -> tuple[EnvConfig, int] | None:
         """This session's env and seed; None when the resumed model has trained enough.
@@ -236,8 +259,11 @@ class Trainer:
         cfg = self.config.train
         with _sigterm_as_interrupt():
             try:
+                if model.num_timesteps >= cfg.max_steps:
+                    return  # imitation used every step
+                fresh = self.resume is None and model.num_timesteps == 0
                 model.learn(cfg.max_steps - model.num_timesteps, callback=callbacks,
-                            reset_num_timesteps=self.resume is None,
+                            reset_num_timesteps=fresh,
                             log_interval=10 if cfg.off_policy else 1)
             except KeyboardInterrupt:
                 self.interrupted = True

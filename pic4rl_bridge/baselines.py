@@ -5,14 +5,17 @@
   that the env, transport and recorder work end to end (it reaches any goal in open space).
 - ``dwa``: the Dynamic Window Approach (Fox, Burgard, Thrun 1997), the local planner that
   nav2 and the BARN challenge compare learned planners with.
+- ``planner``: the privileged planner (``pic4rl_bridge.planner``): the world's shortest path
+  with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
 
-Both are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no simulator.
+The first two are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
+simulator.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -21,20 +24,16 @@ from .errors import ConfigError
 from .frame import SensorFrame
 from .robot_info import RobotInfo
 from .tasks.collision import footprint_clearance, sensed_points
+from .tasks.goto import normalized_action
+
+if TYPE_CHECKING:
+    from pic4rl_sim.engine.world_spec import WorldSpec
 
 
 def _bearing(dx: float, dy: float, yaw: float) -> float:
     """The angle (rad, in [-pi, pi]) of the vector (dx, dy) seen from heading ``yaw``."""
     angle = math.atan2(dy, dx) - yaw
     return math.atan2(math.sin(angle), math.cos(angle))
-
-
-def _normalized(robot: RobotInfo, v: float, w: float) -> np.ndarray:
-    """The goToPose action for (v, ω): -1..1 spans [min_linear, max_linear] and ±max_angular."""
-    span = robot.max_linear_m_s - robot.min_linear_m_s
-    a_v = 2.0 * (v - robot.min_linear_m_s) / span - 1.0 if span > 0 else 0.0
-    a_w = w / robot.max_angular_rad_s if robot.max_angular_rad_s > 0 else 0.0
-    return np.clip(np.array([a_v, a_w], dtype=np.float32), -1.0, 1.0)
 
 
 class Baseline(Protocol):
@@ -69,7 +68,7 @@ class GoToGoalController:
         w = float(np.clip(self.turn_gain * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
         v = self.speed_gain * math.hypot(dx, dy) * max(0.0, math.cos(bearing)) ** 4
         v = float(np.clip(v, r.min_linear_m_s, r.max_linear_m_s))
-        return _normalized(r, v, w)
+        return normalized_action(r, v, w)
 
 
 _LANES = 72  # directions (5° apart) checked for a free lane toward the goal
@@ -171,7 +170,7 @@ class DwaController:
         return self._last
 
     def action(self, frame: SensorFrame) -> np.ndarray:
-        return _normalized(self.robot, *self.command(frame))
+        return normalized_action(self.robot, *self.command(frame))
 
     def _rollout(self, v: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, ...]:
         """Poses (S, K) of constant-velocity arcs from the origin at ``self._times``: exact,
@@ -260,19 +259,27 @@ class DwaController:
 
 
 #: The baselines ``pic4rl-test --baseline`` knows, and the tasks they drive.
-BASELINES = ("proportional", "dwa")
+BASELINES = ("proportional", "dwa", "planner")
 BASELINE_TASKS = (TaskName.GO_TO_POSE.value,)
 
 
-def make_baseline(name: str, config: EnvConfig, robot: RobotInfo) -> Baseline:
-    """The baseline ``name`` for an env of ``config`` and ``robot``; ``ConfigError`` when it
-    does not fit the task (before anything runs)."""
+def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
+                  world: WorldSpec | None = None) -> Baseline:
+    """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
+    simulated ``world``); ``ConfigError`` when it does not fit (before anything runs)."""
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
     if name == "dwa":
         return DwaController(robot, config.baselines.dwa,
                              collision_tolerance_m=config.collision_tolerance_m)
+    if name == "planner":
+        if world is None:
+            raise ConfigError("--baseline planner: it plans on the simulated world's map, and "
+                              "this env has none (no 'sim:' section: a real robot)")
+        from .planner import PlannerController
+
+        return PlannerController(robot, world)
     return GoToGoalController(robot)
 
 

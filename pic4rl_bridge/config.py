@@ -31,6 +31,7 @@ from pic4rl_sim.interfaces import (
     GOAL_POSE,
     ODOM,
     PERSON_POSE,
+    PLAN,
     RECORDED,
     SCAN,
 )
@@ -59,6 +60,11 @@ class TaskName(ParamEnum):
 class SensorName(ParamEnum):
     LIDAR = "lidar"
     DEPTH = "depth"
+
+
+class GoalInput(ParamEnum):
+    GOAL = "goal"
+    PLAN = "plan"
 
 
 class TransportName(ParamEnum):
@@ -238,6 +244,8 @@ class TopicsConfig:
     depth: str = param(DEPTH_IMAGE.name, doc="sensor_msgs/Image (32FC1)")
     goal: str = param(GOAL_POSE.name, doc="geometry_msgs/PoseStamped")
     person: str = param(PERSON_POSE.name, doc="geometry_msgs/PoseStamped (personMonitoring)")
+    plan: str = param(PLAN.name, doc="nav_msgs/Path: the global plan of goal_input plan (the "
+                      "sim's, or any planner's, e.g. nav2's /plan)")
 
 
 @dataclass(frozen=True)
@@ -289,6 +297,12 @@ class EnvConfig:
                                    range=POSITIVE)
     normalize_observations: bool = param(False, doc="goToPose: ranges and goal distance in "
                                          "[0, 1], angle / pi")
+    goal_input: GoalInput = param(GoalInput.GOAL, doc="goToPose: what the goal part of the "
+                                  "observation points at: goal (the final goal, mapless: the "
+                                  "paper's) | plan (a look-ahead point on topics.plan)")
+    plan_lookahead_m: float = param(1.5, doc="goal_input plan: the point this far along the "
+                                    "plan beyond the robot's projection on it", unit="m",
+                                    range=POSITIVE)
     goal_tolerance_m: float = param(0.4, doc="the goal is reached this close", unit="m",
                                     range=POSITIVE)
     collision_tolerance_m: float = param(0.05, doc="a scan point this close to the footprint is "

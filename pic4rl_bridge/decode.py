@@ -31,6 +31,12 @@ def planar_pose(pose: Any) -> Pose2D:
                   yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
 
+def path(msg: Any) -> np.ndarray:
+    """A ``nav_msgs/Path`` as its positions (k × 2, m, float64), in its header's frame."""
+    return np.array([(float(p.pose.position.x), float(p.pose.position.y)) for p in msg.poses],
+                    dtype=np.float64).reshape(-1, 2)
+
+
 def odometry(msg: Any) -> tuple[Pose2D, Twist2D]:
     """Pose and body twist of a ``nav_msgs/Odometry``."""
     lin, ang = msg.twist.twist.linear, msg.twist.twist.angular

@@ -43,7 +43,7 @@ from .transport import EpisodeRequest, RawMessage, Transport
 
 log = logging.getLogger(__name__)
 
-_FRAME_SENSORS = frozenset({"scan", "depth", "person"})
+_FRAME_SENSORS = frozenset({"scan", "depth", "person", "plan"})
 
 
 def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,

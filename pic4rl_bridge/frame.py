@@ -49,7 +49,8 @@ class SensorFrame:
 
     ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
     the frame the goal is given in); ``goal`` is the current goal in that frame; ``depth`` is
-    height × width metres (float32, ±inf out of range); ``person`` is the person's pose.
+    height × width metres (float32, ±inf out of range); ``person`` is the person's pose;
+    ``plan`` is the latest global plan (k × 2, m, in the goal's frame).
     """
 
     stamp_ns: int
@@ -59,3 +60,4 @@ class SensorFrame:
     scan: ScanData | None = None
     depth: np.ndarray | None = None
     person: Pose2D | None = None
+    plan: np.ndarray | None = None

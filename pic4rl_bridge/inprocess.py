@@ -17,7 +17,7 @@ import numpy as np
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
-from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, INTERFACES, STEP_TOPICS, interface
+from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, INTERFACES, PLAN, STEP_TOPICS, interface
 
 from . import decode
 from .config import EnvConfig
@@ -75,7 +75,7 @@ class InProcessTransport(Transport):
         self._stamp_ns += self._control_dt_ns
         self.fault = None
         if self.tap is not None:
-            self._messages().goal(self.engine.goal, self._stamp_ns, self.tap)
+            self._messages().episode(self.engine, self._stamp_ns, self.tap)
         return self._frame()
 
     def step(self, command: Twist2D) -> SensorFrame:
@@ -117,8 +117,9 @@ class InProcessTransport(Transport):
         if "person" in self._sensors:
             seen = engine.person_pose()
             person = as_published(seen[0]) if seen is not None else None
+        plan = engine.plan() if "plan" in self._sensors else None
         return SensorFrame(self._stamp_ns, as_published(pose), twist, engine.goal, scan, depth,
-                           person)
+                           person, plan)
 
 
 class _MessageWriter:
@@ -127,15 +128,16 @@ class _MessageWriter:
 
     def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
         from geometry_msgs.msg import Twist
-        from pic4rl_sim.node.messages import StateMessages, goal_pose
+        from pic4rl_sim.node.messages import StateMessages, goal_pose, plan_path
         from rclpy.serialization import serialize_message
 
         self._engine = engine
         self._serialize = serialize_message
         self._twist_type = Twist
         self._goal_pose = goal_pose
+        self._plan_path = plan_path
         self.state_messages = StateMessages(engine)
-        self._names = {t.name: f"{namespace}/{t.name}" for t in (*STEP_TOPICS, GOAL_POSE, CMD_VEL)}
+        self._names = {t.name: f"{namespace}/{t.name}" for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
         self._outputs = [(t.name, msg) for t, msg in self.state_messages.published
                          if t.name in topics]
         self._topics = topics
@@ -145,8 +147,11 @@ class _MessageWriter:
             tap(RawMessage(self._names[topic], interface(topic).type, self._serialize(msg),
                            stamp_ns))
 
-    def goal(self, goal: tuple[float, float], stamp_ns: int, tap: Tap) -> None:
-        self._emit(GOAL_POSE.name, self._goal_pose(goal, stamp_ns), stamp_ns, tap)
+    def episode(self, engine: Engine, stamp_ns: int, tap: Tap) -> None:
+        """The episode's goal and, when recorded, its plan, as the node publishes them."""
+        self._emit(GOAL_POSE.name, self._goal_pose(engine.goal, stamp_ns), stamp_ns, tap)
+        if PLAN.name in self._topics:
+            self._emit(PLAN.name, self._plan_path(engine.plan(), stamp_ns), stamp_ns, tap)
 
     def command(self, command: Twist2D, stamp_ns: int, tap: Tap) -> None:
         msg = self._twist_type()
@@ -169,4 +174,5 @@ class _MessageWriter:
             depth = decode.depth_image(m.depth_image)
         if "person" in sensors and m.person is not None:
             person = decode.planar_pose(m.person.pose)
-        return SensorFrame(stamp_ns, pose, twist, engine.goal, scan, depth, person)
+        plan = engine.plan() if "plan" in sensors else None
+        return SensorFrame(stamp_ns, pose, twist, engine.goal, scan, depth, person, plan)

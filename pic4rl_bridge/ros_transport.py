@@ -31,7 +31,7 @@ import rclpy
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParametersAtomically
@@ -57,6 +57,7 @@ from pic4rl_sim.interfaces import (
     INTERFACES,
     ODOM,
     PERSON_POSE,
+    PLAN,
     SCAN,
     Cadence,
     Interface,
@@ -84,7 +85,7 @@ _KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Ca
 
 
 #: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
-_STAMP_FIRST = (Clock, Odometry, LaserScan, Imu, Image, CameraInfo, PoseStamped)
+_STAMP_FIRST = (Clock, Odometry, LaserScan, Imu, Image, CameraInfo, PoseStamped, Path)
 
 
 def _cdr_stamp(data: bytes) -> int:
@@ -120,6 +121,7 @@ class _Topic:
         self.stamp_ns = -1
         self.count = 0
         self.recorded = False
+        self.episodic = False  # published once per episode (goal, plan), not every step
 
 
 class RosTransport(Transport):
@@ -182,6 +184,9 @@ class RosTransport(Transport):
         wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (ros_type(ODOM.type), _RELIABLE),
                                                       t.goal: (ros_type(GOAL_POSE.type), goal_qos)}
         self._roles = {"pose": t.pose, "goal": t.goal}
+        if "plan" in sensors:  # once per episode, like the goal (nav2's /plan: on each replan)
+            wanted[t.plan] = (ros_type(PLAN.type), goal_qos)
+            self._roles["plan"] = t.plan
         for role, topic, sim_topic in (("scan", t.scan, SCAN), ("depth", t.depth, DEPTH_IMAGE),
                                        ("person", t.person, PERSON_POSE)):
             if role in sensors:
@@ -202,13 +207,16 @@ class RosTransport(Transport):
                 if sim_topic is None:
                     raise ConfigError(f"record.topics: {topic!r} has no known message type; "
                                       f"expected one of {', '.join(_KNOWN_TOPICS)}")
-                wanted[topic] = ((ros_type(GOAL_POSE.type), _LATCHED) if sim_topic is GOAL_POSE
+                wanted[topic] = ((ros_type(sim_topic.type), _LATCHED)
+                                 if sim_topic.qos is QosKind.LATCHED
                                  else _like(sim_topic, sensor_qos))
         listed = ({resolve(name) for name in config.record.topics} if config.record.enabled
                   else set())
         for topic, (kind, qos) in wanted.items():
             entry = _Topic(topic, kind)
             entry.recorded = resolve(topic) in listed
+            entry.episodic = qos.durability == DurabilityPolicy.TRANSIENT_LOCAL or topic in (
+                t.goal, t.plan)
             needed = topic in self._roles.values()
             sub = self.node.create_subscription(kind, topic, self._callback(entry, needed), qos,
                                                 raw=True)
@@ -314,6 +322,11 @@ class RosTransport(Transport):
             self._spin_until(lambda: goal.stamp_ns > used,
                              self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
         self._used_goal_ns = goal.stamp_ns
+        if "plan" in self._roles:  # the sim's plan carries its goal's stamp; any plan else
+            plan = self._topics[self._roles["plan"]]
+            first = goal.stamp_ns if self._set_params is not None else 0
+            self._spin_until(lambda: plan.stamp_ns >= first, self._timeout_s,
+                             f"topic {plan.name}: the episode's plan")
         self.fault = None
         self._faults.clear()
         if self._status is not None:
@@ -383,7 +396,8 @@ class RosTransport(Transport):
     def _next_frame(self, after_ns: int, *, inclusive: bool) -> SensorFrame:
         """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
         it when ``inclusive``); in rate mode, the latest messages."""
-        needed = [self._topics[t] for role, t in self._roles.items() if role != "goal"]
+        needed = [self._topics[t] for role, t in self._roles.items()
+                  if role not in ("goal", "plan")]
         sync = self._topics[self._roles.get("scan") or self._roles.get("depth")
                             or self._roles["pose"]]
         if self._mode is StepMode.LOCKSTEP:
@@ -415,8 +429,9 @@ class RosTransport(Transport):
             depth = decode.depth_image(topics[roles["depth"]].msg, topic=roles["depth"])
         if "person" in roles:
             person = decode.planar_pose(topics[roles["person"]].msg.pose)
+        plan = decode.path(topics[roles["plan"]].msg) if "plan" in roles else None
         self._frame_stamp_ns = stamp_ns
-        return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person)
+        return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person, plan)
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
         """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
@@ -434,10 +449,9 @@ class RosTransport(Transport):
         stamp, so the bag holds the episode's last messages too."""
         if self.tap is None or self._mode is not StepMode.LOCKSTEP:
             return
-        goal = self._roles["goal"]
         last = self._frame_stamp_ns
-        waiting = [t for key, t in self._topics.items()
-                   if key != goal and t.recorded and t.count > 0]
+        waiting = [t for t in self._topics.values()
+                   if not t.episodic and t.recorded and t.count > 0]
         try:
             self._spin_until(lambda: all(t.stamp_ns >= last for t in waiting), 1.0,
                              "recorded topics: the last step's messages")

@@ -114,6 +114,10 @@ SCAN = Interface(
 GOAL_POSE = Interface(
     "goal_pose", "geometry_msgs/msg/PoseStamped", Direction.PUB, QosKind.LATCHED,
     "the episode's goal", Cadence.EPISODE, record_order=5)
+PLAN = Interface(
+    "plan", "nav_msgs/msg/Path", Direction.PUB, QosKind.LATCHED,
+    "the episode's global plan from start to goal (the shortest path with a clearance margin, "
+    "`pic4rl_sim.engine.paths.plan_path`)", Cadence.EPISODE, record_order=9)
 WORLD_MARKERS = Interface(
     "world/markers", "visualization_msgs/msg/MarkerArray", Direction.PUB, QosKind.LATCHED,
     "the world's boxes and cylinders, and the goal", Cadence.EPISODE)
@@ -130,7 +134,7 @@ UNPAUSE_PHYSICS = Interface(
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
 INTERFACES = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, IMU, PERSON_POSE, CAMERA_INFO, DEPTH_IMAGE,
-              SCAN, GOAL_POSE, WORLD_MARKERS, DIAGNOSTICS, RESET_WORLD, PAUSE_PHYSICS,
+              SCAN, GOAL_POSE, PLAN, WORLD_MARKERS, DIAGNOSTICS, RESET_WORLD, PAUSE_PHYSICS,
               UNPAUSE_PHYSICS)
 _BY_NAME = {i.name: i for i in INTERFACES}
 #: A step's state topics, in publishing order.

@@ -3,7 +3,10 @@
 The reward is the paper's: a dense ``d_{t-1} - d_t`` toward the goal, +1000 on reaching it,
 -150 on a collision, plus the original code's optional heading and per-step terms. The
 policy sees the goal in polar form in the robot's frame and its last action, beside the LiDAR
-sectors or the depth image. Every term is reported every step (0 when not triggered) so that
+sectors or the depth image. With ``goal_input: plan`` the polar target is instead the point
+``plan_lookahead_m`` along the global plan (``topics.plan``) beyond the robot's projection on
+it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
+the outcome still judge the final goal. Every term is reported every step (0 when not triggered) so that
 ``info["reward_terms"]`` keeps one shape through an episode.
 """
 
@@ -16,9 +19,9 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Twist2D
+from pic4rl_sim.engine.geometry import Twist2D, point_along, project
 
-from ..config import EnvConfig
+from ..config import EnvConfig, GoalInput
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Task
@@ -43,6 +46,15 @@ def planar_command(action: np.ndarray, robot: RobotInfo) -> Twist2D:
     return Twist2D(vx=float(v), vy=0.0, wz=float(a[1] * robot.max_angular_rad_s))
 
 
+def normalized_action(robot: RobotInfo, v: float, w: float) -> np.ndarray:
+    """The 2-D normalized action of (v, ω) (m/s, rad/s): ``planar_command``'s inverse, clipped
+    to [-1, 1]."""
+    span = robot.max_linear_m_s - robot.min_linear_m_s
+    a_v = 2.0 * (v - robot.min_linear_m_s) / span - 1.0 if span > 0 else 0.0
+    a_w = w / robot.max_angular_rad_s if robot.max_angular_rad_s > 0 else 0.0
+    return np.clip(np.array([a_v, a_w], dtype=np.float32), -1.0, 1.0)
+
+
 def planar_action_space() -> gym.spaces.Box:
     """The 2-D normalized action space of the differential-drive tasks."""
     return gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
@@ -56,6 +68,9 @@ class _GoToPose(Task):
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
         self.action_space = planar_action_space()
+        self._plan = config.goal_input == GoalInput.PLAN.value
+        if self._plan:
+            self.required = self.required | {"plan"}
 
     def command(self, action: np.ndarray) -> Twist2D:
         return planar_command(action, self.robot)
@@ -75,13 +90,25 @@ class _GoToPose(Task):
 
     def _goal_vector(self, frame: SensorFrame, context: EpisodeContext,
                      last_action: np.ndarray) -> np.ndarray:
-        distance, angle = target_polar(frame.pose, *_goal(context))
+        distance, angle = target_polar(frame.pose, *self._target(frame, context))
         if self.config.normalize_observations:
             distance, angle = min(distance / NORMALIZED_GOAL_DISTANCE_M, 1.0), angle / math.pi
         else:
             distance = min(distance, MAX_TARGET_DISTANCE_M)
         return np.concatenate((np.array([distance, angle], np.float32),
                                clipped_action(last_action, 2)))
+
+    def _target(self, frame: SensorFrame, context: EpisodeContext) -> tuple[float, float]:
+        """What the observation points at: the goal, or the plan's look-ahead point."""
+        if not self._plan:
+            return _goal(context)
+        plan = frame.plan
+        if plan is None or len(plan) == 0:
+            raise ValueError(f"goToPose (goal_input plan): no plan on topic "
+                             f"{self.config.topics.plan!r} for this episode")
+        s = project(plan, (frame.pose.x, frame.pose.y))[0] if len(plan) > 1 else 0.0
+        x, y = point_along(plan, s + self.config.plan_lookahead_m)
+        return float(x), float(y)
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:

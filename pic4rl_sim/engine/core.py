@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import WorldError, require
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
+from .paths import plan_path
 from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
 from .sensors import DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
@@ -109,6 +110,7 @@ class Engine:
         self.start = Pose2D(0.0, 0.0, 0.0)
         self.goal = (0.0, 0.0)
         self.steps = 0
+        self._plan: np.ndarray | None = None
         self.reset(seed=seed)
 
     # -- episodes ----------------------------------------------------------------------------
@@ -131,7 +133,17 @@ class Engine:
         self.seed, self._rng = seed, rng
         self.start = Pose2D(float(start.x), float(start.y), wrap_angle(float(start.yaw)))
         self.goal = (float(goal[0]), float(goal[1]))
+        self._plan = None
         self._restart()
+
+    def plan(self) -> np.ndarray:
+        """The episode's global plan (k × 2, m, world frame) from its start to its goal
+        (``paths.plan_path`` with the footprint's circumscribed radius): computed on first
+        use, then kept for the episode; empty when no path exists."""
+        if self._plan is None:
+            self._plan = plan_path(self.world, self.start[:2], self.goal,
+                                   robot_radius_m=self.robot.footprint.bounding_radius_m)
+        return self._plan
 
     def _sample_missing(self, start: Pose2D | None, goal: tuple[float, float] | None,
                         rng: np.random.Generator) -> tuple[Pose2D, tuple[float, float]]:

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import NamedTuple
+
+import numpy as np
 
 from ..errors import require
 
@@ -63,3 +66,42 @@ def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
 def wrap_angle(angle: float) -> float:
     """``angle`` wrapped to [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+# -- polylines (a row's centre line, a global plan) ------------------------------------------
+
+def project(polyline: np.ndarray, xy: Sequence[float]) -> tuple[float, float]:
+    """The point of ``polyline`` (n × 2, m) closest to ``xy``: its arc length from the first
+    point (m) and the signed distance to it (m, positive left of the line's direction)."""
+    line = np.asarray(polyline, dtype=np.float64)
+    a, seg = line[:-1], np.diff(line, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    rel = np.asarray(xy, dtype=np.float64) - a
+    t = np.clip(np.einsum("ij,ij->i", rel, seg) / np.maximum(lengths**2, 1e-18), 0.0, 1.0)
+    gap = rel - t[:, None] * seg
+    dist = np.hypot(gap[:, 0], gap[:, 1])
+    i = int(np.argmin(dist))
+    s = float(lengths[:i].sum() + t[i] * lengths[i])
+    left = seg[i, 0] * rel[i, 1] - seg[i, 1] * rel[i, 0] >= 0.0
+    return s, float(dist[i] if left else -dist[i])
+
+
+def polyline_length(polyline: np.ndarray) -> float:
+    """Length (m) of a polyline (n × 2)."""
+    seg = np.diff(np.asarray(polyline, dtype=np.float64), axis=0)
+    return float(np.hypot(seg[:, 0], seg[:, 1]).sum())
+
+
+def point_along(polyline: np.ndarray, s: float) -> np.ndarray:
+    """The point (x, y) of ``polyline`` (n × 2, m) at arc length ``s`` (m) from its first point,
+    clipped to its ends."""
+    line = np.asarray(polyline, dtype=np.float64)
+    if len(line) == 1:
+        return line[0].copy()
+    seg = np.diff(line, axis=0)
+    ends = np.concatenate(([0.0], np.cumsum(np.hypot(seg[:, 0], seg[:, 1]))))
+    s = min(max(s, 0.0), float(ends[-1]))
+    i = min(int(np.searchsorted(ends, s, side="right")) - 1, len(seg) - 1)
+    length = ends[i + 1] - ends[i]
+    t = (s - ends[i]) / length if length > 0 else 0.0
+    return line[i] + t * seg[i]

@@ -341,3 +341,23 @@ def shortest_path_length(world: WorldSpec, start_xy: Sequence[float], goal_xy: S
     ``start_xy`` to ``goal_xy`` in ``world``; ``math.inf`` when there is none."""
     planner = planner_for(world, robot_radius_m=robot_radius_m, resolution_m=resolution_m)
     return planner.length(start_xy, goal_xy)
+
+
+#: Clearances (m) a global plan keeps beyond the robot's circumscribed radius, tried in turn
+#: until one leaves a path: a path followed with a tracking error of a few centimetres still
+#: clears door frames and the env's collision tolerance. With the Jackal, 0 gave 9 collisions
+#: in 50 test-kind pairs and 0.064 (obstacles inflated by 0.40 m) none; a small round robot
+#: (the Burger) needed more than 0.064, as it has no slack between footprint and circle.
+PLAN_MARGINS_M = (0.15, 0.064, 0.0)
+
+
+def plan_path(world: WorldSpec, start_xy: Sequence[float], goal_xy: Sequence[float], *,
+              robot_radius_m: float, margins_m: Sequence[float] = PLAN_MARGINS_M) -> np.ndarray:
+    """A global plan (k × 2, m) from ``start_xy`` to ``goal_xy`` that keeps the first of
+    ``margins_m`` beyond ``robot_radius_m`` from every obstacle with which a path exists (a
+    door narrower than that needs a smaller one); empty (0 × 2) when there is none."""
+    for margin in margins_m:
+        path = planner_for(world, robot_radius_m=robot_radius_m + margin).path(start_xy, goal_xy)
+        if path is not None and len(path):
+            return path
+    return np.zeros((0, 2))

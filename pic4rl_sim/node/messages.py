@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Vector3
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_msgs.msg import ColorRGBA, Header
@@ -165,6 +165,27 @@ def goal_pose(goal: tuple[float, float], stamp_ns: int) -> PoseStamped:
     msg = PoseStamped(header=Header(frame_id=WORLD_FRAME))
     set_stamp(msg.header.stamp, stamp_ns)
     msg.pose.position.x, msg.pose.position.y = goal
+    return msg
+
+
+def plan_path(points: np.ndarray, stamp_ns: int) -> Path:
+    """A plan (k × 2, m) as a ``nav_msgs/Path`` in the world frame: each pose heads along its
+    segment (the last one along the one before it); an empty plan has no poses."""
+    msg = Path(header=Header(frame_id=WORLD_FRAME))
+    set_stamp(msg.header.stamp, stamp_ns)
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(pts) > 1:
+        d = np.diff(pts, axis=0)
+        yaws = np.arctan2(d[:, 1], d[:, 0])
+        yaws = np.append(yaws, yaws[-1])
+    else:
+        yaws = np.zeros(len(pts))
+    for (x, y), yaw in zip(pts, yaws):
+        pose = PoseStamped(header=msg.header)
+        pose.pose.position.x, pose.pose.position.y = float(x), float(y)
+        qx, qy, qz, qw = yaw_to_quaternion(float(yaw))
+        pose.pose.orientation = Quaternion(x=qx, y=qy, z=qz, w=qw)
+        msg.poses.append(pose)
     return msg
 
 

@@ -16,7 +16,7 @@ start: the episode is void, and the bridge ends it as ``diverged``.
 Episodes: set ``seed``, ``world_variant``, ``start_pose``, ``goal`` (or any parameter) with the
 parameter services, whose result is the acknowledgement, then call ``reset_world``. The reset
 rebuilds the engine if the robot, world, sensors or timing changed, starts the episode,
-advances sim time by one control period to t0, publishes ``goal_pose`` (stamp t0),
+advances sim time by one control period to t0, publishes ``goal_pose`` (stamp t0), ``plan``,
 ``world/markers`` and one full set of sensor messages stamped t0, and only then returns.
 Contract: after ``reset_world`` returns, messages stamped >= ``goal_pose.header.stamp`` belong
 to the new episode. A reset uses ``seed`` if it was set since the last reset, else the previous
@@ -63,6 +63,7 @@ from ..interfaces import (
     GOAL_POSE,
     INTERFACES,
     PAUSE_PHYSICS,
+    PLAN,
     RESET_WORLD,
     STEP_TOPICS,
     UNPAUSE_PHYSICS,
@@ -70,7 +71,7 @@ from ..interfaces import (
     Direction,
     Interface,
 )
-from .messages import PHYSICS_STATUS, StateMessages, goal_pose, world_markers
+from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_path, world_markers
 from .ros_interfaces import qos_profile, ros_type
 from ..params import (
     MAX_SEED,
@@ -154,6 +155,7 @@ class SimNode(Node):
         self._engine.reset(seed=episode.seed, start=episode.start, goal=episode.goal)
         self._messages = StateMessages(self._engine)
         self._goal_pub = self._publisher(GOAL_POSE)
+        self._plan_pub = self._publisher(PLAN)
         self._markers_pub = self._publisher(WORLD_MARKERS)
         self._diagnostics_pub = self._publisher(DIAGNOSTICS)
         self._status = DiagnosticArray(status=[DiagnosticStatus(
@@ -248,10 +250,11 @@ class SimNode(Node):
         self._restart_clock()
 
     def _publish_episode(self) -> None:
-        """Goal, markers and a full set of sensor messages, all with the current stamp."""
+        """Goal, plan, markers and a full set of sensor messages, all with the current stamp."""
         engine = self._engine
         self._command = _STOP
         self._goal_pub.publish(goal_pose(engine.goal, self._stamp_ns))
+        self._plan_pub.publish(plan_path(engine.plan(), self._stamp_ns))
         self._markers_pub.publish(world_markers(engine.world, engine.goal, self._stamp_ns))
         self._publish_state()
 

@@ -1,5 +1,5 @@
-"""The classical baselines: DWA goes round a wall that the proportional controller drives into,
-never commands beyond the robot's velocity and acceleration limits, and a baseline that does
+"""The classical baselines: DWA and the privileged planner go round a wall that the
+proportional controller drives into; DWA never commands beyond the robot's velocity and acceleration limits, and a baseline that does
 not fit the task is refused before anything runs.
 
 The wall world is analytic: the 10 m walled arena of ``tests/ros_helpers.py`` without its
@@ -51,7 +51,7 @@ def drive(name: str, world: Path) -> tuple[str, list[Twist2D]]:
     env = NavEnv(CONFIG, sim={"world": str(world)}, overrides={"episode_max_steps": 300})
     commands: list[Twist2D] = []
     try:
-        controller = make_baseline(name, env.config, env.scenario.robot)
+        controller = make_baseline(name, env.config, env.scenario.robot, env.scenario.world)
         env.reset(seed=0, options=EPISODE)
         controller.reset()
         done, info = False, {}
@@ -72,6 +72,21 @@ def test_dwa_goes_round_the_wall_the_proportional_controller_hits(wall):
     window = [(abs(b.vx - a.vx), abs(b.wz - a.wz)) for a, b in zip(commands, commands[1:])]
     assert max(dv for dv, _ in window) <= 3.0 * 0.1 + 1e-6  # within the acceleration window
     assert max(dw for _, dw in window) <= 6.0 * 0.1 + 1e-6
+
+
+def test_the_planner_goes_round_the_wall_through_its_own_map(wall):
+    """The privileged planner knows the wall from the world, not from the scan: it reaches the
+    goal round the wall with the clearance its plan keeps."""
+    outcome, commands = drive("planner", wall)
+    assert outcome == "goal"
+    assert max(abs(c.wz) for c in commands) <= 1.0 + 1e-9
+    assert all(0.0 <= c.vx <= 0.5 + 1e-9 for c in commands)
+    assert min(c.vx for c in commands[:3]) >= 0.0
+
+
+def test_the_planner_needs_a_simulated_world():
+    with pytest.raises(ConfigError, match="map"):
+        make_baseline("planner", EnvConfig(), JACKAL)
 
 
 def _scan(ranges: list[float]) -> ScanData:

@@ -29,7 +29,7 @@ DOC = ROOT / "docs" / "sim.md"
 DESIGN_NAMES = frozenset({
     "cmd_vel", "scan", "odom", "ground_truth", "camera/depth/image_raw",
     "camera/depth/camera_info", "imu/data", "goal_pose", "person/pose", "clock",
-    "world/markers", "reset_world", "pause_physics", "unpause_physics",
+    "world/markers", "reset_world", "pause_physics", "unpause_physics", "plan",
 })
 
 

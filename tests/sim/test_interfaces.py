@@ -32,7 +32,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: robot's bag holds (static transforms): not the sim's.
 NOT_THE_SIMS = {contract.FACTS_TOPIC, contract.OUTCOME_TOPIC, contract.TF_STATIC_TOPIC}
 #: Recorded topics no metric reads.
-UNREAD_BY_METRICS = {"/camera/depth/image_raw", "/camera/depth/camera_info"}
+UNREAD_BY_METRICS = {"/camera/depth/image_raw", "/camera/depth/camera_info", "/plan"}
 
 
 def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts() -> None:
@@ -42,7 +42,8 @@ def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts(
     orders = [i.record_order for i in INTERFACES if i.record_order is not None]
     assert sorted(orders) == list(range(len(orders)))
     assert RECORDED == ("clock", "ground_truth", "odom", "scan", "cmd_vel", "goal_pose",
-                        "camera/depth/image_raw", "camera/depth/camera_info", "person/pose")
+                        "camera/depth/image_raw", "camera/depth/camera_info", "person/pose",
+                        "plan")
 
 
 def test_a_step_ends_with_the_scan_and_only_topics_have_a_qos() -> None:

@@ -84,7 +84,7 @@ def test_the_node_has_exactly_the_design_interfaces(shared_sim):
         "/clock": "rosgraph_msgs/msg/Clock", "/ground_truth": "nav_msgs/msg/Odometry",
         "/odom": "nav_msgs/msg/Odometry", "/imu/data": "sensor_msgs/msg/Imu",
         "/scan": "sensor_msgs/msg/LaserScan", "/goal_pose": "geometry_msgs/msg/PoseStamped",
-        "/world/markers": "visualization_msgs/msg/MarkerArray",
+        "/plan": "nav_msgs/msg/Path", "/world/markers": "visualization_msgs/msg/MarkerArray",
         "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
         "/parameter_events": "rcl_interfaces/msg/ParameterEvent",
         "/rosout": "rcl_interfaces/msg/Log",
