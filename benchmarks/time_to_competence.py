@@ -2,7 +2,8 @@
 reaches ``--target`` (90 %) eval success on ``--eval-episodes`` (100) seeded test-kind pairs.
 
 The recipe (``--config``, default ``config/train_goto_lidar_td3.yaml``) trains in this process
-exactly as ``pic4rl-train`` trains it (``pic4rl_agents.train.Trainer``), with three changes
+exactly as ``pic4rl-train`` trains it (``pic4rl_agents.train.Trainer``; imitation of the
+privileged planner included, whose labelling counts in the clock), with three changes
 that do not touch learning: no checkpoints, no progress bar, and no step limit (the clock
 decides: training stops at the first evaluation that reaches the target, or at the first one
 past ``--budget-s``). Every ``--eval-every-s`` seconds of training the deterministic policy
@@ -43,7 +44,9 @@ CONFIG = ROOT / "config" / "train_goto_lidar_td3.yaml"
 NO_STEP_LIMIT = 10**9
 #: --smoke: seconds-long, to check the script runs (tiny nets, episodes too short to succeed).
 SMOKE_TRAIN = {"policy.net_arch": [16], "policy.critic_arch": [16], "batch_size": 32,
-               "learning_starts": 50, "buffer_size": 5000, "tensorboard": False}
+               "learning_starts": 50, "buffer_size": 5000, "tensorboard": False,
+               "imitation.bc_steps": 100, "imitation.dagger_steps": 100,
+               "imitation.gradient_steps": 10, "imitation.critic_warmup_steps": 10}
 SMOKE_ENV = {"episode_max_steps": 40}  # 4 s at 0.5 m/s: 2 m, short of any 4-8 m pair
 
 

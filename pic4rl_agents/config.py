@@ -148,7 +148,8 @@ class ImitationConfig:
     student drives ``dagger_steps`` env steps, the expert labels every state, the labels are
     aggregated and the actor regressed on all of them), then RL from the imitation-initialised
     actor for the rest of ``max_steps`` / ``max_wall_s``, after ``critic_warmup_steps``
-    gradient steps on the critic alone. Every env step of imitation counts in ``max_steps``,
+    gradient steps on the critic alone, with ``rl_gradient_steps`` of regression on the labels
+    per 1000 env steps decaying to none over ``rl_decay_steps``. Every env step of imitation counts in ``max_steps``,
     and the expert's time in every clock."""
 
     enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
@@ -167,6 +168,12 @@ class ImitationConfig:
                          "go to the replay buffer and stay there for RL")
     critic_warmup_steps: int = param(5_000, doc="before RL: critic gradient steps on the "
                                      "replay buffer with the actor frozen", range=NON_NEGATIVE)
+    rl_gradient_steps: int = param(0, doc="during RL: actor regression steps on the labels "
+                                   "per 1000 env steps, at RL's start (a behaviour-cloning term "
+                                   "that keeps the actor near the expert while the critic is "
+                                   "new)", range=NON_NEGATIVE)
+    rl_decay_steps: int = param(100_000, doc="RL env steps over which rl_gradient_steps falls "
+                                "linearly to 0", range=POSITIVE)
 
 
 @dataclass(frozen=True)

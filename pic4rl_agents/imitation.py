@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3.common.callbacks import CallbackList
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
@@ -97,11 +97,14 @@ def actor_loss(model: Any, obs: Any, actions: torch.Tensor) -> torch.Tensor:
 class Imitation:
     """Behaviour cloning then DAgger on ``model`` (an SB3 off-policy model on ``env``), each
     env step counted in ``model.num_timesteps`` and passed to ``callback`` (evaluations,
-    checkpoints, the clock); ``run`` returns False when a callback ended training."""
+    checkpoints, the clock); ``run`` returns False when a callback ended training or the
+    steps reached ``max_steps``."""
 
     def __init__(self, config: ImitationConfig, env: VecEnv, env_config: EnvConfig, model: Any,
-                 callback: CallbackList, *, batch_size: int, seed: int = 0) -> None:
+                 callback: CallbackList, *, batch_size: int, seed: int = 0,
+                 max_steps: int | None = None) -> None:
         self.config, self.env, self.model, self.callback = config, env, model, callback
+        self.max_steps = max_steps
         self.experts = [make_expert(config.expert, env_config) for _ in range(env.num_envs)]
         self.data = Demonstrations()
         self.batch_size = batch_size
@@ -120,6 +123,8 @@ class Imitation:
             rounds += [(STUDENT, c.dagger_steps)] * c.dagger_rounds
             for number, (driver, steps) in enumerate(rounds):
                 if not self.collect(steps, driver):
+                    if self._out_of_steps():  # an imitation-only run: its last data counts
+                        self.fit(c.gradient_steps)
                     return False
                 self.fit(c.gradient_steps)
                 log.info("imitation round %d/%d (%s): %d labelled states, loss %.4f",
@@ -132,13 +137,15 @@ class Imitation:
 
     def collect(self, steps: int, driver: int) -> bool:
         """Drive ``steps`` env steps (the expert or the student), labelling every state;
-        False when a callback asked to stop."""
+        False when a callback asked to stop or ``max_steps`` is reached."""
         env, model = self.env, self.model
         if self._obs is None:
             self._obs = env.reset()
             for expert in self.experts:
                 expert.reset()
         for _ in range(max(1, steps // env.num_envs)):
+            if self._out_of_steps():
+                return False
             frames = env.get_attr("frame")
             labels = np.stack([e.action(f) for e, f in zip(self.experts, frames)])
             if driver == EXPERT:
@@ -158,6 +165,9 @@ class Imitation:
             if not self.callback.on_step():
                 return False
         return True
+
+    def _out_of_steps(self) -> bool:
+        return self.max_steps is not None and self.model.num_timesteps >= self.max_steps
 
     def fit(self, gradient_steps: int) -> None:
         """Regress the actor on every labelled state so far (minibatches drawn uniformly)."""
@@ -195,7 +205,33 @@ class Imitation:
             for p in frozen:
                 p.requires_grad_(True)
         log.info("critic warmed up: %d gradient steps on %d transitions", gradient_steps,
-                 model.replay_buffer.size())
+                 model.replay_buffer.size() * model.replay_buffer.n_envs)
+
+
+class DecayingCloning(BaseCallback):
+    """During RL, every 1000 env steps: ``imitation.rl_gradient_steps`` regression steps on the
+    labels, times ``1 - t / rl_decay_steps`` (t: RL's env steps so far), so that the
+    actor stays near the expert while the critic learns, and RL alone takes over."""
+
+    def __init__(self, imitation: Imitation) -> None:
+        super().__init__()
+        self.imitation = imitation
+        self._start: int | None = None
+        self._due = 0
+
+    def _on_step(self) -> bool:
+        c = self.imitation.config
+        if self._start is None:
+            self._start = self._due = self.num_timesteps
+        if self.num_timesteps < self._due:
+            return True
+        self._due += 1000
+        share = 1.0 - (self.num_timesteps - self._start) / c.rl_decay_steps
+        steps = round(c.rl_gradient_steps * share)
+        if steps > 0:
+            self.imitation.fit(steps)
+            self.logger.record("imitation/rl_gradient_steps", steps)
+        return True
 
 
 def _next_obs(new_obs: Any, dones: np.ndarray, infos: list[dict[str, Any]]) -> Any:

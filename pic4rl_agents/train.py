@@ -143,7 +143,7 @@ class Trainer:
         has imitated already); False when a callback (the clock) ended training during it."""
         from stable_baselines3.common.callbacks import CallbackList
 
-        from .imitation import Imitation
+        from .imitation import DecayingCloning, Imitation
 
         cfg = self.config.train
         if not cfg.imitation.enabled or self.resume is not None:
@@ -152,8 +152,13 @@ class Trainer:
         callback.init_callback(model)
         with _sigterm_as_interrupt():
             try:
-                return Imitation(cfg.imitation, env, env_cfg, model, callback,
-                                 batch_size=cfg.batch_size, seed=cfg.seed).run()
+                imitation = Imitation(cfg.imitation, env, env_cfg, model, callback,
+                                      batch_size=cfg.batch_size, seed=cfg.seed,
+                                      max_steps=cfg.max_steps)
+                done = imitation.run()
+                if cfg.imitation.rl_gradient_steps > 0:
+                    callbacks.insert(0, DecayingCloning(imitation))
+                return done
             except KeyboardInterrupt:
                 self.interrupted = True
                 log.warning("interrupted during imitation at %d steps; saving",
@@ -354,7 +359,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
         run, resume = resolve(args, ros)
-        with console_logging(__name__, "pic4rl-train: %(message)s"):
+        with console_logging("pic4rl_agents", "pic4rl-train: %(message)s"):
             Trainer(run, resume=resume, progress=not args.no_progress, ros=ros).run()
     except TransportError as err:
         print(f"pic4rl-train: {err}\n{no_sim_hint('train', run.env if run else None)}",

@@ -180,3 +180,52 @@ def test_twist_stamped_commands(domain: int, ros_client) -> None:
         transport.close()
     assert inbox[0].twist.linear.x == pytest.approx(0.3)
     assert inbox[0].twist.angular.z == pytest.approx(-0.2)
+
+
+def test_the_plan_is_published_recorded_and_observed_alike(domain: int, start_sim,
+                                                            tmp_path: Path) -> None:
+    """``goal_input: plan``: the sim node's ``plan`` reaches the ROS env's frame as the engine's
+    plan reaches the in-process one (bit-identical observations through both), and each bag
+    holds it as a ``nav_msgs/Path`` at the episode's first stamp."""
+    from pic4rl_bridge.env import NavEnv
+    from pic4rl_metrics.contract import typestore
+
+    config = ROOT / CONFIGS["pic4rl/GoToPoseLidar-v0"]
+    start_sim(domain, "--params-file", str(config))
+    common = {"goal_input": "plan", "episode_max_steps": 30, "record.enabled": True}
+    ros = NavEnv(config, transport="ros", overrides={
+        **common, "ros.domain_id": domain, "record.bags_dir": str(tmp_path), "record.run": "ros"})
+    local = NavEnv(config, overrides={**common, "record.bags_dir": str(tmp_path),
+                                      "record.run": "local"})
+    rng = np.random.default_rng(3)
+    plans = []
+    try:
+        for episode in range(2):
+            seed = 5 if episode == 0 else None
+            (obs_r, _), (obs_l, _) = ros.reset(seed=seed), local.reset(seed=seed)
+            assert ros.frame.plan is not None and len(ros.frame.plan) >= 2
+            assert np.array_equal(ros.frame.plan, local.frame.plan)
+            assert np.allclose(ros.frame.plan[-1], ros.frame.goal)
+            plans.append(ros.frame.plan)
+            assert np.array_equal(obs_r, obs_l)
+            done = False
+            while not done:
+                action = rng.uniform(-1, 1, 2).astype(np.float32)
+                out_r, out_l = ros.step(action), local.step(action)
+                assert np.array_equal(out_r[0], out_l[0])
+                done = out_r[2] or out_r[3]
+    finally:
+        ros.close()
+        local.close()
+    store = typestore()
+    for run in ("ros", "local"):
+        bags = sorted((tmp_path / run).glob("episode_*"))
+        assert len(bags) == 2
+        for bag, plan in zip(bags, plans):
+            with Reader(bag) as reader:
+                found = [(c, t, d) for c, t, d in reader.messages() if c.topic == "/plan"]
+                first = min(t for _, t, _ in reader.messages())
+            assert len(found) == 1 and found[0][1] == first
+            msg = store.deserialize_cdr(found[0][2], found[0][0].msgtype)
+            points = np.array([(p.pose.position.x, p.pose.position.y) for p in msg.poses])
+            assert np.array_equal(points, plan)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import subprocess
 import sys
@@ -176,3 +177,33 @@ def test_importing_tasks_pulls_in_neither_ros_nor_mujoco():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "[]"
+
+
+def _with_plan(plan: np.ndarray | None) -> SensorFrame:
+    base = frame(0.0, goal=(3.0, 0.0))
+    return SensorFrame(base.stamp_ns, base.pose, base.twist, base.goal, base.scan, plan=plan)
+
+
+@pytest.mark.parametrize("sensor", ["lidar", "depth"])
+def test_the_mapless_observation_holds_no_path_information(sensor):
+    """goal_input goal (the paper's): the same observation whatever plan the frame carries,
+    and the same space as without one; goal_input plan: the target is the plan's point
+    plan_lookahead_m ahead (here round an obstacle: up, then across)."""
+    detour = np.array([[0.0, 0.0], [0.0, 2.0], [3.0, 2.0], [3.0, 0.0]])
+    depth = np.full((60, 80), 2.0, np.float32)
+    frames = [dataclasses.replace(_with_plan(p), depth=depth)
+              for p in (None, detour, detour[::-1], np.array([[0.0, 0.0], [3.0, 0.0]]))]
+    config = EnvConfig(sensor=sensor, normalize_observations=True)
+    task = make_task(config, robot(), None)
+    context = task.begin(frames[0])
+    observations = [task.observe(f, context, np.zeros(2)) for f in frames]
+    goal_parts = [o["goal"] if sensor == "depth" else o[-4:] for o in observations]
+    assert all(np.array_equal(goal_parts[0], g) for g in goal_parts[1:])
+    planned = make_task(config.replace(goal_input="plan", plan_lookahead_m=1.0), robot(), None)
+    assert planned.observation_space == task.observation_space
+    assert "plan" in planned.required and "plan" not in task.required
+    obs = planned.observe(frames[1], context, np.zeros(2))
+    goal = obs["goal"] if sensor == "depth" else obs[-4:]
+    np.testing.assert_allclose(goal[:2], [1.0 / 10.0, 0.5], rtol=1e-6)  # (0, 1): 1 m at +90°
+    with pytest.raises(ValueError, match="plan"):
+        planned.observe(frames[0], context, np.zeros(2))
