@@ -98,6 +98,7 @@ def run_config(algorithm: str, transport: str, n_envs: int, sizes: Sizes) -> Run
     """The shipped file with this case's algorithm, transport and number of envs."""
     train: dict[str, Any] = {"algorithm": algorithm or "td3", "n_envs": n_envs,
                              "learning_starts": sizes.learning_starts, "tensorboard": False,
+                             "imitation.enabled": False,  # RL's throughput is measured
                              **sizes.train}
     if algorithm == "ppo":
         train["epsilon.initial"] = 0.0  # ε-greedy is off-policy only
