@@ -89,6 +89,9 @@ def build_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = 
         common.update(buffer_size=config.buffer_size, batch_size=config.batch_size,
                       learning_starts=config.learning_starts, tau=config.tau,
                       train_freq=config.train_freq, gradient_steps=config.gradient_steps)
+        if config.algorithm in ("sac", "tqc"):
+            ent = config.ent_coef
+            common["ent_coef"] = ent if ent.startswith("auto") else float(ent)
         if config.algorithm in ("ddpg", "td3") and config.action_noise_std > 0:
             n = int(np.prod(env.action_space.shape))
             common["action_noise"] = NormalActionNoise(np.zeros(n),

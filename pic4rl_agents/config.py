@@ -217,6 +217,8 @@ class TrainConfig:
                                 "env's)", range=POSITIVE)
     action_noise_std: float = param(0.1, doc="ddpg/td3 Gaussian noise, in normalised action "
                                     "units", range=NON_NEGATIVE)
+    ent_coef: str = param("auto", doc="sac/tqc entropy coefficient: auto (learned, from 1), "
+                          "auto_<x> (learned, from x) or a number (fixed)")
     policy: PolicyConfig = section(PolicyConfig)
     epsilon: EpsilonConfig = section(EpsilonConfig)
     ppo: PpoConfig = section(PpoConfig)
@@ -251,6 +253,8 @@ class TrainConfig:
         require(0 <= cur.down < cur.up <= 1, "curriculum.up", cur.up,
                 f"a success rate in (curriculum.down={cur.down}, 1]")
         require(cur.window > 0, "curriculum.window", cur.window, "a positive number of episodes")
+        require(_valid_ent_coef(self.ent_coef), "ent_coef", self.ent_coef,
+                "auto, auto_<x> or a number > 0 (SB3's ent_coef)")
         for key in ("policy.net_arch", "policy.critic_arch", "policy.cnn_channels"):
             sizes = getattr(self.policy, key.split(".")[1])
             require(len(sizes) > 0 and all(s > 0 for s in sizes), key, list(sizes), _LAYERS)
@@ -265,6 +269,16 @@ class TrainConfig:
     def replace(self, **overrides: Any) -> TrainConfig:
         """A copy with dotted ``overrides`` applied (``{"epsilon.decay": 0.999}``)."""
         return train_config_from_params({**self.to_params(), **overrides})
+
+
+def _valid_ent_coef(value: str) -> bool:
+    text = value[len("auto_"):] if value.startswith("auto_") else value
+    if text == "auto":
+        return True
+    try:
+        return float(text) > 0
+    except ValueError:
+        return False
 
 
 def train_config_from_params(params: Mapping[str, Any]) -> TrainConfig:
