@@ -25,10 +25,13 @@ from pic4rl_agents.train import route_params
 from pic4rl_bridge.errors import ConfigError
 
 SHIPPED = {
-    "train_goto_lidar_td3.yaml": ("td3", "lidar"),
-    "train_goto_lidar_sac.yaml": ("sac", "lidar"),
-    "train_goto_depth_td3.yaml": ("td3", "depth"),
-    "train_goto_depth_sac.yaml": ("sac", "depth"),
+    "train_goto_lidar_td3.yaml": ("td3", "lidar", "td3_lidar"),
+    "train_goto_lidar_sac.yaml": ("sac", "lidar", "sac_lidar"),
+    "train_goto_depth_td3.yaml": ("td3", "depth", "td3_depth"),
+    "train_goto_depth_sac.yaml": ("sac", "depth", "sac_depth"),
+    "train_goto_plan_td3.yaml": ("td3", "lidar", "td3_plan"),
+    "train_goto_lidar_td3_imitation.yaml": ("td3", "lidar", "td3_lidar_imitation"),
+    "train_goto_lidar_sac_imitation.yaml": ("sac", "lidar", "sac_lidar_imitation"),
 }
 
 
@@ -50,11 +53,11 @@ def test_every_shipped_training_file_is_listed_here() -> None:
 def test_a_shipped_training_file_loads_with_its_algorithm_and_sensor(name: str) -> None:
     path = CONFIG / name
     run = load_run_config([path])
-    algorithm, sensor = SHIPPED[name]
+    algorithm, sensor, run_name = SHIPPED[name]
     assert (run.train.algorithm, run.env.sensor) == (algorithm, sensor)
     raw = yaml.safe_load(path.read_text())
     trainer = raw["trainer"]["ros__parameters"]
-    assert run.name == trainer["run"] == f"{algorithm}_{sensor}"
+    assert run.name == trainer["run"] == run_name
     assert run.train.max_steps == trainer["max_steps"]
     assert run.train.policy.net_arch == tuple(trainer["policy"]["net_arch"])
     assert run.train.epsilon.initial == trainer.get("epsilon", {}).get("initial", 0.0)

@@ -73,7 +73,8 @@ def check_run(run_dir: Path, path: Path, *, n_envs: int, **env_changes: Any) -> 
     assert model.num_timesteps == summary["total_steps"] >= STEPS
 
     episodes = episode_table(run_dir / "monitor")
-    assert summary["episodes"] == len(episodes) >= STEPS // EPISODE_STEPS
+    # at least each env's timeouts (an imitation recipe's expert rarely ends one sooner)
+    assert summary["episodes"] == len(episodes) >= n_envs * (STEPS // n_envs // EPISODE_STEPS)
     assert episodes["l"].between(1, EPISODE_STEPS).all()
     assert set(episodes["outcome"]) <= {"goal", "collision", "timeout"}
     if shipped.train.curriculum.enabled:  # pairs from the curriculum's first stage
