@@ -62,23 +62,28 @@ class Demonstrations:
     observations: list[Any] = field(default_factory=list)
     actions: list[np.ndarray] = field(default_factory=list)
     drivers: list[np.ndarray] = field(default_factory=list)
+    _joined: tuple[Any, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 
     def add(self, obs: Any, actions: np.ndarray, driver: int) -> None:
         self.observations.append(copy.deepcopy(obs))
         self.actions.append(np.asarray(actions, dtype=np.float32))
         self.drivers.append(np.full(len(actions), driver, dtype=np.int8))
+        self._joined = None
 
     def __len__(self) -> int:
         return sum(len(a) for a in self.actions)
 
     def arrays(self) -> tuple[Any, np.ndarray, np.ndarray]:
-        """Everything so far as (observations, actions, drivers), concatenated."""
-        first = self.observations[0]
-        if isinstance(first, dict):
-            obs: Any = {k: np.concatenate([o[k] for o in self.observations]) for k in first}
-        else:
-            obs = np.concatenate(self.observations)
-        return obs, np.concatenate(self.actions), np.concatenate(self.drivers)
+        """Everything so far as (observations, actions, drivers), concatenated (once per
+        change: RL's cloning term regresses on the same labels again and again)."""
+        if self._joined is None:
+            first = self.observations[0]
+            if isinstance(first, dict):
+                obs: Any = {k: np.concatenate([o[k] for o in self.observations]) for k in first}
+            else:
+                obs = np.concatenate(self.observations)
+            self._joined = (obs, np.concatenate(self.actions), np.concatenate(self.drivers))
+        return self._joined
 
 
 def actor_loss(model: Any, obs: Any, actions: torch.Tensor) -> torch.Tensor:
