@@ -7,14 +7,18 @@ code is 1 when any bag failed (after all bags were judged and reported), 2 on ba
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
-from collections.abc import Sequence
+import tempfile
+from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 from .aggregate import aggregate
 from .batch import MetricsResult, compute
 from .contract import EpisodeFacts, parse_facts
-from .errors import ConfigError, MetricsError
+from .errors import ConfigError, MetricsError, OutputError
 from .registry import METRICS, REGISTRY
 from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, TABLE1_COLUMNS
@@ -145,9 +149,35 @@ def _emit(text: str, out: Path | None, force: bool) -> None:
     if out.exists() and not force:
         msg = f"--out {str(out)!r} exists; pass --force to replace it"
         raise ConfigError(msg)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text if text.endswith("\n") else text + "\n")
+    data = (text if text.endswith("\n") else text + "\n").encode()
+    with _writing(out):
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
+        try:
+            with os.fdopen(fd, "wb") as handle:
+                _write_all(handle, data)
+            os.replace(tmp, out)  # whole or not at all: a failed write leaves no file
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
     print(f"wrote {out}", file=sys.stderr)
+
+
+def _write_all(handle: Any, data: bytes) -> None:
+    handle.write(data)
+    handle.flush()
+    os.fsync(handle.fileno())
+
+
+@contextlib.contextmanager
+def _writing(path: Path) -> Iterator[None]:
+    """An OS error while writing ``path`` (a full disk, a parent that is a file, no
+    permission) as one ``OutputError`` line naming the path."""
+    try:
+        yield
+    except OSError as err:
+        raise OutputError(f"--out {str(path)!r}: cannot write it: "
+                          f"{err.strerror or err}") from err
 
 
 def _report_failures(result: MetricsResult) -> int:
@@ -176,14 +206,16 @@ def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
         if target.exists():
             print(f"kept existing {target}", file=sys.stderr)
             continue
-        save_figure(episode_figure(r.episode, r.metrics), target)
+        with _writing(target):
+            save_figure(episode_figure(r.episode, r.metrics), target)
         print(f"wrote {target}", file=sys.stderr)
     if len(result.episodes) > 1:
         target = out / "comparison.png"
         if target.exists():
             print(f"kept existing {target}", file=sys.stderr)
         else:
-            save_figure(comparison_figure(result.episodes, group_by=args.by), target)
+            with _writing(target):
+                save_figure(comparison_figure(result.episodes, group_by=args.by), target)
             print(f"wrote {target}", file=sys.stderr)
 
 

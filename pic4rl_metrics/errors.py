@@ -25,3 +25,8 @@ class EpisodeError(MetricsError):
 
 class ConfigError(MetricsError):
     """A topic map, an episode fact or a command-line value is invalid."""
+
+
+class OutputError(MetricsError):
+    """An output (``--out``) cannot be written: a full disk, a parent that is a file, no
+    permission."""

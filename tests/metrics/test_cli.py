@@ -8,6 +8,7 @@ markdown and LaTeX (the cells are compared as strings).
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import math
@@ -156,6 +157,53 @@ def test_out_writes_a_file_and_refuses_to_overwrite(capsys, runs: Path, tmp_path
     code, _, err = _run(capsys, "compute", "--format", "csv", "--out", target, "--force", runs)
     assert code == 0, err
     assert target.read_text() == first
+
+
+def _disk_full(*_: object, **__: object) -> None:
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def test_a_full_disk_is_one_line_exit_2_and_no_file(capsys, runs: Path, tmp_path: Path,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """The write fails (a full disk, simulated): exit 2, one line naming the path and the
+    error, no file left behind (not even a temporary one), so the next run is not refused."""
+    target = tmp_path / "metrics.csv"
+    monkeypatch.setattr(cli, "_write_all", _disk_full)
+    code, out, err = _run(capsys, "compute", "--format", "csv", "--out", target, runs)
+    assert code == 2 and out == ""
+    assert err.strip().splitlines() == [
+        f"pic4rl-metrics: --out {str(target)!r}: cannot write it: No space left on device"]
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    code, _, err = _run(capsys, "compute", "--format", "csv", "--out", target, runs)
+    assert code == 0 and target.is_file(), err
+
+
+@pytest.mark.parametrize("where", ["parent_is_a_file", "proc"])
+def test_an_output_that_cannot_exist_is_one_line_exit_2(capsys, runs: Path, tmp_path: Path,
+                                                        where: str) -> None:
+    if where == "proc":
+        target = Path("/proc/pic4rl_metrics_test/metrics.csv")
+    else:
+        (tmp_path / "file").write_text("x")
+        target = tmp_path / "file" / "metrics.csv"
+    code, out, err = _run(capsys, "compute", "--out", target, runs)
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"pic4rl-metrics: --out {str(target)!r}: "
+                                                   "cannot write it: ")
+
+
+def test_plot_on_a_full_disk_is_one_line_exit_2_and_no_partial_png(
+        capsys, runs: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from matplotlib.figure import Figure
+
+    monkeypatch.setattr(Figure, "savefig", _disk_full)
+    code, out, err = _run(capsys, "plot", "--out", tmp_path / "figs", runs)
+    assert code == 2 and out == ""
+    assert "cannot write it: No space left on device" in err
+    assert "Traceback" not in err
+    assert list((tmp_path / "figs").iterdir()) == []
 
 
 # --- compare ---------------------------------------------------------------------------------
