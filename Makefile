@@ -20,9 +20,9 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 # The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar) and the three baselines
-# (proportional, DWA and the privileged planner) on the paper's 5 indoor test pairs, each through the sim node over ROS 2
-# (pic4rl-run starts and stops it), one bag per episode under bags/demo*/, then the metrics
-# table of those bags. `make demo TRAIN=1` trains TD3-LiDAR from scratch first (in process;
+# (proportional, DWA and the privileged planner) on the paper's 5 indoor test pairs, each
+# through the sim node over ROS 2 (pic4rl-run starts and stops it), one bag per episode under
+# bags/demo*/, then the metrics table of those bags. `make demo TRAIN=1` trains TD3-LiDAR from scratch first (in process;
 # see docs/results.md for how long) and tests that run instead.
 DEMO_RUN := demo_$(shell date +%Y%m%d-%H%M%S)
 demo: setup

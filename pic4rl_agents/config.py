@@ -149,8 +149,8 @@ class ImitationConfig:
     aggregated and the actor regressed on all of them), then RL from the imitation-initialised
     actor for the rest of ``max_steps`` / ``max_wall_s``, after ``critic_warmup_steps``
     gradient steps on the critic alone, with ``rl_gradient_steps`` of regression on the labels
-    per 1000 env steps decaying to none over ``rl_decay_steps``. Every env step of imitation counts in ``max_steps``,
-    and the expert's time in every clock."""
+    per 1000 env steps decaying to none over ``rl_decay_steps``. Every env step of imitation
+    counts in ``max_steps``, and the expert's time in every clock."""
 
     enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
     expert: str = param("planner", doc="the expert that labels states: planner (the "

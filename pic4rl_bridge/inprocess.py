@@ -137,7 +137,8 @@ class _MessageWriter:
         self._goal_pose = goal_pose
         self._plan_path = plan_path
         self.state_messages = StateMessages(engine)
-        self._names = {t.name: f"{namespace}/{t.name}" for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
+        self._names = {t.name: f"{namespace}/{t.name}"
+                       for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
         self._outputs = [(t.name, msg) for t, msg in self.state_messages.published
                          if t.name in topics]
         self._topics = topics

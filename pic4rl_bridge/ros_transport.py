@@ -27,6 +27,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -172,6 +173,8 @@ class RosTransport(Transport):
         if config.ros.reset_service:
             self._reset_client = node.create_client(Empty, config.ros.reset_service)
         self._used_goal_ns = -1  # the goal stamp of the last episode
+        self._plan_msg: Any = None  # the plan message last decoded, and its points
+        self._plan = np.zeros((0, 2))
 
     # -- wiring ---------------------------------------------------------------------------
 
@@ -429,9 +432,15 @@ class RosTransport(Transport):
             depth = decode.depth_image(topics[roles["depth"]].msg, topic=roles["depth"])
         if "person" in roles:
             person = decode.planar_pose(topics[roles["person"]].msg.pose)
-        plan = decode.path(topics[roles["plan"]].msg) if "plan" in roles else None
+        plan = self._decoded_plan(topics[roles["plan"]].msg) if "plan" in roles else None
         self._frame_stamp_ns = stamp_ns
         return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person, plan)
+
+    def _decoded_plan(self, msg: Any) -> np.ndarray:
+        """The plan message as points, decoded once per message (not at every step)."""
+        if msg is not self._plan_msg:
+            self._plan_msg, self._plan = msg, decode.path(msg)
+        return self._plan
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
         """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
