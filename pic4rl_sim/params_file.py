@@ -92,6 +92,26 @@ def load(paths: Sequence[str | Path], nodes: Iterable[str]) -> dict[str, dict[st
     return merged
 
 
+def param_rules(args: Sequence[str]) -> dict[str, Any]:
+    """The ``-p name:=value`` rules of ``args``' ``--ros-args`` segments, values read as YAML
+    as rcl reads them. rcl drops a rule whose type differs from a params file's value for the
+    same key; the sim applies these after the files so that such a rule is checked, not lost."""
+    rules: dict[str, Any] = {}
+    inside = False
+    for arg, following in zip(args, [*args[1:], None]):
+        if arg == "--ros-args":
+            inside = True
+        elif arg == "--":
+            inside = False
+        elif inside and arg in ("-p", "--param") and following and ":=" in following:
+            name, _, text = following.partition(":=")
+            try:
+                rules[name] = yaml.safe_load(text) if text.strip() else ""
+            except yaml.YAMLError as err:
+                raise ConfigError(f"{arg} {following}: the value is not valid YAML") from err
+    return rules
+
+
 def dump(sections: Mapping[str, Mapping[str, Any]]) -> str:
     """A params file of ``sections`` (node → flat parameters), as ``load`` reads it back."""
     doc = {node: {"ros__parameters": dict(params)} for node, params in sections.items()}

@@ -88,6 +88,7 @@ from ..params import (
 from ..engine.robot_specs import load_robot
 from ..engine.sampling import check_free
 from ..engine.world_spec import WorldSpec
+from ..params_file import param_rules
 from ..schema import ParamSpec, ParamType, help_text
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
@@ -364,6 +365,17 @@ def _usage() -> str:
                       help_text(parameter_table(load_robot(ROBOT.default)))])
 
 
+def _rules_as_parameters(rules: dict[str, Any]) -> list[Parameter]:
+    """``-p`` rules as overrides for the node (checked against the table there)."""
+    out = []
+    for name, value in rules.items():
+        try:
+            out.append(Parameter(name, value=value))
+        except (TypeError, ValueError) as err:
+            raise ConfigError(f"-p {name}: {value!r} is not a ROS parameter value") from err
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the sim until interrupted; exit code 2 for a bad argument or parameter."""
     args = ["pic4rl-sim", *(sys.argv[1:] if argv is None else argv)]
@@ -381,7 +393,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     rclpy.init(args=args)
     try:
-        node = SimNode()
+        node = SimNode(parameter_overrides=_rules_as_parameters(param_rules(args)))
     except (ConfigError, WorldError) as err:
         print(f"pic4rl-sim: {err}", file=sys.stderr)
         rclpy.try_shutdown()

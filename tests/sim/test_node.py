@@ -323,6 +323,24 @@ def test_a_bad_params_file_stops_the_node_with_one_line(start_sim, domain, tmp_p
     assert len(sim.output.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize(("rule", "expected"), [
+    ("lidar.beams:=abc", "lidar.beams: 'abc' is invalid; expected an integer"),
+    ("lidar.beams:=2.5", "lidar.beams: 2.5 is invalid; expected an integer"),
+    ("seed:=abc", "seed: 'abc' is invalid; expected an integer"),
+])
+@pytest.mark.parametrize("with_file", [True, False])
+def test_a_wrong_typed_rule_is_refused_whether_or_not_a_params_file_sets_it(
+        start_sim, domain, tmp_path, arena_mjcf, rule, expected, with_file):
+    """rcl silently drops a ``-p`` whose type differs from the file's value for that key."""
+    params = tmp_path / "sim.yaml"
+    params.write_text(f"/**:\n  ros__parameters:\n    world: {arena_mjcf}\n    seed: 3\n"
+                      "    lidar.beams: 90\n")
+    files = ["--params-file", str(params)] if with_file else ["-p", f"world:={arena_mjcf}"]
+    sim = start_sim(sim_command(*files, "-p", rule), domain)
+    assert sim.wait(60) == 2
+    assert sim.output.strip() == f"pic4rl-sim: {expected}"
+
+
 def test_every_config_file_starts_and_publishes_its_main_sensor(start_sim, ros_client, domain):
     main_sensor = {
         "sim_indoor_jackal.yaml": ("scan", LaserScan),
