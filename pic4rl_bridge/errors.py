@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from pic4rl_sim.errors import ConfigError, require, unknown_key
 
-__all__ = ["BridgeError", "ConfigError", "EpisodeRejected", "RecorderError", "TransportError",
-           "require", "unknown_key"]
+__all__ = ["BridgeError", "ConfigError", "EpisodeRejected", "RecorderError", "SimConflict",
+           "TransportError", "require", "unknown_key"]
 
 
 class BridgeError(Exception):
@@ -19,6 +19,11 @@ class BridgeError(Exception):
 
 class TransportError(BridgeError):
     """The robot or simulator did not answer: a missing service, a silent topic, a bad message."""
+
+
+class SimConflict(BridgeError):
+    """Two simulator nodes answer on the same names (a forgotten sim, say): every message
+    would come twice, or from the wrong world."""
 
 
 class EpisodeRejected(BridgeError):

@@ -68,7 +68,7 @@ from pic4rl_sim.node.ros_interfaces import ros_type
 
 from . import decode
 from .config import EnvConfig, StepMode
-from .errors import ConfigError, EpisodeRejected, TransportError
+from .errors import ConfigError, EpisodeRejected, SimConflict, TransportError
 from .frame import SensorFrame
 from .robot_info import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
@@ -284,6 +284,7 @@ class RosTransport(Transport):
                 raise TransportError(f"{what}: the transport was closed")
             remaining = 1.0 if deadline is None else deadline - time.monotonic()
             if remaining <= 0:
+                self._check_one_sim()  # two sims out of step time out: say so, not "no sim"
                 raise TransportError(f"{what}: nothing within {timeout_s:g} s")
             self._executor.spin_once(timeout_sec=min(remaining, 1.0))
 
@@ -306,6 +307,7 @@ class RosTransport(Transport):
         goal = self._topics[self._roles["goal"]]
         if self._set_params is not None or self._reset_client is not None:
             self._wait_for_graph(goal)
+            self._check_one_sim()
             if self._set_params is not None:
                 self._set_episode(request)
             before = goal.stamp_ns
@@ -351,6 +353,25 @@ class RosTransport(Transport):
         if self._cmd_pub.get_subscription_count() == 0:
             self._spin_until(lambda: self._cmd_pub.get_subscription_count() > 0,
                              self._timeout_s, f"topic {self._cmd_name}: a subscriber")
+
+    def _check_one_sim(self) -> None:
+        """``SimConflict`` when more than one node named like ``ros.sim_node`` publishes our
+        goal or pose topic: a second sim (a forgotten ``pic4rl-sim``) answers every command
+        too, so frames and bags would mix two worlds. A graph query: cheap, once an episode."""
+        if not self._ros.sim_node:
+            return
+        sim = self.node.resolve_topic_name(self._ros.sim_node)
+        for role in ("goal", "pose"):
+            topic = self._topics[self._roles[role]].name
+            nodes = [f"{info.node_namespace.rstrip('/')}/{info.node_name}"
+                     for info in self.node.get_publishers_info_by_topic(topic)]
+            twins = [name for name in nodes if name == sim]
+            if len(twins) > 1:
+                raise SimConflict(
+                    f"{len(twins)} simulator nodes named {sim} publish {topic} in ROS domain "
+                    f"{self.node.context.get_domain_id()}: {' and '.join(twins)} (a pic4rl-sim "
+                    "left running?); stop all but one, or give each its own namespace "
+                    "(-r __ns:=/robot2) or ROS_DOMAIN_ID")
 
     def _set_episode(self, request: EpisodeRequest) -> None:
         start = [] if request.start is None else [float(v) for v in request.start]

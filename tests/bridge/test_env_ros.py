@@ -11,12 +11,16 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from gymnasium.utils.env_checker import check_env
 from rosbags.rosbag2 import Reader
 from std_srvs.srv import Empty
 
 import pic4rl_bridge  # noqa: F401 - registers the envs
 from pic4rl_bridge.config import load_env_config
+from pic4rl_bridge.errors import SimConflict
 from pic4rl_metrics.batch import compute
 
 pytestmark = pytest.mark.integration
@@ -68,6 +72,31 @@ def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, domain: int,
     finally:
         ros.close()
         local.close()
+
+
+def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_sim,
+                                                            ros_client) -> None:
+    """A twin ``sim`` publishing the goal (as a forgotten sim would): the reset refuses with
+    one message naming both nodes, not the "is a sim answering?" hint of a silent graph."""
+    config = ROOT / CONFIGS["pic4rl/GoToPoseLidar-v0"]
+    start_sim(domain, "--params-file", str(config))
+    client = ros_client(domain)
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    client.collect("/goal_pose", PoseStamped, latched, 60.0)
+    client.spin_for(2.0)  # past the sim's own look for a twin, which would stop it
+    twin = rclpy.create_node("sim", context=client.context)
+    twin.create_publisher(PoseStamped, "goal_pose", latched).publish(PoseStamped())
+    env = gym.make("pic4rl/GoToPoseLidar-v0", config=config, transport="ros",
+                   overrides={"ros.domain_id": domain, "ros.timeout_s": 5.0})
+    try:
+        with pytest.raises(SimConflict, match=(
+                rf"^2 simulator nodes named /sim publish /goal_pose in ROS domain {domain}: "
+                r"/sim and /sim \(a pic4rl-sim left running\?\)")):
+            env.reset(seed=1)
+    finally:
+        env.close()
+        twin.destroy_node()
 
 
 def _go_to_goal(env: gym.Env, max_steps: int = 300) -> dict:
