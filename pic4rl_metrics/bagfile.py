@@ -213,16 +213,19 @@ class OpenBag:
             out.update(getattr(metadata, "custom", None) or {})
         return out
 
-    def messages(self, connections: list[Connection]) -> Iterator[tuple[Connection, int, bytes]]:
-        """(connection, receive time in ns, raw data) of ``connections``, file by file."""
+    def streams(
+        self, connections: list[Connection]
+    ) -> Iterator[tuple[list[Connection], Iterator[tuple[Connection, int, bytes]]]]:
+        """Per file, its connections among ``connections`` and their messages (connection,
+        receive time in ns, raw data); connection ids are unique within one file only."""
         for reader in self._readers:
             own = [c for c in reader.connections if any(c is w for w in connections)]
             if own:
-                yield from reader.messages(connections=own)
+                yield own, reader.messages(connections=own)
 
-    def decoder(self, conn: Connection) -> Callable[[bytes], Any]:
-        """A function decoding ``conn``'s raw messages; ``BagError`` naming the type that no
-        definition covers."""
+    def decoder(self, conn: Connection) -> Callable[[bytes, str], Any]:
+        """The function decoding ``conn``'s raw messages (called with the data and the
+        message type); ``BagError`` naming the type that no definition covers."""
         msgdef = conn.msgdef
         store, missing = typestore_for(conn.msgtype, msgdef.format, msgdef.data, self.ros1)
         if missing:
@@ -232,11 +235,4 @@ class OpenBag:
                 f"neither defined in the bag nor known to {default}'s types"
             )
             raise BagError(msg)
-        deserialize = store.deserialize_ros1 if self.ros1 else store.deserialize_cdr
-        msgtype = conn.msgtype
-        return lambda raw: deserialize(raw, msgtype)
-
-
-def key(conn: Connection) -> tuple[int, int]:
-    """A connection's identity across the files of a split bag (ids repeat from file to file)."""
-    return id(conn.owner), conn.id
+        return store.deserialize_ros1 if self.ros1 else store.deserialize_cdr

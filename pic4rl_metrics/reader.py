@@ -20,7 +20,7 @@ import numpy as np
 from rosbags.interfaces import Connection
 
 from . import tf
-from .bagfile import OpenBag, bag_errors, key
+from .bagfile import OpenBag, bag_errors
 from .contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from .errors import ConfigError, EpisodeError
 from .facts import Mount
@@ -92,23 +92,24 @@ class _BagContents:
             self._read(bag, conns, chosen.wanted)
 
     def _read(self, bag: OpenBag, conns: list[Connection], wanted: dict[str, str]) -> None:
-        # Per connection, resolved once: decoder, extractor and the lists to append to.
-        plan = {}
-        for conn in conns:
-            role = wanted[conn.topic]
-            extract = _tf_extract if conn.msgtype == TF_MESSAGE else _EXTRACTORS[role]
-            sample = self.topics[role]
-            plan[key(conn)] = (
-                bag.decoder(conn), conn.msgtype, extract,
-                sample.stamp.append, sample.recv.append, sample.rows.append,
-            )
-        for conn, recv_ns, raw in bag.messages(conns):
-            decode, msgtype, extract, add_stamp, add_recv, add_row = plan[key(conn)]
-            msg = decode(raw)
-            header = getattr(msg, "header", None)
-            add_stamp(_stamp_ns(header) if header is not None else 0)
-            add_recv(recv_ns)
-            add_row(extract(msg, msgtype))
+        for own, messages in bag.streams(conns):  # one storage file at a time
+            # Per connection, resolved once: decoder, extractor and the lists to append to.
+            plan = {}
+            for conn in own:
+                role = wanted[conn.topic]
+                extract = _tf_extract if conn.msgtype == TF_MESSAGE else _EXTRACTORS[role]
+                sample = self.topics[role]
+                plan[conn.id] = (
+                    bag.decoder(conn), conn.msgtype, extract,
+                    sample.stamp.append, sample.recv.append, sample.rows.append,
+                )
+            for conn, recv_ns, raw in messages:
+                decode, msgtype, extract, add_stamp, add_recv, add_row = plan[conn.id]
+                msg = decode(raw, msgtype)
+                header = getattr(msg, "header", None)
+                add_stamp(_stamp_ns(header) if header is not None else 0)
+                add_recv(recv_ns)
+                add_row(extract(msg, msgtype))
         for role, conn in ((wanted[c.topic], c) for c in conns):
             if conn.msgtype in (LASER_SCAN, ODOMETRY, POSE_STAMPED, POSE_COV, TWIST_STAMPED):
                 self.topics[role].has_header = True
@@ -122,8 +123,11 @@ class _BagContents:
             role = wanted[conn.topic]
             if role not in ("scan", "pose") or conn.msgtype not in (LASER_SCAN, ODOMETRY):
                 continue
-            for _, _, raw in bag.messages([conn]):
-                msg = bag.decoder(conn)(raw)
+            for _, messages in bag.streams([conn]):
+                first = next(iter(messages), None)
+                if first is None:
+                    continue
+                msg = bag.decoder(conn)(first[2], conn.msgtype)
                 frame = msg.header.frame_id if role == "scan" else msg.child_frame_id
                 self.topics[role].frame = frame.lstrip("/")
                 break

@@ -101,12 +101,17 @@ def _to_ros1(value: Any, ts: Any) -> Any:
                   for f in dataclasses.fields(cls) if not f.name.startswith("__")})
 
 
-def _to_bag(src: Path, dst: Path, *, empty_definition: str | None = None) -> Path:
+def _to_bag(src: Path, dst: Path, *, empty_definition: str | None = None,
+            chunks: Writer1.CompressionFormat | None = None) -> Path:
     """Copy rosbag2 ``src`` into the ROS 1 bag ``dst``; ``empty_definition``: a topic whose
-    connection carries no message definition (as some ROS 1 tools write it)."""
+    connection carries no message definition (as some ROS 1 tools write it); ``chunks``:
+    their compression."""
     jazzy, noetic = typestore(), _noetic()
     msgs, _ = _messages(src)
-    with Writer1(dst) as writer:
+    writer = Writer1(dst)
+    if chunks is not None:
+        writer.set_compression(chunks)
+    with writer:
         conns: dict[str, Any] = {}
         for topic, msgtype, t_ns, raw in msgs:
             if topic not in conns:
@@ -117,10 +122,12 @@ def _to_bag(src: Path, dst: Path, *, empty_definition: str | None = None) -> Pat
     return dst
 
 
+@pytest.mark.parametrize("chunks", [None, *Writer1.CompressionFormat])
 def test_a_ros1_bag_gives_the_rosbag2_row(
-    plain: Path, reference: dict[str, object], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    plain: Path, reference: dict[str, object], tmp_path: Path, capsys: pytest.CaptureFixture[str],
+    chunks: Writer1.CompressionFormat | None,
 ) -> None:
-    bag = _to_bag(plain, tmp_path / "episode.bag")
+    bag = _to_bag(plain, tmp_path / "episode.bag", chunks=chunks)
     _assert_same_row(reference, _row(bag))
     assert main(["compute", "--format", "json", str(tmp_path)]) == 0  # found in a directory
     (row,) = json.loads(capsys.readouterr().out)
