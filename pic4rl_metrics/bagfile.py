@@ -209,8 +209,8 @@ class OpenBag:
         """The metadata's ``custom_data`` (empty for a lone file or a ROS 1 bag)."""
         out: dict[str, str] = {}
         for reader in self._readers:
-            metadata = getattr(reader, "storage", None) and reader.storage.metadata
-            out.update(getattr(metadata, "custom", None) or {})
+            if isinstance(reader, Reader):
+                out.update(reader.storage.metadata.custom or {})
         return out
 
     def streams(

@@ -228,7 +228,6 @@ def test_a_split_bag_without_metadata_is_one_episode(
         assert compute(inputs).frame["bag"].tolist() == [str(split)], inputs
 
 
-@pytest.mark.bad_input
 def test_a_directory_of_unrelated_storage_files_is_no_one_bag(plain: Path, tmp_path: Path) -> None:
     mixed = tmp_path / "mixed"
     mixed.mkdir()
