@@ -22,18 +22,23 @@ from .errors import ConfigError, MetricsError, OutputError
 from .registry import METRICS, REGISTRY
 from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, TABLE1_COLUMNS
-from .topics import TopicMap, load_topic_map
+from .topics import TopicMap, load_topic_map, parse_frames
 
 
 def _add_input_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "bags", nargs="+",
-        help="rosbag2 directories, metadata.yaml, .db3 or .mcap files, directories to search, globs",
+        help="rosbag2 directories, metadata.yaml, .db3/.mcap files (or their .zstd), ROS 1 .bag "
+             "files, directories to search, globs",
     )
     topics = parser.add_argument_group("topics (defaults: the bag contract's names)")
     topics.add_argument("--topic-map", type=Path, help="YAML topic map (and episode facts)")
     topics.add_argument("--pose-topic", action="append", metavar="TOPIC",
-                        help="Odometry/PoseStamped/PoseWithCovarianceStamped topic; repeat for fallbacks")
+                        help="Odometry/PoseStamped/PoseWithCovarianceStamped topic; repeat for "
+                             "fallbacks (with --pose-frames: the TFMessage topic, default /tf)")
+    topics.add_argument("--pose-frames", type=_frames, metavar="PARENT:CHILD",
+                        help="poses from /tf and /tf_static: CHILD's pose in PARENT, e.g. "
+                             "odom:base_link or map:base_link")
     topics.add_argument("--scan-topic", metavar="TOPIC", help="LaserScan topic")
     topics.add_argument("--cmd-topic", metavar="TOPIC", help="Twist or TwistStamped topic")
     topics.add_argument("--goal-topic", metavar="TOPIC", help="goal PoseStamped topic")
@@ -68,6 +73,14 @@ def _jobs(text: str) -> int:
         msg = f"{text!r}: expected a number of processes >= 1, or 0 for one per core"
         raise argparse.ArgumentTypeError(msg)
     return jobs
+
+
+def _frames(text: str) -> tuple[str, str]:
+    """--pose-frames: PARENT:CHILD."""
+    try:
+        return parse_frames(text, "")
+    except ConfigError as err:
+        raise argparse.ArgumentTypeError(str(err).strip()) from err
 
 
 def _names(text: str) -> tuple[str, ...]:
@@ -113,6 +126,7 @@ def _inputs(args: argparse.Namespace) -> tuple[TopicMap, EpisodeFacts, frozenset
     topic_map = topic_map.with_overrides(
         pose=tuple(args.pose_topic) if args.pose_topic else None, scan=args.scan_topic,
         cmd_vel=args.cmd_topic, goal=args.goal_topic, person=args.person_topic,
+        pose_frames=args.pose_frames,
     )
     cli = {
         "agent": args.agent, "goal": args.goal, "start": args.start, "footprint": args.footprint,

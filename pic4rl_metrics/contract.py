@@ -43,6 +43,9 @@ FACTS_TOPIC = "/episode/facts"
 #: ``std_msgs/msg/String``; ``data`` is a JSON object ``{"outcome": "goal"|"collision"|"timeout"|"diverged",
 #: "stamp_ns": <int, on the pose topic's header time base>}`` or just the outcome word.
 OUTCOME_TOPIC = "/episode/outcome"
+#: ``tf2_msgs/msg/TFMessage``: a real bag's moving transforms, where ``--pose-frames`` reads
+#: poses (``odom -> base_link``) when it has no pose topic.
+TF_TOPIC = "/tf"
 #: ``tf2_msgs/msg/TFMessage``: a real bag's static transforms, where the LiDAR's mount is read
 #: when the facts carry no ``scan_mount``.
 TF_STATIC_TOPIC = "/tf_static"

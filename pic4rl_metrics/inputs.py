@@ -1,13 +1,16 @@
-"""Turn what a user types (dirs, ``metadata.yaml``, ``.db3``, ``.mcap``, globs) into bags.
+"""Turn what a user types (dirs, ``metadata.yaml``, storage files, ``.bag``, globs) into bags.
 
-A bag is either a rosbag2 directory (it holds ``metadata.yaml``) or a lone storage file that no
-``metadata.yaml`` lists, as a recorder killed mid-episode leaves it. Every bag is found once,
-however many inputs name it; an input that names nothing is reported, not dropped.
+A bag is a rosbag2 directory (it holds ``metadata.yaml``), a lone storage file that no
+``metadata.yaml`` lists, as a recorder killed mid-episode leaves it (``.db3``, ``.mcap``, either
+compressed whole as ``.zstd``), a directory holding the files ``<name>_<n>.<ext>`` of one split
+bag without its ``metadata.yaml``, or a ROS 1 ``.bag`` file. Every bag is found once, however
+many inputs name it; an input that names nothing is reported, not dropped.
 """
 
 from __future__ import annotations
 
 import glob
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +18,38 @@ from pathlib import Path
 import yaml
 
 STORAGE_SUFFIXES = (".db3", ".mcap")
+#: A storage file compressed whole (rosbag2's ``file`` compression mode).
+COMPRESSED_SUFFIX = ".zstd"
+ROS1_SUFFIX = ".bag"
 METADATA = "metadata.yaml"
+_KINDS = (f"{'/'.join(STORAGE_SUFFIXES)} file (or its {COMPRESSED_SUFFIX}), "
+          f"or ROS 1 {ROS1_SUFFIX} file")
+_SPLIT = re.compile(r"(?P<name>.+)_(?P<index>\d+)")
+
+
+def is_bag_file(path: Path) -> bool:
+    """A storage file by its name: ``.db3``, ``.mcap``, either ``.zstd``-compressed, ``.bag``."""
+    name = path.name.removesuffix(COMPRESSED_SUFFIX)
+    return name.endswith(STORAGE_SUFFIXES) or path.name.endswith(ROS1_SUFFIX)
+
+
+def _split_key(path: Path) -> tuple[str, str, int] | None:
+    """(name, suffixes, index) of a split bag's file ``<name>_<index><suffixes>``."""
+    stem, _, rest = path.name.partition(".")
+    match = _SPLIT.fullmatch(stem)
+    return (match["name"], rest, int(match["index"])) if match else None
+
+
+def split_parts(directory: Path) -> list[Path]:
+    """The files of one split bag in a directory without ``metadata.yaml``, in index order:
+    two or more storage files, all ``<name>_<n>`` of one name and kind; else []."""
+    if _is_bag_dir(directory):
+        return []
+    files = [p for p in directory.iterdir() if p.is_file() and is_bag_file(p)]
+    keys = [_split_key(p) for p in files]
+    if len(files) < 2 or None in keys or len({k[:2] for k in keys if k}) != 1:
+        return []
+    return [p for _, p in sorted(zip([k[2] for k in keys if k], files, strict=True))]
 
 
 @dataclass(frozen=True)
@@ -40,21 +74,25 @@ def _is_bag_dir(path: Path) -> bool:
 
 
 def _bag_of_file(path: Path) -> Path:
-    """A storage file's bag: its directory when that directory's metadata lists it."""
+    """A storage file's bag: its directory when that directory's metadata lists it or the
+    file is a part of the directory's split bag."""
     if _is_bag_dir(path.parent) and path.name in _listed_files(path.parent):
+        return path.parent
+    if path in split_parts(path.parent):
         return path.parent
     return path
 
 
 def _search_dir(root: Path) -> list[Path]:
-    """Bags under ``root``: every dir with ``metadata.yaml``, plus unlisted storage files."""
-    if _is_bag_dir(root):
+    """Bags under ``root``: every dir with ``metadata.yaml`` or a split bag's files, plus
+    unlisted storage files."""
+    if _is_bag_dir(root) or split_parts(root):
         return [root]
     found: list[Path] = []
     for child in sorted(root.iterdir()):
         if child.is_dir():
             found.extend(_search_dir(child))
-        elif child.suffix in STORAGE_SUFFIXES:
+        elif is_bag_file(child):
             found.append(child)
     return found
 
@@ -76,15 +114,12 @@ def _expand(item: str) -> tuple[list[Path], str | None]:
             bags.extend(_search_dir(candidate))
         elif candidate.name == METADATA:
             bags.append(candidate.parent)
-        elif candidate.suffix in STORAGE_SUFFIXES:
+        elif is_bag_file(candidate):
             bags.append(_bag_of_file(candidate))
         elif len(candidates) == 1:
-            return [], (
-                f"not a bag: expected a rosbag2 directory, {METADATA}, or a "
-                f"{' or '.join(STORAGE_SUFFIXES)} file"
-            )
+            return [], f"not a bag: expected a rosbag2 directory, {METADATA}, a {_KINDS}"
     if not bags:
-        return [], "no rosbag2 bag (metadata.yaml, .db3 or .mcap) found here"
+        return [], f"no bag found here (no {METADATA}, {_KINDS})"
     return bags, None
 
 

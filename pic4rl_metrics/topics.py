@@ -1,10 +1,11 @@
 """Topic map: which topics of a bag hold the pose, scan, command, goal and person.
 
 Real-robot bags name things their own way (``/odometry/filtered``, ``/front/scan``); a topic
-map, from a YAML file or the command line, says where to look. A YAML topic map may also carry
-the episode facts a real-robot bag lacks::
+map, from a YAML file or the command line, says where to look, and ``choose_topics`` picks them
+in a bag. A YAML topic map may also carry the episode facts a real-robot bag lacks::
 
     pose: [/odometry/filtered, /odom]   # first present wins
+    pose_frames: odom:base_link         # or poses from /tf and /tf_static: child in parent
     scan: /front/scan
     cmd_vel: /cmd_vel
     goal: /move_base_simple/goal
@@ -26,7 +27,7 @@ import yaml
 
 from . import contract
 from .contract import EpisodeFacts, parse_facts
-from .errors import ConfigError
+from .errors import ConfigError, TopicError
 
 
 def normalize_topic(name: str) -> str:
@@ -46,6 +47,9 @@ class TopicMap:
     person: str | None = contract.PERSON_TOPIC
     facts: str | None = contract.FACTS_TOPIC
     outcome: str | None = contract.OUTCOME_TOPIC
+    #: (parent, child): the pose is ``child``'s in ``parent`` from the ``TFMessage`` topics
+    #: (``pose``, default ``/tf``, and its ``_static`` sibling) instead of a pose topic.
+    pose_frames: tuple[str, str] | None = None
     #: Metric columns to compute (``None``: every registered metric).
     metrics: tuple[str, ...] | None = None
     #: Roles the user named: a missing topic for one of these is an error, not a skip.
@@ -56,6 +60,8 @@ class TopicMap:
             msg = "topic map: 'pose' needs at least one topic"
             raise ConfigError(msg)
         object.__setattr__(self, "pose", tuple(normalize_topic(t) for t in self.pose))
+        if isinstance(self.pose_frames, str):
+            object.__setattr__(self, "pose_frames", parse_frames(self.pose_frames, "pose_frames"))
         for name in ("scan", "cmd_vel", "goal", "person", "facts", "outcome"):
             value = getattr(self, name)
             if value is not None:
@@ -69,8 +75,18 @@ class TopicMap:
         return replace(self, **given, explicit=self.explicit | frozenset(given))  # type: ignore[arg-type]
 
 
+def parse_frames(text: str, source: str) -> tuple[str, str]:
+    """``PARENT:CHILD`` (``odom:base_link``) as two frame names, without leading ``/``."""
+    parts = [p.strip().lstrip("/") for p in str(text).split(":")]
+    if len(parts) != 2 or not all(parts):
+        msg = f"{source} {text!r}: expected PARENT:CHILD frames, e.g. odom:base_link"
+        raise ConfigError(msg)
+    return parts[0], parts[1]
+
+
 _KEYS = (
-    "pose", "scan", "cmd_vel", "goal", "person", "facts_topic", "outcome_topic", "facts", "metrics",
+    "pose", "pose_frames", "scan", "cmd_vel", "goal", "person", "facts_topic", "outcome_topic",
+    "facts", "metrics",
 )
 
 
@@ -111,6 +127,9 @@ def topic_map_from_dict(
     if "pose" in data:
         pose = data["pose"]
         kwargs["pose"] = (pose,) if isinstance(pose, str) else tuple(pose)
+    frames = data.get("pose_frames")
+    if frames is not None:
+        frames = parse_frames(frames, f"{source}: pose_frames")
     for key, value in kwargs.items():
         values = value if isinstance(value, tuple) else (value,)
         if not all(v is None or isinstance(v, str) for v in values):
@@ -125,4 +144,121 @@ def topic_map_from_dict(
             msg = f"{source}: metrics={data['metrics']!r} must be a list of metric names"
             raise ConfigError(msg)
         kwargs["metrics"] = tuple(names)
-    return TopicMap(**kwargs, explicit=explicit), facts, given
+    return TopicMap(**kwargs, pose_frames=frames, explicit=explicit), facts, given
+
+
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+STRING = "std_msgs/msg/String"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+
+SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
+SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
+#: Roles that, when their default topic is absent, take the bag's only topic of their type
+#: (a namespaced ``/robot1/scan``), as the pose takes the only ``Odometry`` topic.
+_ONLY_OF_TYPE = {"scan": LASER_SCAN}
+_FRAMES_HINT = "pass --pose-frames PARENT:CHILD (e.g. odom:base_link) to read poses from it"
+
+
+@dataclass(frozen=True)
+class Chosen:
+    """The topics of one bag that fill the map's roles: topic -> role, and what was guessed."""
+
+    pose: str
+    wanted: dict[str, str]
+    notes: tuple[str, ...]
+
+
+def _only_of_type(available: Mapping[str, str], msgtype: str) -> list[str]:
+    return sorted(t for t, ty in available.items() if ty == msgtype)
+
+
+def _pose_topic(topic_map: TopicMap, available: Mapping[str, str], bag: str,
+                notes: list[str]) -> str:
+    """The first mapped pose topic in the bag, else its only Odometry topic; ``TopicError``
+    naming the topics it has (and ``--pose-frames`` when it has ``/tf``)."""
+    frames = topic_map.pose_frames is not None
+    mapped = topic_map.pose if "pose" in topic_map.explicit or not frames else (contract.TF_TOPIC,)
+    expected = {TF_MESSAGE} if frames else SUPPORTED_POSE_MSGS
+    for topic in (t for t in mapped if t in available):
+        got = available[topic]
+        if got in expected:
+            return topic
+        if frames:
+            hint = f"--pose-frames reads a {TF_MESSAGE} topic"
+        elif got == TF_MESSAGE:
+            hint = _FRAMES_HINT
+        else:
+            hint = f"expected one of {sorted(expected)}"
+        msg = f"{bag}: pose topic {topic!r} has type {got!r}; {hint}"
+        raise TopicError(msg)
+    odometry = _only_of_type(available, ODOMETRY)
+    if "pose" not in topic_map.explicit and not frames and len(odometry) == 1:
+        notes.append(f"none of the pose topics {list(topic_map.pose)} is in the bag; "
+                     f"using its only Odometry topic {odometry[0]!r}")
+        return odometry[0]
+    candidates = sorted(t for t, ty in available.items() if ty in expected)
+    hint = f"; pose-like topics in it: {candidates} (pass --pose-topic)" if candidates else ""
+    if not frames and contract.TF_TOPIC in available:
+        hint += f"; it has {contract.TF_TOPIC}: {_FRAMES_HINT}"
+    msg = (f"{bag}: none of the pose topics {list(mapped)} is in the bag{hint}; "
+           f"it has {sorted(available) or 'no topics'}")
+    raise TopicError(msg)
+
+
+def _role_topic(role: str, topic: str | None, topic_map: TopicMap,
+                available: Mapping[str, str], notes: list[str]) -> str | None:
+    """The topic that fills ``role``: its mapped topic, else (not named by the user) the
+    bag's only topic of its type, with a note; several such topics are named in a note."""
+    if topic is None or topic in available or role in topic_map.explicit:
+        return topic
+    if role not in _ONLY_OF_TYPE:
+        return topic
+    found = _only_of_type(available, _ONLY_OF_TYPE[role])
+    if len(found) == 1:
+        notes.append(f"{role} topic {topic!r} is not in the bag; using its only "
+                     f"{_ONLY_OF_TYPE[role].rsplit('/', 1)[-1]} topic {found[0]!r}")
+        return found[0]
+    if found:
+        notes.append(f"{role} topic {topic!r} is not in the bag, which has {found}; "
+                     f"{role} metrics are NaN (pass --{role}-topic)")
+    return topic
+
+
+def choose_topics(topic_map: TopicMap, available: Mapping[str, str], bag: str) -> Chosen:
+    """Topic -> role for every mapped topic present in a bag whose topics and types are
+    ``available``; a role the user named must be present. ``bag`` names it in errors."""
+    notes: list[str] = []
+    pose = _pose_topic(topic_map, available, bag, notes)
+    static_tf = f"{pose}_static" if topic_map.pose_frames is not None else None
+    needs_static = topic_map.scan is not None or static_tf is not None
+    roles = {
+        "scan": (topic_map.scan, {LASER_SCAN}),
+        "cmd_vel": (topic_map.cmd_vel, SUPPORTED_CMD_MSGS),
+        "goal": (topic_map.goal, SUPPORTED_POSE_MSGS),
+        "person": (topic_map.person, SUPPORTED_POSE_MSGS),
+        "facts": (topic_map.facts, {STRING}),
+        "outcome": (topic_map.outcome, {STRING}),
+        "tf_static": ((static_tf or contract.TF_STATIC_TOPIC) if needs_static else None,
+                      {TF_MESSAGE}),
+    }
+    wanted = {pose: "pose"}
+    for role, (mapped, types) in roles.items():
+        topic = _role_topic(role, mapped, topic_map, available, notes)
+        if topic is None:
+            continue
+        if topic not in available:
+            if role in topic_map.explicit:
+                msg = f"{bag}: {role} topic {topic!r} is not in the bag; it has {sorted(available)}"
+                raise TopicError(msg)
+            continue
+        if available[topic] not in types:
+            msg = (f"{bag}: {role} topic {topic!r} has type {available[topic]!r}; "
+                   f"expected one of {sorted(types)}")
+            raise TopicError(msg)
+        wanted.setdefault(topic, role)
+    return Chosen(pose, wanted, tuple(notes))

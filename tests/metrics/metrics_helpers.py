@@ -86,3 +86,32 @@ def result_row(bag: str, agent: object, run: object = "run1", error: str = "", *
     row.update(metrics)
     row[ERROR_COLUMN] = error
     return row
+
+
+def transform(ns: int, parent: str, child: str, x: float, y: float, yaw: float,
+              z: float = 0.0) -> object:
+    """A ``TransformStamped`` of ``child`` in ``parent``: (x, y, z) and a turn ``yaw`` about z."""
+    t = typestore().types
+    sec, nanosec = divmod(int(ns), NS)
+    return t["geometry_msgs/msg/TransformStamped"](
+        t["std_msgs/msg/Header"](t["builtin_interfaces/msg/Time"](sec, nanosec), parent),
+        child,
+        t["geometry_msgs/msg/Transform"](
+            t["geometry_msgs/msg/Vector3"](x, y, z),
+            t["geometry_msgs/msg/Quaternion"](0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)),
+        ),
+    )
+
+
+def write_tf_bag(path: Path, records: list[tuple[int, str, list[object]]]) -> Path:
+    """A bag of ``TFMessage``s only: (receive ns, topic, transforms), written in that order."""
+    ts = typestore()
+    tf_message = ts.types["tf2_msgs/msg/TFMessage"]
+    with Writer(path, version=9) as writer:
+        conns: dict[str, object] = {}
+        for recv_ns, topic, transforms in records:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, "tf2_msgs/msg/TFMessage", typestore=ts)
+            data = ts.serialize_cdr(tf_message(transforms), "tf2_msgs/msg/TFMessage")
+            writer.write(conns[topic], recv_ns, data)
+    return path

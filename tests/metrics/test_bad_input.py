@@ -41,6 +41,7 @@ from pic4rl_metrics.synthetic import (
     straight_line,
     write_episode_bag,
 )
+from pic4rl_metrics.topics import TopicMap
 
 TS = get_typestore(Stores.ROS2_JAZZY)
 T = TS.types
@@ -241,7 +242,7 @@ def test_an_empty_directory_is_a_bag_error_and_an_error_row(bad: Path) -> None:
         read_episode(bad / "empty")
     result = compute([bad / "empty"])
     assert len(result.results) == 1
-    assert "empty" in result.results[0].error and "no rosbag2 bag" in result.results[0].error
+    assert "empty" in result.results[0].error and "no bag found here" in result.results[0].error
 
 
 def test_garbage_metadata_is_a_bag_error(bad: Path) -> None:
@@ -285,7 +286,7 @@ def test_the_batch_goes_on_past_every_broken_bag(bad: Path) -> None:
     expected = {
         "corrupt": "not a database",
         "truncated.db3": "malformed",
-        "empty": "no rosbag2 bag",
+        "empty": "no bag found here",
         "garbage_metadata": "cannot open bag",
         "no_pose_topic": "it has ['/cmd_vel', '/scan']",
         "string_odom": "'std_msgs/msg/String'",
@@ -649,3 +650,37 @@ def test_physically_impossible_motion_is_flagged(tmp_path: Path) -> None:
     assert any("speed from pose differences up to 1e+71 m/s" in w for w in flagged), row.warnings
     calm = _row(compute([write_episode_bag(tmp_path / "calm", LINE)]), "calm")
     assert calm.warnings == ()
+
+
+# --------------------------------------------------------------------------- namespaced topics
+
+
+def _robot1(scan_topics: Sequence[str]) -> list[tuple[str, Any]]:
+    """/robot1/odom along +x, 0.1 m every 100 ms, and a scan with a return 1 m ahead on each
+    of ``scan_topics``."""
+    out: list[tuple[str, Any]] = []
+    for i in range(11):
+        ns = DEFAULT_T0_NS + i * 100_000_000
+        out.append(("/robot1/odom", _odometry(ns, 0.1 * i, 0.0, 0.0, vx=1.0)))
+        out += [(topic, _laser(ns, [1.0] * 8)) for topic in scan_topics]
+    return out
+
+
+def test_a_namespaced_scan_is_picked_like_the_namespaced_odometry(tmp_path: Path) -> None:
+    bag = _write(tmp_path / "robot1", _robot1(["/robot1/scan"]))
+    row = _row(compute([bag]), "robot1")
+    assert row.error == "" and row.episode.pose_topic == "/robot1/odom"
+    assert row.metrics.obstacle_dist_min_m == pytest.approx(1.0, abs=1e-6)
+    assert row.metrics.n_scans == 11
+    assert "scan topic '/scan' is not in the bag; using its only LaserScan topic '/robot1/scan'" \
+        in row.warnings
+
+
+def test_two_namespaced_scans_are_named_in_a_warning(tmp_path: Path) -> None:
+    bag = _write(tmp_path / "two", _robot1(["/robot1/front/scan", "/robot1/rear/scan"]))
+    row = _row(compute([bag]), "two")
+    assert row.error == "" and math.isnan(row.metrics.obstacle_dist_min_m)
+    assert ("scan topic '/scan' is not in the bag, which has ['/robot1/front/scan', "
+            "'/robot1/rear/scan']; scan metrics are NaN (pass --scan-topic)") in row.warnings
+    picked = compute([bag], topic_map=TopicMap().with_overrides(scan="/robot1/rear/scan"))
+    assert _row(picked, "two").metrics.obstacle_dist_min_m == pytest.approx(1.0, abs=1e-6)

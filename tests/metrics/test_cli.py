@@ -268,12 +268,15 @@ def test_topic_map_with_renamed_topics_and_facts(capsys, husky_bag: Path, tmp_pa
     assert row["collision_count"] == 0.0
     assert row["safety_violation_time_s"] == 0.0
 
-    # Without the map: the pose falls back (with a warning), and there is no scan or goal.
+    # Without the map: the pose and the scan fall back to the bag's only Odometry and
+    # LaserScan topics (each with a warning naming it); there is no goal.
     code, out, err = _run(capsys, "compute", "--format", "json", husky_bag)
     assert code == 0, err
     (row,) = json.loads(out)
-    assert row["obstacle_dist_min_m"] is None and row["outcome"] == "unknown"
+    assert row["obstacle_dist_min_m"] == pytest.approx(1.0, abs=F32)
+    assert row["outcome"] == "unknown"
     assert "/odometry/filtered" in row["warnings"]
+    assert "using its only LaserScan topic '/front/scan'" in row["warnings"]
 
 
 def test_topic_map_typo_exits_2_with_a_suggestion(capsys, husky_bag: Path, tmp_path: Path) -> None:
