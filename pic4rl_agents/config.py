@@ -18,7 +18,7 @@ from typing import Any
 import yaml
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
-from pic4rl_bridge.errors import ConfigError, require
+from pic4rl_bridge.errors import ConfigError, require, unknown_key
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
@@ -27,11 +27,13 @@ from pic4rl_sim.schema import (
     POSITIVE,
     PROBABILITY,
     ParamEnum,
+    ParamSpec,
     Range,
     check,
     from_params,
     param,
     section,
+    specs,
     to_params,
 )
 
@@ -292,10 +294,18 @@ class RunConfig:
     train: TrainConfig
     env: EnvConfig
     sources: tuple[str, ...] = ()  # the params files, in order
+    overridden: bool = False  # command-line overrides were applied over them
 
     @property
     def name(self) -> str:
         return self.train.run or f"{self.train.algorithm}_{self.env.sensor}"
+
+    @property
+    def origin(self) -> str:
+        """Its sensor and where it came from, for messages: ``sensor lidar, from a.yaml +
+        command line``."""
+        parts = [*self.sources, *(["command line"] if self.overridden else [])]
+        return f"sensor {self.env.sensor}, from {' + '.join(parts) or 'the defaults'}"
 
     def to_yaml(self) -> str:
         """The params file of this run (all three sections): ``pic4rl-train`` and
@@ -343,15 +353,47 @@ def load_run_config(paths: Sequence[str | Path], *, train: Mapping[str, Any] | N
                     env: Mapping[str, Any] | None = None,
                     sim: Mapping[str, Any] | None = None) -> RunConfig:
     """The ``trainer``, ``nav_env`` and ``sim`` sections of ``paths`` (later files win, key by
-    key, as ROS merges several ``--params-file``), then dotted overrides per section."""
+    key, as ROS merges several ``--params-file``), then dotted overrides per section (checked
+    by the caller with ``check_overrides``, which names their flags)."""
     merged = params_file.load(paths, (TRAINER_NODE, ENV_NODE, SIM_NODE))
     merged[TRAINER_NODE].update(train or {})
     merged[ENV_NODE].update(env or {})
     merged[SIM_NODE].update(sim or {})
-    where = ", ".join(str(p) for p in paths) or "command line"
+    overridden = bool(train or env or sim)
+    where = " + ".join([*(str(p) for p in paths), *(["command line"] if overridden else [])])
     try:
         train_config = train_config_from_params(merged[TRAINER_NODE])
         env_config = env_config_from_params(merged[ENV_NODE], sim_params=merged[SIM_NODE])
     except ConfigError as err:
-        raise ConfigError(f"{where}: {err}") from err
-    return RunConfig(train_config, env_config, tuple(str(p) for p in paths))
+        raise ConfigError(f"{where or 'command line'}: {err}") from err
+    return RunConfig(train_config, env_config, tuple(str(p) for p in paths), overridden)
+
+
+def _table(node: str) -> dict[str, ParamSpec]:
+    """The parameters of ``node``'s section (the sim's names are the same for every robot)."""
+    if node == TRAINER_NODE:
+        return {spec.name: spec for spec in specs(TrainConfig)}
+    if node == ENV_NODE:
+        return {spec.name: spec for spec in specs(EnvConfig)}
+    from pic4rl_sim.engine.robot_specs import load_robot
+    from pic4rl_sim.params import ROBOT, parameter_table
+
+    return {spec.name: spec for spec in parameter_table(load_robot(ROBOT.default))}
+
+
+def check_overrides(node: str, overrides: Mapping[str, Any], *, where: str) -> dict[str, Any]:
+    """``overrides`` of ``node``'s section (trainer, nav_env or sim) when every key is known
+    and every value of its type and range; else ``ConfigError`` naming ``where``, the flag
+    that gave them, so that a bad command-line value is not blamed on the params file."""
+    table = _table(node)
+    for key, value in overrides.items():
+        if key not in table:
+            raise unknown_key(key, table, where=where)
+        spec = table[key]
+        try:
+            typed = spec.check(value)
+            if spec.bounds is not None:
+                require(typed in spec.bounds, key, value, spec.bounds.expected())
+        except ConfigError as err:
+            raise ConfigError(f"{where}: {err}") from err
+    return dict(overrides)

@@ -21,7 +21,7 @@ from pic4rl_agents.config import (
     train_config_from_params,
 )
 from pic4rl_agents.rosargs import RosArgs, split_ros_args
-from pic4rl_agents.train import route_params
+from pic4rl_agents.trainargs import route_params
 from pic4rl_bridge.errors import ConfigError
 
 SHIPPED = {
