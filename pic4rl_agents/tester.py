@@ -43,7 +43,7 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-from . import runs
+from . import atomic, runs
 from .config import ENV_NODE, SIM_NODE, check_overrides, parse_overrides
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
@@ -132,9 +132,9 @@ def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ..
     from pic4rl_metrics.report import render_comparison, render_episodes
 
     result = compute([run_dir])
-    (run_dir / "episodes.csv").write_text(render_episodes(result.frame, "csv"))
+    atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
     table = aggregate(result.frame, by="agent")
-    (run_dir / "table.md").write_text(render_comparison(table, "markdown", with_std=with_std))
+    atomic.write_text(run_dir / "table.md", render_comparison(table, "markdown", with_std=with_std))
     return table, tuple(str(failed.error) for failed in result.failed)
 
 
