@@ -44,7 +44,8 @@ from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from . import atomic, runs
-from .config import ENV_NODE, SIM_NODE, check_overrides, parse_overrides
+from .config import ENV_NODE, SIM_NODE
+from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
 from .testplan import AgentSpec, TestPlan, first_env, resolve_agents

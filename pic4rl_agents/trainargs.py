@@ -11,16 +11,8 @@ from pic4rl_bridge.errors import ConfigError, unknown_key
 from pic4rl_sim.schema import help_text, param_names, specs
 
 from . import runs
-from .config import (
-    ENV_NODE,
-    SIM_NODE,
-    TRAINER_NODE,
-    RunConfig,
-    TrainConfig,
-    check_overrides,
-    load_run_config,
-    parse_overrides,
-)
+from .config import ENV_NODE, SIM_NODE, TRAINER_NODE, RunConfig, TrainConfig, load_run_config
+from .overrides import check_overrides, parse_overrides
 from .rosargs import RosArgs
 
 DESCRIPTION = ("pic4rl-train: the training node. It owns the env (the paper's "

@@ -34,14 +34,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
 from .callbacks import SeededEvalCallback
-from .config import (
-    ENV_NODE,
-    TRAINER_NODE,
-    RunConfig,
-    check_overrides,
-    load_run_config,
-    parse_overrides,
-)
+from .config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
+from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .samplers import suggest
 from .tune_summary import write_summary
