@@ -35,7 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_agents.callbacks import StopAfterEval
-from pic4rl_agents.config import load_run_config, parse_overrides
+from pic4rl_agents.config import load_run_config
+from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.curves import eval_curves
 from pic4rl_agents.train import Trainer
 

@@ -22,28 +22,57 @@ from torch import nn
 
 from pic4rl_bridge.errors import ConfigError
 
+from .atomic import replacing
 from .config import TrainConfig
 from .exploration import EpsilonGreedy
 from .extractors import DepthGoalExtractor
 
 
-class DDPG(EpsilonGreedy, sb3.DDPG):
+class AtomicSave:
+    """Mixin for an SB3 algorithm: ``save`` and ``save_replay_buffer`` to a path write a
+    temporary file and rename it (``pic4rl_agents.atomic``), so that a kill mid-save leaves the
+    previous file, not a truncated one; SB3's callbacks (checkpoints, the best model) save
+    through them too."""
+
+    def save(self, path: Any, *args: Any, **kwargs: Any) -> None:
+        if not isinstance(path, (str, Path)):
+            super().save(path, *args, **kwargs)  # type: ignore[misc]
+            return
+        with replacing(_with_suffix(path, ".zip")) as tmp:
+            super().save(tmp, *args, **kwargs)  # type: ignore[misc]
+
+    def save_replay_buffer(self, path: Any) -> None:
+        if not isinstance(path, (str, Path)):
+            super().save_replay_buffer(path)  # type: ignore[misc]
+            return
+        with replacing(_with_suffix(path, ".pkl")) as tmp:
+            super().save_replay_buffer(tmp)  # type: ignore[misc]
+
+
+def _with_suffix(path: str | Path, suffix: str) -> Path:
+    """Where SB3 writes ``path``: with ``suffix`` appended when it has none."""
+    path = Path(path)
+    return path if path.suffix else path.with_name(path.name + suffix)
+
+
+class DDPG(AtomicSave, EpsilonGreedy, sb3.DDPG):
     """SB3's DDPG with the paper's ε-greedy exploration."""
 
 
-class TD3(EpsilonGreedy, sb3.TD3):
+class TD3(AtomicSave, EpsilonGreedy, sb3.TD3):
     """SB3's TD3 with the paper's ε-greedy exploration."""
 
 
-class SAC(EpsilonGreedy, sb3.SAC):
+class SAC(AtomicSave, EpsilonGreedy, sb3.SAC):
     """SB3's SAC with the paper's ε-greedy exploration."""
 
 
-class TQC(EpsilonGreedy, sb3_contrib.TQC):
+class TQC(AtomicSave, EpsilonGreedy, sb3_contrib.TQC):
     """sb3-contrib's TQC with the paper's ε-greedy exploration."""
 
 
-PPO = sb3.PPO
+class PPO(AtomicSave, sb3.PPO):
+    """SB3's PPO."""
 
 ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"ddpg": DDPG, "td3": TD3, "sac": SAC, "tqc": TQC,
                                               "ppo": PPO}
@@ -108,9 +137,11 @@ def build_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = 
     return model
 
 
-def load_model(path: str | Path, algorithm: str, *, env: Any = None,
-               device: str = "cpu") -> BaseAlgorithm:
-    """A saved model (SB3 zip) of ``algorithm``, attached to ``env`` when given."""
+def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str = "cpu",
+               trained: str = "", env_from: str = "the env") -> BaseAlgorithm:
+    """A saved model (SB3 zip) of ``algorithm``, attached to ``env`` when given; a model whose
+    spaces differ from ``env``'s is a one-line error saying where each came from (``trained``:
+    the model's config, ``env_from``: the env's)."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: no such model file (expected an SB3 .zip)")
@@ -119,13 +150,42 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None,
         data, _, _ = load_from_zip_file(path, load_data=True, device="cpu")
     except (ValueError, KeyError, RuntimeError, OSError) as err:  # not an SB3 zip
         raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
-    policy = (data or {}).get("policy_class")
+    data = data or {}
+    policy = data.get("policy_class")
     known = tuple(cls.policy_aliases.values())
     if isinstance(policy, type) and not issubclass(policy, known):
         raise ConfigError(f"{path}: cannot load it as a {algorithm} model: it holds a "
                           f"{policy.__name__}, not one of {', '.join(k.__name__ for k in known)}"
                           "; pass the algorithm it was trained with")
+    if env is not None and "observation_space" in data:
+        check_spaces(data["observation_space"], data.get("action_space"), env,
+                     model=f"{path}{f' ({trained})' if trained else ''}", env_from=env_from)
     try:
         return cls.load(path, env=env, device=device)
     except (ValueError, KeyError, RuntimeError, TypeError, AttributeError) as err:
         raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
+
+
+def describe_space(space: gym.Space) -> str:
+    """A space in one short line: a Box's shape and bounds, a Dict's per key."""
+    if isinstance(space, gym.spaces.Dict):
+        return "Dict(" + ", ".join(f"{k}: {describe_space(v)}" for k, v in space.items()) + ")"
+    if isinstance(space, gym.spaces.Box):
+        shape = "x".join(str(n) for n in space.shape)
+        return f"Box({shape}) in [{float(np.min(space.low)):g}, {float(np.max(space.high)):g}]"
+    return " ".join(str(space).split())
+
+
+def check_spaces(observation: gym.Space, action: gym.Space | None, env: Any, *, model: str,
+                 env_from: str) -> None:
+    """``ConfigError`` in one line when the model's observation (or action) space is not
+    ``env``'s: ``model`` and ``env_from`` say which model and env, and where each came from."""
+    for kind, trained, given in (("observation", observation, env.observation_space),
+                                 ("action", action, env.action_space)):
+        if trained is None or trained == given:
+            continue
+        mine, theirs = describe_space(trained), describe_space(given)
+        if mine == theirs:
+            mine, theirs = f"{mine} (bounds differ per element)", theirs
+        raise ConfigError(f"{model} was trained on the {kind} space {mine} but {env_from} "
+                          f"gives {theirs}; use the sensor and settings it was trained with")

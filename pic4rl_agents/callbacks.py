@@ -1,22 +1,25 @@
 """SB3 callbacks of the trainer: a progress bar with the numbers a user watches, the reward
-curve refreshed as training goes, evaluation on the same episodes every time (against env
-steps and the clock), and an early stop on an evaluation's success or the clock."""
+curve refreshed as training goes, checkpoints that a kill cannot leave half-written,
+evaluation on the same episodes every time (against env steps and the clock), and an early
+stop on an evaluation's success or the clock."""
 
 from __future__ import annotations
 
 import csv
+import io
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 from stable_baselines3.common.vec_env import VecEnv
 from tqdm import tqdm
 
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 
+from . import atomic
 from .curves import save_reward_curve
 from .runs import EVALUATIONS
 
@@ -86,6 +89,20 @@ class RewardCurveCallback(BaseCallback):
     def save(self) -> Path | None:
         return save_reward_curve(self.monitor_dir, self.out, window=self.window,
                                  title=self.title)
+
+
+class Checkpoints(CheckpointCallback):
+    """SB3's checkpoints with the replay buffer saved before the model, each file written
+    whole (``algorithms.AtomicSave``): a checkpoint's model exists only once its buffer does,
+    so a kill between the two leaves no checkpoint that has lost its experience."""
+
+    def _on_step(self) -> bool:
+        if self.n_calls % self.save_freq == 0:
+            if self.save_replay_buffer and getattr(self.model, "replay_buffer", None) is not None:
+                self.model.save_replay_buffer(  # type: ignore[attr-defined]
+                    self._checkpoint_path("replay_buffer_", extension="pkl"))
+            self.model.save(self._checkpoint_path(extension="zip"))
+        return True
 
 
 class SeededEvalCallback(EvalCallback):
@@ -172,13 +189,15 @@ class SeededEvalCallback(EvalCallback):
         for outcome in OUTCOME_COLUMNS:
             row[f"{outcome}_rate"] = self._outcomes.count(outcome) / n if n else 0.0
         self.last_row = row
-        new = not self.csv_path.exists()
-        with self.csv_path.open("a", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
-            if new:
-                writer.writeheader()
-            writer.writerow({k: (round(v, 3) if isinstance(v, float) else v)
-                             for k, v in row.items()})
+        text = io.StringIO(newline="")
+        writer = csv.DictWriter(text, fieldnames=CSV_COLUMNS)
+        if self.csv_path.exists():
+            text.write(self.csv_path.read_text())
+        else:
+            writer.writeheader()
+        writer.writerow({k: (round(v, 3) if isinstance(v, float) else v)
+                         for k, v in row.items()})
+        atomic.write_text(self.csv_path, text.getvalue())  # a kill leaves no half row
 
 
 #: Outcomes counted in their own column of ``evaluations.csv`` (a goal is ``success_rate``).

@@ -2,20 +2,17 @@
 
 A training file holds the three nodes' sections side by side (``pic4rl_sim.params_file``).
 Each field carries its description, unit and range (``pic4rl_sim.schema``); names are dotted
-as in ROS (``epsilon.decay``); every key is checked with a "did you mean". RL-Zoo-style
-``key:value`` overrides from the command line land here too.
+as in ROS (``epsilon.decay``); every key is checked with a "did you mean". Command-line
+overrides (``pic4rl_agents.overrides``) are applied over the files by ``load_run_config``.
 """
 
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError, require
@@ -292,10 +289,18 @@ class RunConfig:
     train: TrainConfig
     env: EnvConfig
     sources: tuple[str, ...] = ()  # the params files, in order
+    overridden: bool = False  # command-line overrides were applied over them
 
     @property
     def name(self) -> str:
         return self.train.run or f"{self.train.algorithm}_{self.env.sensor}"
+
+    @property
+    def origin(self) -> str:
+        """Its sensor and where it came from, for messages: ``sensor lidar, from a.yaml +
+        command line``."""
+        parts = [*self.sources, *(["command line"] if self.overridden else [])]
+        return f"sensor {self.env.sensor}, from {' + '.join(parts) or 'the defaults'}"
 
     def to_yaml(self) -> str:
         """The params file of this run (all three sections): ``pic4rl-train`` and
@@ -312,46 +317,21 @@ def ros_domain(env: EnvConfig | None) -> str:
     return os.environ.get("ROS_DOMAIN_ID", "0")
 
 
-_FLOAT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
-
-
-def yaml_value(text: str) -> Any:
-    """A command-line value as ROS reads it: YAML, plus ``1e-3`` as a number (YAML 1.1 wants
-    ``1.0e-3``; RL Zoo users write ``1e-3``)."""
-    value = yaml.safe_load(text) if text.strip() else ""
-    if isinstance(value, str) and _FLOAT.match(value.strip()):
-        return float(value)
-    return value
-
-
-def parse_overrides(items: Sequence[str], *, flag: str) -> dict[str, Any]:
-    """RL-Zoo-style ``key:value`` items (values read as YAML: ``0.001``, ``[64, 64]``, ``sac``)
-    as a dict of dotted names."""
-    out: dict[str, Any] = {}
-    for item in items:
-        key, sep, text = item.partition(":")
-        if not sep or not key.strip():
-            raise ConfigError(f"{flag} {item!r}: expected key:value (e.g. learning_rate:0.001)")
-        try:
-            out[key.strip()] = yaml_value(text)
-        except yaml.YAMLError as err:
-            raise ConfigError(f"{flag} {item!r}: the value is not valid YAML: {err}") from err
-    return out
-
-
 def load_run_config(paths: Sequence[str | Path], *, train: Mapping[str, Any] | None = None,
                     env: Mapping[str, Any] | None = None,
                     sim: Mapping[str, Any] | None = None) -> RunConfig:
     """The ``trainer``, ``nav_env`` and ``sim`` sections of ``paths`` (later files win, key by
-    key, as ROS merges several ``--params-file``), then dotted overrides per section."""
+    key, as ROS merges several ``--params-file``), then dotted overrides per section (checked
+    by the caller with ``check_overrides``, which names their flags)."""
     merged = params_file.load(paths, (TRAINER_NODE, ENV_NODE, SIM_NODE))
     merged[TRAINER_NODE].update(train or {})
     merged[ENV_NODE].update(env or {})
     merged[SIM_NODE].update(sim or {})
-    where = ", ".join(str(p) for p in paths) or "command line"
+    overridden = bool(train or env or sim)
+    where = " + ".join([*(str(p) for p in paths), *(["command line"] if overridden else [])])
     try:
         train_config = train_config_from_params(merged[TRAINER_NODE])
         env_config = env_config_from_params(merged[ENV_NODE], sim_params=merged[SIM_NODE])
     except ConfigError as err:
-        raise ConfigError(f"{where}: {err}") from err
-    return RunConfig(train_config, env_config, tuple(str(p) for p in paths))
+        raise ConfigError(f"{where or 'command line'}: {err}") from err
+    return RunConfig(train_config, env_config, tuple(str(p) for p in paths), overridden)

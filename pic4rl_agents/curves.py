@@ -19,7 +19,7 @@ from stable_baselines3.common.monitor import LoadMonitorResultsError, load_resul
 
 from pic4rl_bridge.errors import ConfigError
 
-from . import runs
+from . import atomic, runs
 
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:
@@ -53,8 +53,8 @@ def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
+    with atomic.replacing(out) as tmp:  # whole or not at all
+        fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
     plt.close(fig)
     return out
 
@@ -134,8 +134,8 @@ def save_eval_curves(curves: Mapping[str, pd.DataFrame], out: Path, *,
     left.legend(loc="best", fontsize="small")
     if title:
         fig.suptitle(title)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=120)
+    with atomic.replacing(out) as tmp:
+        fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
     plt.close(fig)
     return out
 

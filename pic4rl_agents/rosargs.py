@@ -16,7 +16,8 @@ import yaml
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 
-from .config import ros_domain, yaml_value
+from .config import ros_domain
+from .overrides import yaml_value
 
 
 @dataclass

@@ -38,7 +38,7 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
     """The env the child will drive (its sim section, its ROS domain), and its number of
     envs."""
     if command == "train":
-        from .train import build_parser, resolve
+        from .trainargs import build_parser, resolve
 
         run, _ = resolve(build_parser().parse_args(plain), ros)
         return run.env, run.train.n_envs

@@ -8,18 +8,23 @@
     reward_curve.png, summary.yaml, summary-2.yaml, ...
 
 A session is one ``pic4rl-train`` process on the run: 0, then one more per resume. Files that
-every session writes anew (``config``, ``summary``) get ``-2``, ``-3``, ... rather than
-overwrite the previous session's.
+every session writes anew (``config``, ``summary``) are named after it (``session_file``):
+session 1 writes ``config-2.yaml`` and ``summary-2.yaml``, and nothing is overwritten.
+Every file is written whole or not at all (``pic4rl_agents.atomic``).
 """
 
 from __future__ import annotations
 
+import pickle
 import re
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pic4rl_bridge.errors import ConfigError
+
+from . import atomic
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,22 +42,28 @@ CHECKPOINT_PREFIX = "model"  # SB3's CheckpointCallback name_prefix
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
 
 
-def free_path(path: Path, *, keep_suffix: bool = False) -> Path:
-    """``path``, or ``<name>-2``, ``<name>-3``, ... (before the suffix with ``keep_suffix``):
-    the first that does not exist, so nothing is overwritten."""
+def numbered(path: Path, n: int, *, keep_suffix: bool = False) -> Path:
+    """The ``n``-th of a series: ``path`` itself for 1, else ``<name>-<n>`` (before the
+    suffix with ``keep_suffix``)."""
+    if n == 1:
+        return path
     stem, suffix = (path.stem, path.suffix) if keep_suffix else (path.name, "")
-    candidate, n = path, 1
-    while candidate.exists():
+    return path.with_name(f"{stem}-{n}{suffix}")
+
+
+def free_path(path: Path, *, keep_suffix: bool = False, start: int = 1) -> Path:
+    """The first of ``numbered(path, start)``, ``numbered(path, start + 1)``, ... that does
+    not exist, so nothing is overwritten."""
+    n = start
+    while numbered(path, n, keep_suffix=keep_suffix).exists():
         n += 1
-        candidate = path.with_name(f"{stem}-{n}{suffix}")
-    return candidate
+    return numbered(path, n, keep_suffix=keep_suffix)
 
 
-def write_new(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` or, when it exists, to its first free ``-N`` sibling."""
-    path = free_path(path, keep_suffix=True)
-    path.write_text(text)
-    return path
+def session_file(path: Path, session: int) -> Path:
+    """What session ``session`` names a file every session writes anew: ``config.yaml`` for
+    session 0, ``config-2.yaml`` for session 1, ... (the next free one if that is taken)."""
+    return free_path(path, keep_suffix=True, start=session + 1)
 
 
 def run_config_file(folder: Path) -> Path | None:
@@ -153,10 +164,10 @@ class RunDir:
         return self.path / "best" / str(self.session)
 
     def write_config(self, text: str) -> Path:
-        return write_new(self.path / CONFIG, text)
+        return atomic.write_text(session_file(self.path / CONFIG, self.session), text)
 
     def write_summary(self, text: str) -> Path:
-        return write_new(self.path / SUMMARY, text)
+        return atomic.write_text(session_file(self.path / SUMMARY, self.session), text)
 
     def checkpoint_files(self) -> list[tuple[int, Path]]:
         """The checkpoints' models and their steps."""
@@ -166,39 +177,104 @@ class RunDir:
 
 @dataclass(frozen=True)
 class Resume:
-    """A checkpoint to continue from: the model, its replay buffer (if saved), its run dir."""
+    """A checkpoint to continue from: the model, its replay buffer (if saved), its run dir,
+    and the newer checkpoints passed over because they do not load (``<file>: <why>``)."""
 
     model: Path
     replay_buffer: Path | None
     run_dir: Path
+    skipped: tuple[str, ...] = ()
+
+
+#: What reading a truncated or corrupt zip or pickle raises.
+_UNREADABLE = (ValueError, KeyError, RuntimeError, OSError, EOFError, pickle.UnpicklingError,
+               zipfile.BadZipFile)
 
 
 def find_resume(path: str | Path) -> Resume:
-    """The checkpoint named by ``path``: a model zip, or a run directory (its latest
-    checkpoint, or its final ``model.zip`` when that is newer)."""
+    """The checkpoint named by ``path``: a model zip, or a run directory (its newest
+    checkpoint or final ``model.zip`` that loads, with its replay buffer)."""
     path = Path(path)
     if path.is_dir():
-        candidates = RunDir(path).checkpoint_files()
-        if (path / MODEL).is_file():
-            candidates.append((steps_in(path / MODEL), path / MODEL))
-        if not candidates:
-            raise ConfigError(f"--resume {path}: no checkpoint in it (expected {MODEL} or "
-                              f"checkpoints/{CHECKPOINT_PREFIX}_<steps>_steps.zip)")
-        path = max(candidates, key=lambda c: (c[0], c[1].stat().st_mtime))[1]
+        return _newest_loadable(path)
     if not path.is_file() or path.suffix != ".zip":
         raise ConfigError(f"--resume {path}: no such checkpoint (expected a model .zip or a "
                           "run directory)")
-    default = path.parent.parent if checkpoint_steps(path) is not None else path.parent
-    buffer = replay_buffer_of(path)
-    return Resume(path, buffer if buffer.is_file() else None, run_of(path) or default)
+    why = _unloadable(path)
+    if why is not None:
+        raise ConfigError(f"--resume {path}: {why}; give the run directory to resume from its "
+                          "newest checkpoint that loads")
+    return _resume_of(path)
+
+
+def _resume_of(model_zip: Path, skipped: tuple[str, ...] = ()) -> Resume:
+    checkpoint = checkpoint_steps(model_zip) is not None
+    default = model_zip.parent.parent if checkpoint else model_zip.parent
+    buffer = replay_buffer_of(model_zip)
+    return Resume(model_zip, buffer if buffer.is_file() else None,
+                  run_of(model_zip) or default, skipped)
+
+
+def _newest_loadable(run_dir: Path) -> Resume:
+    """The run's newest checkpoint (by steps, then time; ``model.zip`` too) that loads."""
+    candidates = RunDir(run_dir).checkpoint_files()
+    skipped: list[str] = []
+    final = run_dir / MODEL
+    if final.is_file():
+        try:
+            candidates.append((steps_in(final), final))
+        except _UNREADABLE as err:
+            skipped.append(f"{MODEL}: the model does not load ({_reason(err, final)})")
+    if not candidates and not skipped:
+        raise ConfigError(f"--resume {run_dir}: no checkpoint in it (expected {MODEL} or "
+                          f"checkpoints/{CHECKPOINT_PREFIX}_<steps>_steps.zip)")
+    for _, model in sorted(candidates, key=lambda c: (c[0], c[1].stat().st_mtime),
+                           reverse=True):
+        why = _unloadable(model)
+        if why is None:
+            return _resume_of(model, tuple(skipped))
+        skipped.append(f"{model.relative_to(run_dir)}: {why}")
+    raise ConfigError(f"--resume {run_dir}: none of its {len(skipped)} checkpoints loads "
+                      f"(newest: {skipped[0]})")
+
+
+def _unloadable(model_zip: Path) -> str | None:
+    """Why ``model_zip`` or the replay buffer saved with it does not load; None when both do
+    (or the model does and has no buffer)."""
+    from stable_baselines3.common.save_util import load_from_pkl
+
+    try:
+        _model_data(model_zip)
+    except _UNREADABLE as err:
+        return f"the model does not load ({_reason(err, model_zip)})"
+    buffer = replay_buffer_of(model_zip)
+    if buffer.is_file():
+        try:
+            load_from_pkl(buffer)
+        except _UNREADABLE as err:
+            return f"its replay buffer {buffer.name} does not load ({_reason(err, buffer)})"
+    return None
+
+
+def _reason(err: BaseException, path: Path) -> str:
+    """What reading ``path`` raised, on one line, the path by its name alone."""
+    return " ".join(f"{type(err).__name__}: {err}".replace(str(path), path.name).split())
+
+
+def _model_data(model_zip: Path) -> dict[str, Any]:
+    """A saved model's data (its class parameters), its weights read too; ``ValueError`` when
+    the zip holds none (a truncated SB3 zip can open as the torch zip nested in it)."""
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    data, params, _ = load_from_zip_file(model_zip, load_data=True, device="cpu")
+    if not data or "policy" not in params:
+        raise ValueError("no SB3 model in it (cut short?)")
+    return data
 
 
 def steps_in(model_zip: Path) -> int:
     """The env steps a saved model had trained for (its ``num_timesteps``)."""
-    from stable_baselines3.common.save_util import load_from_zip_file
-
-    data, _, _ = load_from_zip_file(model_zip, load_data=True, device="cpu")
-    return int((data or {}).get("num_timesteps", 0))
+    return int(_model_data(model_zip).get("num_timesteps", 0))
 
 
 def session_summary(run: RunConfig, session: int, total_steps: int, session_steps: int,

@@ -43,8 +43,9 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-from . import runs
-from .config import parse_overrides
+from . import atomic, runs
+from .config import ENV_NODE, SIM_NODE
+from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
 from .testplan import AgentSpec, TestPlan, first_env, resolve_agents
@@ -75,14 +76,12 @@ class Policy:
         self.model = None
         self.controller = None
         if spec.model is not None:
-            from .algorithms import load_model
+            from .algorithms import check_spaces, load_model
 
             self.model = load_model(spec.model, spec.run.train.algorithm)
-            if self.model.observation_space != env.observation_space:
-                raise ConfigError(
-                    f"--agent {spec.model}: it observes {self.model.observation_space} but "
-                    f"its test env gives {env.observation_space}; test it with the sensor "
-                    "and settings it was trained with")
+            check_spaces(self.model.observation_space, self.model.action_space, env,
+                         model=f"--agent {spec.model} ({spec.trained})",
+                         env_from=f"its test env ({spec.run.origin})")
         else:
             from pic4rl_bridge.baselines import make_baseline
 
@@ -134,9 +133,9 @@ def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ..
     from pic4rl_metrics.report import render_comparison, render_episodes
 
     result = compute([run_dir])
-    (run_dir / "episodes.csv").write_text(render_episodes(result.frame, "csv"))
+    atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
     table = aggregate(result.frame, by="agent")
-    (run_dir / "table.md").write_text(render_comparison(table, "markdown", with_std=with_std))
+    atomic.write_text(run_dir / "table.md", render_comparison(table, "markdown", with_std=with_std))
     return table, tuple(str(failed.error) for failed in result.failed)
 
 
@@ -194,8 +193,13 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
         agents=tuple(args.agent), baselines=tuple(args.baseline), algorithm=args.algorithm or "",
         episodes=args.episodes, random=args.random, pairs=args.pairs, seed=args.seed,
         bags_dir=Path(args.bags_dir), run=args.run, params_files=tuple(ros.params_files),
-        env_overrides={**ros.params, **parse_overrides(args.env_kwargs, flag="--env-kwargs")},
-        sim_overrides=parse_overrides(args.sim_kwargs, flag="--sim-kwargs"),
+        env_overrides={
+            **check_overrides(ENV_NODE, ros.params, where="-p parameters"),
+            **check_overrides(ENV_NODE, parse_overrides(args.env_kwargs, flag="--env-kwargs"),
+                              where="--env-kwargs")},
+        sim_overrides=check_overrides(SIM_NODE, parse_overrides(args.sim_kwargs,
+                                                                flag="--sim-kwargs"),
+                                      where="--sim-kwargs"),
         with_std=args.with_std, progress=not args.no_progress)
 
 

@@ -45,8 +45,9 @@ class TestPlan:
     progress: bool = True
 
     def __post_init__(self) -> None:
-        if self.episodes < 1 or (self.random is not None and self.random < 1):
-            raise ConfigError("--episodes/--random: expected a positive number of episodes")
+        for flag, value in (("--episodes", self.episodes), ("--random", self.random)):
+            if value is not None and value < 1:
+                raise ConfigError(f"{flag} {value}: expected a positive number of episodes")
 
     @property
     def n_episodes(self) -> int:
@@ -62,6 +63,7 @@ class AgentSpec:
     model: Path | None = None
     baseline: str = ""
     episode_set: str = ""  # its test episodes, in words
+    trained: str = ""  # a model's training config, in words (``RunConfig.origin``)
 
 
 def _agent_files(path: Path) -> tuple[Path, Path | None]:
@@ -106,7 +108,8 @@ def _agents(plan: TestPlan) -> list[AgentSpec]:
         if not sep:
             name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
                 path.parent.name if path.suffix == ".zip" else path.name)
-        specs.append(AgentSpec(name, run, model=model))
+        trained = load_run_config([config]).origin if config else "no config beside it"
+        specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
     return specs
 
 

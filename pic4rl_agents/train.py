@@ -4,16 +4,15 @@ trains an SB3 agent on it, with checkpoints, resume, evaluation, logs and a rewa
     pic4rl-train --ros-args --params-file config/train_goto_lidar_td3.yaml
     pic4rl-train --hyperparams learning_rate:0.001 epsilon.initial:0.2 -n 50000 \\
         --env-kwargs transport:ros --ros-args --params-file config/train_goto_lidar_td3.yaml
-    pic4rl-train --resume runs/td3_lidar            # the run's latest checkpoint
+    pic4rl-train --resume runs/td3_lidar            # the run's newest checkpoint that loads
 
 A run lives in ``<runs_dir>/<run>/`` (``pic4rl_agents.runs`` has its layout). A new run with a
 taken name gets ``<run>-2``; a resume continues the run's model, replay buffer, curriculum and
-curve, as a new session.
+curve, as a new session. The command line is read by ``pic4rl_agents.trainargs``.
 """
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import logging
 import signal
@@ -27,30 +26,15 @@ from typing import Any
 import yaml
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError, unknown_key
-from pic4rl_sim.schema import help_text, param_names, specs
+from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 
-from . import runs
-from .config import RunConfig, TrainConfig, load_run_config, parse_overrides
+from . import atomic, runs
+from .config import RunConfig, load_run_config
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
+from .trainargs import build_parser, resolve
 
 log = logging.getLogger(__name__)
-
-
-def route_params(params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """``-p key:=value`` items split between the trainer (its keys) and the env (its keys);
-    a key neither knows is an error with a "did you mean"."""
-    train_keys, env_keys = param_names(TrainConfig), param_names(EnvConfig)
-    train, env = {}, {}
-    for key, value in params.items():
-        if key in train_keys:
-            train[key] = value
-        elif key in env_keys:
-            env[key] = value
-        else:
-            raise unknown_key(key, (*train_keys, *env_keys), where="-p parameters")
-    return train, env
 
 
 @contextlib.contextmanager
@@ -124,7 +108,6 @@ class Trainer:
         env_cfg, seed = session
         if cfg.torch_threads > 0:
             torch.set_num_threads(cfg.torch_threads)
-        self.layout.write_config(self.config.to_yaml())
         with contextlib.ExitStack() as stack:
             node = None
             if env_cfg.transport == "ros" and cfg.n_envs == 1:
@@ -133,6 +116,9 @@ class Trainer:
             env = self._training_env(stack, env_cfg, seed, node)
             model = self._model(env)
             callbacks = self._callbacks(stack, env_cfg, started)
+            # Only now: a session that fails to start (a checkpoint that does not fit the
+            # env, no sim) leaves no config behind.
+            self.layout.write_config(self.config.to_yaml())
             stack.callback(self._save_if_trained, model, started, model.num_timesteps)
             if self._imitate(model, env, env_cfg, callbacks):
                 self._learn(model, callbacks)
@@ -175,6 +161,7 @@ class Trainer:
         if self.resume is None:
             return env_cfg, cfg.seed
         done = runs.steps_in(self.resume.model)
+        self._announce(self.resume, done)
         if done >= cfg.max_steps:
             log.info("%s has trained %d steps already (max_steps=%d); nothing to do",
                      self.resume.model, done, cfg.max_steps)
@@ -183,6 +170,19 @@ class Trainer:
         starting = max(0, env_cfg.episodes.starting_episodes - driven)
         return (env_cfg.replace(**{"episodes.starting_episodes": starting}),
                 cfg.seed + self.layout.session)
+
+    def _announce(self, resume: runs.Resume, steps: int) -> None:
+        """Which checkpoint this session resumes from, which newer ones do not load and why;
+        the temporary files of a killed session are removed."""
+        for line in resume.skipped:
+            log.warning("skipped %s", line)
+        model = (resume.model.relative_to(resume.run_dir)
+                 if resume.model.is_relative_to(resume.run_dir) else resume.model)
+        buffer = (f"its replay buffer {resume.replay_buffer.name}" if resume.replay_buffer
+                  else "no replay buffer")
+        log.info("resuming from %s (%d steps) with %s", model, steps, buffer)
+        for partial in atomic.remove_partials(resume.run_dir):
+            log.info("removed %s, a file a killed session left half-written", partial)
 
     def _training_env(self, stack: contextlib.ExitStack, env_cfg: EnvConfig, seed: int,
                       node: Any) -> Any:
@@ -207,7 +207,11 @@ class Trainer:
         if self.resume is None:
             model = build_model(cfg, env)
         else:
-            model = load_model(self.resume.model, cfg.algorithm, env=env, device=cfg.device)
+            trained = runs.run_config_file(self.resume.run_dir)
+            model = load_model(
+                self.resume.model, cfg.algorithm, env=env, device=cfg.device,
+                trained=f"trained with {load_run_config([trained]).origin}" if trained else "",
+                env_from=f"this session's env ({self.config.origin})")
             if self.resume.replay_buffer is not None and hasattr(model, "load_replay_buffer"):
                 model.load_replay_buffer(self.resume.replay_buffer)
             if hasattr(model, "set_epsilon"):
@@ -219,9 +223,7 @@ class Trainer:
     def _callbacks(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                    started: float) -> list[Any]:
         """The reward curve, checkpoints, evaluation, wall-clock limit and progress bar."""
-        from stable_baselines3.common.callbacks import CheckpointCallback
-
-        from .callbacks import ProgressCallback, RewardCurveCallback, WallClockLimit
+        from .callbacks import Checkpoints, ProgressCallback, RewardCurveCallback, WallClockLimit
 
         cfg = self.config.train
         every = max(cfg.checkpoint.interval_steps // cfg.n_envs, 1)
@@ -230,7 +232,7 @@ class Trainer:
             every=every if cfg.checkpoint.interval_steps else 10_000,
             window=cfg.reward_window, title=self._title())]
         if cfg.checkpoint.interval_steps:
-            callbacks.append(CheckpointCallback(
+            callbacks.append(Checkpoints(
                 every, str(self.layout.checkpoints), name_prefix=runs.CHECKPOINT_PREFIX,
                 save_replay_buffer=cfg.checkpoint.replay_buffer and cfg.off_policy))
         if cfg.eval.enabled:
@@ -287,9 +289,9 @@ class Trainer:
             return
         wall_s = time.perf_counter() - started
         cfg = self.config.train
-        model.save(self.layout.model)
-        if cfg.off_policy and cfg.checkpoint.replay_buffer:
+        if cfg.off_policy and cfg.checkpoint.replay_buffer:  # first, as in Checkpoints
             model.save_replay_buffer(self.layout.replay_buffer)
+        model.save(self.layout.model)
         save_reward_curve(self.layout.monitor, self.layout.reward_curve,
                           window=cfg.reward_window, title=self._title())
         summary = runs.session_summary(self.config, self.layout.session, model.num_timesteps,
@@ -300,55 +302,6 @@ class Trainer:
                  summary["total_steps"], summary["episodes"], wall_s / 60,
                  summary["steps_per_s"], self.layout.model)
 
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="pic4rl-train", description=__doc__.split("\n\n")[0],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="ROS arguments after --ros-args: --params-file FILE (sim:, nav_env:, trainer: "
-               "sections), -p key:=value (a trainer or env key).\n\ntrainer parameters:\n"
-               f"{help_text(specs(TrainConfig))}\n\nenv (nav_env) parameters:\n"
-               f"{help_text(specs(EnvConfig))}")
-    parser.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
-                        help="trainer overrides, RL-Zoo style: learning_rate:0.001 "
-                             "policy.net_arch:[64,64]")
-    parser.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY:VALUE",
-                        help="env (nav_env) overrides: episode_max_steps:300 transport:ros")
-    parser.add_argument("--sim-kwargs", nargs="+", default=[], metavar="KEY:VALUE",
-                        help="sim overrides: world_variant:1")
-    parser.add_argument("-n", "--max-steps", type=int, help="trainer max_steps")
-    parser.add_argument("--seed", type=int, help="trainer seed")
-    parser.add_argument("--run", help="run name (a folder under runs_dir)")
-    parser.add_argument("--n-envs", type=int, help="trainer n_envs")
-    parser.add_argument("--resume", metavar="PATH",
-                        help="a checkpoint .zip or a run directory (its latest checkpoint)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    return parser
-
-
-def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, runs.Resume | None]:
-    """The run's config from params files, -p items and the flags (in that order)."""
-    resume = runs.find_resume(args.resume) if args.resume else None
-    files = list(ros.params_files)
-    if not files and resume is not None:
-        latest = runs.run_config_file(resume.run_dir)
-        if latest is None:
-            raise ConfigError(f"--resume {args.resume}: no {runs.CONFIG} in {resume.run_dir}; "
-                              "give the params file with --ros-args --params-file FILE")
-        files = [str(latest)]
-    if not files:
-        raise ConfigError("no --params-file given (e.g. pic4rl-train --ros-args --params-file "
-                          "config/train_goto_lidar_td3.yaml)")
-    p_train, p_env = route_params(ros.params)
-    train = {**p_train, **parse_overrides(args.hyperparams, flag="--hyperparams")}
-    for key, value in (("max_steps", args.max_steps), ("seed", args.seed), ("run", args.run),
-                       ("n_envs", args.n_envs)):
-        if value is not None:
-            train[key] = value
-    env = {**p_env, **parse_overrides(args.env_kwargs, flag="--env-kwargs")}
-    sim = parse_overrides(args.sim_kwargs, flag="--sim-kwargs")
-    return load_run_config(files, train=train, env=env, sim=sim), resume
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -34,7 +34,8 @@ from stable_baselines3.common.callbacks import BaseCallback
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
 from .callbacks import SeededEvalCallback
-from .config import RunConfig, load_run_config, parse_overrides
+from .config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
+from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .samplers import suggest
 from .tune_summary import write_summary
@@ -244,14 +245,16 @@ def settings_from(args: argparse.Namespace) -> TuneSettings:
         raise ConfigError(f"--trial-seconds {args.trial_seconds}: expected a number >= 0")
     if not Path(args.base).is_file():
         raise ConfigError(f"--base {args.base}: no such params file")
-    fixed = parse_overrides(args.hyperparams, flag="--hyperparams")
+    fixed = check_overrides(TRAINER_NODE, parse_overrides(args.hyperparams, flag="--hyperparams"),
+                            where="--hyperparams")
     if args.algorithm:
         fixed.setdefault("algorithm", args.algorithm)
     if fixed.get("algorithm") == "ppo":
         fixed.setdefault("epsilon.initial", 0.0)  # a base with ε-greedy: not for PPO
     if args.eval_episodes is not None and args.eval_episodes < 1:
         raise ConfigError(f"--eval-episodes {args.eval_episodes}: expected a positive integer")
-    env = parse_overrides(args.env_kwargs, flag="--env-kwargs")
+    env = check_overrides(ENV_NODE, parse_overrides(args.env_kwargs, flag="--env-kwargs"),
+                          where="--env-kwargs")
     base = load_run_config([args.base], train=fixed, env=env)
     name = args.study_name or base.name
     study_dir = Path(args.study_dir or Path(base.train.runs_dir) / "tune" / name)

@@ -5,13 +5,14 @@ takes as it is), and at the end ``importances.yaml`` and ``eval_curves.png``."""
 from __future__ import annotations
 
 import logging
-import os
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import optuna
 import yaml
+
+from . import atomic
 
 if TYPE_CHECKING:
     from .tune import TuneSettings
@@ -70,7 +71,5 @@ def _write_curves(complete: list[Any], folder: Path, top: int = 8) -> None:
 
 
 def _write(path: Path, text: str) -> None:
-    """Write through a temporary file, so a reader (or another worker) never sees half."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
+    """Written whole, so a reader (or another worker) never sees half."""
+    atomic.write_text(path, text)

@@ -62,7 +62,7 @@ class Scenario:
 
             try:
                 robot = load_robot(config.robot or config.sim_params.get("robot", "jackal"))
-                values = resolve(parameter_table(robot), config.sim_params)
+                values = resolve(parameter_table(robot), config.sim_params, where="")
                 if config.robot:
                     values["robot"] = config.robot
                 self.sim = build_config(values)

@@ -32,8 +32,9 @@ def require(ok: bool, key: str, value: Any, expected: str) -> None:
 
 
 def unknown_key(key: str, known: Iterable[str], *, where: str) -> ConfigError:
-    """An error for an unknown ``key`` in ``where``, with a "did you mean" when one is close."""
+    """An error for an unknown ``key`` in ``where`` (no prefix when empty: the caller adds
+    one), with a "did you mean" when one is close."""
     known = sorted(known)
     close = difflib.get_close_matches(key, known, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
-    return ConfigError(f"{where}: unknown key {key!r}{hint}")
+    return ConfigError(f"{f'{where}: ' if where else ''}unknown key {key!r}{hint}")

@@ -131,17 +131,17 @@ def parameter_table(robot: RobotSpec) -> tuple[ParamSpec, ...]:
 
 
 def resolve(table: Iterable[ParamSpec], overrides: Mapping[str, Any], *,
-            also_known: Iterable[str] = ()) -> dict[str, Any]:
+            also_known: Iterable[str] = (), where: str = "parameters") -> dict[str, Any]:
     """The table's defaults updated with checked ``overrides`` (a params file, ``-p``).
 
     An override not in the table nor in ``also_known`` (rclpy's own parameters) is an error
-    with a "did you mean"; so is a value of the wrong type or out of range.
+    with a "did you mean", naming ``where``; so is a value of the wrong type or out of range.
     """
     specs = {spec.name: spec for spec in table}
     known = set(specs) | set(also_known)
     for name in sorted(overrides):
         if name not in known:
-            raise unknown_key(name, known, where="parameters")
+            raise unknown_key(name, known, where=where)
     values = {name: spec.default for name, spec in specs.items()}
     for name, value in overrides.items():
         if name in specs:

@@ -16,7 +16,8 @@ from agents_helpers import LIDAR_TD3, TINY, TrainedRun
 from stable_baselines3.common.logger import configure
 
 from pic4rl_agents.algorithms import ALGORITHMS, build_model
-from pic4rl_agents.config import load_run_config, parse_overrides
+from pic4rl_agents.config import load_run_config
+from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.exploration import EpsilonGreedy, epsilon_at
 

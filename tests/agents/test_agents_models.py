@@ -17,7 +17,8 @@ from agents_helpers import CONFIG, DEPTH_TD3, LIDAR_TD3, TINY
 from torch import nn
 
 from pic4rl_agents.algorithms import ALGORITHMS, algorithm_class, build_model, load_model
-from pic4rl_agents.config import load_run_config, parse_overrides
+from pic4rl_agents.config import load_run_config
+from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.exploration import EpsilonGreedy
 from pic4rl_agents.extractors import DepthGoalExtractor

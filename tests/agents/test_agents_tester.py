@@ -141,9 +141,16 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
                                "--env-kwargs", "sensor:depth",
                                "--sim-kwargs", "depth.enabled:true"])
     assert code == 2
-    assert err.startswith("episodes: ") and "\npic4rl-test: --agent " in err
-    assert "observes" in err
-    assert "test it with the sensor" in err and "Dict(" in err
+    episodes, line = err.splitlines()
+    assert episodes.startswith("episodes: ")
+    run, model = trained_run.run_dir, trained_run.run_dir / "model.zip"
+    assert re.fullmatch(
+        rf"pic4rl-test: --agent {re.escape(str(model))} \(trained with sensor lidar, from "
+        rf"{re.escape(str(run / 'config.yaml'))}\) was trained on the observation space "
+        r"Box\(40\) in \[\S+, \S+\] but its test env \(sensor depth, from "
+        rf"{re.escape(str(run / 'config.yaml'))} \+ command line\) gives "
+        r"Dict\(depth: Box\(1x\d+x\d+\) in \[\S+, \S+\], goal: Box\(\d+\) in \[\S+, \S+\]\); "
+        r"use the sensor and settings it was trained with", line), line
     assert out == ""
     assert not list(tmp_path.rglob("*.db3"))
 
@@ -166,6 +173,30 @@ def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> 
     code, out, err = run_main([*argv, "--bags", str(tmp_path / "bags"), "--no-progress"])
     assert code == 2
     assert err.startswith("pic4rl-test: ") and message.replace("{tmp}", str(tmp_path)) in err
+    assert not (tmp_path / "bags").exists()
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["--episodes", "-5"], "--episodes -5: expected a positive number of episodes"),
+    (["--random", "0"], "--random 0: expected a positive number of episodes"),
+    (["--ros-args", "-p", "episode_max_steps:=abc"],
+     "-p parameters: episode_max_steps: 'abc' is invalid; expected an integer"),
+    (["--ros-args", "-p", "batch_size:=32"], "-p parameters: unknown key 'batch_size'; "),
+    (["--env-kwargs", "lidar.beams:abc"],
+     "--env-kwargs: lidar.beams: 'abc' is invalid; expected an integer"),
+    (["--sim-kwargs", "lidar.beems:36"],
+     "--sim-kwargs: unknown key 'lidar.beems'; did you mean 'lidar.beams'?"),
+])
+def test_bad_arguments_name_the_flag_not_the_params_file(tmp_path: Path, argv: list[str],
+                                                         line: str) -> None:
+    """A bad command-line value is one line naming the flag it came from, not the params
+    file; no bag is written."""
+    code, out, err = run_main(["--baseline", "proportional", *argv, "--bags",
+                               str(tmp_path / "bags"), "--no-progress", "--ros-args",
+                               "--params-file", str(LIDAR_TD3)])
+    assert code == 2 and out == ""
+    assert err.startswith(f"pic4rl-test: {line}") and err.count("\n") == 1
+    assert str(LIDAR_TD3) not in err
     assert not (tmp_path / "bags").exists()
 
 

@@ -9,6 +9,7 @@ import hashlib
 import io
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -181,20 +182,22 @@ def test_resume_continues_the_run_where_it_stopped(trained_run: TrainedRun,
         assert eps <= epsilon_at(since - 1, 0.2, 0.99995, 0.01) + 1e-12
 
 
-def test_find_resume_picks_the_latest_checkpoint_by_steps(tmp_path: Path) -> None:
-    checkpoints = tmp_path / "run" / "checkpoints"
-    checkpoints.mkdir(parents=True)
-    for steps in (100, 200, 1000, 900):
-        (checkpoints / f"model_{steps}_steps.zip").write_bytes(b"")
-    (checkpoints / "model_replay_buffer_1000_steps.pkl").write_bytes(b"")
-    (checkpoints / "model_replay_buffer_900_steps.pkl").write_bytes(b"")
-    (checkpoints / "notes.zip").write_bytes(b"")
-    found = find_resume(tmp_path / "run")
+def test_find_resume_picks_the_latest_checkpoint_by_steps(trained_run: TrainedRun,
+                                                         tmp_path: Path) -> None:
+    run = trained_run.copy_to(tmp_path)
+    checkpoints = run / "checkpoints"
+    (run / "model.zip").unlink()
+    for steps in (1000, 900):
+        shutil.copy(checkpoints / "model_100_steps.zip", checkpoints / f"model_{steps}_steps.zip")
+        shutil.copy(checkpoints / "model_replay_buffer_100_steps.pkl",
+                    checkpoints / f"model_replay_buffer_{steps}_steps.pkl")
+    shutil.copy(checkpoints / "model_100_steps.zip", checkpoints / "notes.zip")
+    found = find_resume(run)
     assert found.model == checkpoints / "model_1000_steps.zip"  # by number, not by name
     assert found.replay_buffer == checkpoints / "model_replay_buffer_1000_steps.pkl"
-    assert found.run_dir == tmp_path / "run"
+    assert found.run_dir == run and found.skipped == ()
     (checkpoints / "model_replay_buffer_1000_steps.pkl").unlink()
-    assert find_resume(tmp_path / "run").replay_buffer is None
+    assert find_resume(run).replay_buffer is None
 
 
 def test_find_resume_prefers_a_final_model_with_more_steps(trained_run: TrainedRun,
@@ -204,7 +207,8 @@ def test_find_resume_prefers_a_final_model_with_more_steps(trained_run: TrainedR
     found = find_resume(run)
     assert found.model == run / "model.zip"
     assert found.replay_buffer == run / "replay_buffer.pkl" and found.run_dir == run
-    (run / "checkpoints" / "model_400_steps.zip").write_bytes(b"")
+    shutil.copy(run / "checkpoints" / "model_200_steps.zip",
+                run / "checkpoints" / "model_400_steps.zip")
     assert find_resume(run).model == run / "checkpoints" / "model_400_steps.zip"
 
 
@@ -279,6 +283,35 @@ def test_bad_arguments_exit_2_naming_the_key_or_file(
     assert code == 2
     assert err.startswith("pic4rl-train: ") and message in err
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["-n", "-5"], "-n/--max-steps: max_steps: -5 is invalid; expected a positive number"),
+    (["--n-envs", "0"], "--n-envs: n_envs: 0 is invalid; expected a positive number"),
+    (["--ros-args", "-p", "batch_size:=abc"],
+     "-p parameters: batch_size: 'abc' is invalid; expected an integer"),
+    (["--ros-args", "-p", "gamma:=0"],
+     "-p parameters: gamma: 0 is invalid; expected a value in (0, 1]"),
+    (["--hyperparams", "batch_size:abc"],
+     "--hyperparams: batch_size: 'abc' is invalid; expected an integer"),
+    (["--hyperparams", "learning_rat:0.1"],
+     "--hyperparams: unknown key 'learning_rat'; did you mean 'learning_rate'?"),
+    (["--env-kwargs", "episode_max_steps:abc"],
+     "--env-kwargs: episode_max_steps: 'abc' is invalid; expected an integer"),
+    (["--sim-kwargs", "lidar.beems:36"],
+     "--sim-kwargs: unknown key 'lidar.beems'; did you mean 'lidar.beams'?"),
+    (["--sim-kwargs", "lidar.beams:abc"],
+     "--sim-kwargs: lidar.beams: 'abc' is invalid; expected an integer"),
+])
+def test_bad_arguments_name_the_flag_not_the_params_file(
+        argv: list[str], line: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A bad command-line value is one line naming the flag it came from (and the key), not
+    the params file that holds a good one; nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    code, err = run_main([*argv, "--ros-args", "--params-file", str(LIDAR_TD3)])
+    assert code == 2
+    assert err == f"pic4rl-train: {line}\n"
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_a_malformed_flag_is_argparse_usage_error(capsys: pytest.CaptureFixture[str]) -> None:

@@ -114,3 +114,16 @@ def test_bad_arguments_exit_2_naming_the_flag(tmp_path: Path,
     assert tune.main(["--base", str(LIDAR_TD3), "--study-dir", str(tmp_path),
                       "--hyperparams", "learning_rat:0.1"]) == 2
     assert "learning_rate" in capsys.readouterr().err  # did you mean
+
+
+@pytest.mark.parametrize(("argv", "line"), [
+    (["--hyperparams", "batch_size:abc"],
+     "--hyperparams: batch_size: 'abc' is invalid; expected an integer"),
+    (["--env-kwargs", "lidar.beams:0"],
+     "--env-kwargs: lidar.beams: 0 is invalid; expected a positive number"),
+])
+def test_bad_arguments_name_the_flag_not_the_base_file(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], line: str) -> None:
+    assert tune.main(["--base", str(LIDAR_TD3), "--study-dir", str(tmp_path / "s"), *argv]) == 2
+    assert capsys.readouterr().err == f"pic4rl-tune: {line}\n"
+    assert not (tmp_path / "s").exists()

@@ -20,7 +20,8 @@ from stable_baselines3.common.utils import obs_as_tensor
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import TD3, build_model, load_model
-from pic4rl_agents.config import ImitationConfig, load_run_config, parse_overrides
+from pic4rl_agents.config import ImitationConfig, load_run_config
+from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.imitation import EXPERT, STUDENT, Imitation, actor_loss
 from pic4rl_bridge.errors import ConfigError

@@ -1,0 +1,56 @@
+"""Files written whole or not at all: each goes to a temporary file beside it, then is renamed
+over it (``os.replace``), so a process killed mid-write leaves the previous file (or none),
+never half of one. Checkpoints, replay buffers, configs, summaries and curves go this way.
+
+A temporary file is hidden (``.<name>.<random>.tmp<suffix>``): no run-directory glob sees it,
+and the suffix is the target's, since SB3 appends ``.zip`` or ``.pkl`` to a path without one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+from collections.abc import Iterator
+from pathlib import Path
+
+#: The glob of the temporary files a killed process may leave behind.
+PARTIAL_GLOB = ".*.tmp*"
+
+
+@contextlib.contextmanager
+def replacing(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; when the block ends it replaces ``path``
+    (after an ``fsync``), and when the block raises it is removed and ``path`` is untouched."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    while True:  # created here, with the umask's permissions (mkstemp's are 0600)
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp{path.suffix}")
+        try:
+            tmp.open("xb").close()
+            break
+        except FileExistsError:
+            continue
+    try:
+        yield tmp
+        with tmp.open("rb+") as written:
+            os.fsync(written.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` whole or not at all."""
+    with replacing(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
+def remove_partials(folder: Path) -> list[Path]:
+    """Delete the temporary files under ``folder`` that a killed writer left; those deleted."""
+    partials = [p for p in folder.rglob(PARTIAL_GLOB) if p.is_file()]
+    for partial in partials:
+        partial.unlink(missing_ok=True)
+    return partials
