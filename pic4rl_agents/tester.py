@@ -259,8 +259,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
     print(f"bags: {result.run_dir}", file=sys.stderr)
     if result.videos:
-        print(f"videos: {len(result.videos)} in {result.run_dir} (<agent>/episode_NNNN.mp4)",
-              file=sys.stderr)
+        print(f"videos: {len(result.videos)} in {result.run_dir}/<agent>/, e.g. "
+              f"{result.videos[0]}", file=sys.stderr)
     return 1 if result.failed else 0
 
 
