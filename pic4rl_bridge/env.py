@@ -170,7 +170,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
             try:
                 self._view = make_view(render_view, self.scenario, self.transport,
-                                       self.config.goal_tolerance_m)
+                                       self.config.goal_tolerance_m, depth="depth" in sensors)
             except BaseException:
                 self.transport.close()
                 raise

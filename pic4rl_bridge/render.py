@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -26,8 +27,9 @@ from .tasks.collision import scan_points
 
 #: ``render_view`` values: the drawn top-down view, or MuJoCo's camera.
 RENDER_VIEWS = ("top", "mujoco")
-#: The longer side of the top-down view (pixels).
+#: The width of the top-down view, and the height of the depth inset (pixels).
 VIEW_PX = 480
+INSET_PX = 160
 
 
 def _multiple_of_16(value: float) -> int:
@@ -36,12 +38,16 @@ def _multiple_of_16(value: float) -> int:
 
 class TopDownView:
     """The top-down picture of an episode: ``begin`` at reset, ``track`` at every step,
-    ``render`` when asked."""
+    ``render`` when asked. With ``depth``, a band above the map shows the depth image.
 
-    def __init__(self, scenario: Scenario, goal_tolerance_m: float) -> None:
+    ``view`` maps world points to pixels of the rendered picture."""
+
+    def __init__(self, scenario: Scenario, goal_tolerance_m: float, *,
+                 depth: bool = False) -> None:
         self.world = scenario.world
         self.footprint = scenario.robot.footprint
         self.goal_tolerance_m = goal_tolerance_m
+        self.band = INSET_PX + 16 if depth else 0  # a multiple of 16, as the map's height
         self.view: View | None = None
         self.background: np.ndarray | None = None
         self.path: list[tuple[float, float]] = []
@@ -51,7 +57,12 @@ class TopDownView:
             self._draw_world(View.fit(self.world.bounds, VIEW_PX, height))
 
     def _draw_world(self, view: View) -> None:
-        img = np.full((view.height, view.width, 3), COLORS["background"], np.uint8)
+        """The still picture: the band, then the map in ``view`` (of the map alone)."""
+        img = np.full((self.band + view.height, view.width, 3), COLORS["background"], np.uint8)
+        self.map_view = view
+        self.view = replace(view, row0=view.row0 + self.band, height=self.band + view.height)
+        self.background = img
+        img = img[self.band:]
         if self.world is not None:
             for box in self.world.boxes:
                 corners = raster.rectangle(box.x, box.y, box.yaw_rad, box.size_x_m, box.size_y_m)
@@ -62,7 +73,6 @@ class TopDownView:
             xmin, ymin, xmax, ymax = self.world.bounds
             raster.polyline(img, view, [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax),
                                         (xmin, ymin)], COLORS["obstacle"])
-        self.view, self.background = view, img
 
     def begin(self, frame: SensorFrame, context: EpisodeContext) -> None:
         """A new episode: its path restarts; without a world, the view centres on its start
@@ -81,8 +91,9 @@ class TopDownView:
 
     def render(self, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
         """The picture now (height × width × 3, ``uint8``)."""
-        assert self.view is not None and self.background is not None  # set by begin
-        img, view = self.background.copy(), self.view
+        assert self.background is not None  # drawn by __init__ or begin
+        picture = self.background.copy()
+        img, view = picture[self.band:], self.map_view
         if frame.plan is not None and len(frame.plan):
             raster.polyline(img, view, frame.plan, COLORS["plan"], width=2)
         if context.centerline is not None:
@@ -99,9 +110,9 @@ class TopDownView:
             raster.disc(img, view, frame.person.x, frame.person.y, 0.25, COLORS["person"])
         pose = frame.pose
         raster.footprint(img, view, pose.x, pose.y, pose.yaw, self.footprint)
-        if frame.depth is not None:
-            inset(img, depth_image(frame.depth))
-        return img
+        if frame.depth is not None and self.band:
+            inset(picture[:self.band], depth_image(frame.depth))
+        return picture
 
 
 def scan_world(frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
@@ -121,12 +132,12 @@ def depth_image(depth: np.ndarray) -> np.ndarray:
     return np.repeat(grey.astype(np.uint8)[..., None], 3, axis=2)
 
 
-def inset(img: np.ndarray, picture: np.ndarray, *, fraction: float = 1 / 3) -> None:
-    """``picture`` scaled (nearest pixel) to ``fraction`` of ``img``'s width, framed, top
+def inset(img: np.ndarray, picture: np.ndarray) -> None:
+    """``picture`` scaled (nearest pixel) to ``img``'s height less a margin, framed, at its
     left."""
-    width = max(int(img.shape[1] * fraction), 8)
-    height = max(int(round(width * picture.shape[0] / picture.shape[1])), 2)
-    height = min(height, img.shape[0] - 6)
+    height = img.shape[0] - 10
+    width = min(max(int(round(height * picture.shape[1] / picture.shape[0])), 2),
+                img.shape[1] - 10)
     rows = np.arange(height) * picture.shape[0] // height
     cols = np.arange(width) * picture.shape[1] // width
     img[3:height + 7, 3:width + 7] = 0
@@ -172,11 +183,12 @@ class CameraView:
         self.renderer.close()
 
 
-def make_view(view: str, scenario: Scenario, transport: Any,
-              goal_tolerance_m: float) -> TopDownView | CameraView:
-    """The picture-maker ``render_view`` names: ``top`` (default) or ``mujoco``."""
+def make_view(view: str, scenario: Scenario, transport: Any, goal_tolerance_m: float, *,
+              depth: bool = False) -> TopDownView | CameraView:
+    """The picture-maker ``render_view`` names: ``top`` (default; ``depth``: the frames carry
+    a depth image to show) or ``mujoco``."""
     if view == "top":
-        return TopDownView(scenario, goal_tolerance_m)
+        return TopDownView(scenario, goal_tolerance_m, depth=depth)
     if view != "mujoco":
         raise ConfigError(f"render_view: {view!r} is invalid; expected one of "
                           f"{', '.join(RENDER_VIEWS)}")

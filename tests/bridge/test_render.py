@@ -65,6 +65,11 @@ def test_every_env_renders_its_top_down_view_and_passes_the_checker(env_id: str)
     dt = env.unwrapped.scenario.robot.control_dt_s
     assert env.metadata["render_fps"] == pytest.approx(1 / dt)
     assert np.all(img == COLORS["robot"], axis=-1).sum() > 20
+    band = env.unwrapped._view.band
+    if "depth" in env.unwrapped.task.required:  # the depth image above the map
+        assert band > 0 and (img[:band] != 255).any(axis=-1).sum() > 100 * 100
+    else:
+        assert band == 0
 
 
 def test_robot_goal_obstacle_and_path_are_drawn_where_they_are(arena: Path) -> None:
