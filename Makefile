@@ -43,6 +43,7 @@ bench: setup
 	$(PY) benchmarks/sim_throughput.py
 	$(PY) benchmarks/env_throughput.py
 	$(PY) benchmarks/train_throughput.py
+	$(PY) benchmarks/video_throughput.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info
