@@ -20,8 +20,9 @@ simulator samples). It prints which set it used. The training pairs are never re
 testing.
 Bags go to ``<bags>/<run>/<agent>/episode_NNNN/`` (with ``--video``, each episode's video
 beside it, ``episode_NNNN.mp4``, drawn from the bag by ``pic4rl_metrics``); the table is
-``pic4rl_metrics``'s own (``pic4rl-metrics compare`` on those bags prints the same). The command line builds a
-``TestPlan``; ``run_test(plan)`` does the test and returns a ``TestResult``.
+``pic4rl_metrics``'s own (``pic4rl-metrics compare`` on those bags prints the same). The
+command line builds a ``TestPlan``; ``run_test(plan)`` does the test and returns a
+``TestResult``.
 """
 
 from __future__ import annotations

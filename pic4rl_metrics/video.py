@@ -140,8 +140,8 @@ class EpisodeScene:
                         color=tuple(c / 255 for c in COLORS["centerline"]))
         ax_map.update_datalim([bounds[:2], bounds[2:]])
         ax_map.autoscale_view()
-        ax_map.legend(handles=_legend_handles(self._person_track() is not None), loc="upper right", fontsize="x-small",
-                      framealpha=0.8)
+        ax_map.legend(handles=_legend_handles(self._person_track() is not None),
+                      loc="upper right", fontsize="x-small", framealpha=0.8)
         plot_velocity_profile(ax_v, ax_w, ep)
         ax_v.tick_params(labelbottom=False)
         ax_v.set_xlabel("")

@@ -262,11 +262,12 @@ def render_videos(inputs: Iterable[str | Path], out: Path | None = None, *,
     else:
         judged = _run(reading.judge, list(found.bags), jobs, progress, "bags")
         rows += [VideoResult(r.bag, error=r.error) for r in judged if r.error]
-        groups = _pairs([r for r in judged if not r.error])
-        paired = [g for g in groups if len(g) > 1]
-        work = [_Job(tuple(g), reading,
-                     target(Path(g[0].bag), f"pair_{paired.index(g) + 1:02d}" if g in paired
-                            else None), options, overwrite, threads) for g in groups]
+        work, pairs = [], 0
+        for group in _pairs([r for r in judged if not r.error]):
+            pairs += len(group) > 1
+            stem = f"pair_{pairs:02d}" if len(group) > 1 else None
+            work.append(_Job(tuple(group), reading, target(Path(group[0].bag), stem), options,
+                             overwrite, threads))
     for made in _run(_render, work, jobs, progress, "videos"):
         rows += made
     order = {str(bag): i for i, bag in enumerate(found.bags)}

@@ -124,15 +124,19 @@ def test_grid_puts_a_pairs_episodes_side_by_side(tmp_path: Path) -> None:
     second = bag(tmp_path / "sac" / "episode_0000", agent="sac", speed=0.4,
                  outcome="timeout")
     other = bag(tmp_path / "sac" / "episode_0001", agent="sac", goal=(5.0, 1.0))
+    third = bag(tmp_path / "td3" / "episode_0001", agent="td3", goal=(4.0, 0.0),
+                duration_s=6.0)
+    fourth = bag(tmp_path / "dwa" / "episode_0001", agent="dwa", goal=(4.0, 0.0))
     rows = render_videos([tmp_path], tmp_path / "v", options=VideoOptions(fps=2), grid=True)
     by_bag = {Path(r.bag): r for r in rows}
-    assert not any(r.error for r in rows)
-    pair = tmp_path / "v" / "pair_01.mp4"
-    assert by_bag[first].video == by_bag[second].video == str(pair)
+    assert not any(r.error for r in rows) and len(rows) == 5
+    assert by_bag[first].video == by_bag[second].video == str(tmp_path / "v" / "pair_02.mp4")
+    assert by_bag[third].video == by_bag[fourth].video == str(tmp_path / "v" / "pair_01.mp4")
     assert by_bag[other].video == str(tmp_path / "v" / "sac_episode_0001.mp4")
-    frames = iio.imread(pair)
+    frames = iio.imread(tmp_path / "v" / "pair_02.mp4")
     assert frames.shape[1:] == (576, 2 * 960, 3)
     assert len(frames) == 24  # the longer episode's: both last 12 s
+    assert len(iio.imread(tmp_path / "v" / "pair_01.mp4")) == 24  # dwa's 12 s, td3 holds
 
 
 def test_names_repeat_only_with_their_folders(tmp_path: Path) -> None:
