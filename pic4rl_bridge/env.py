@@ -124,7 +124,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     ``render_fps`` is one frame per control period.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - Gymnasium's
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - Gymnasium's way
 
     def __init__(self, config: EnvConfig | str | Path | Mapping[str, Any] | None = None, *,
                  task: str | None = None, sensor: str | None = None,
@@ -351,7 +351,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     def close(self) -> None:
         self._end_bag(None)
         view = getattr(self, "_view", None)
-        if view is not None and hasattr(view, "close"):
+        if view is not None:
             view.close()
         transport = getattr(self, "transport", None)
         if transport is not None:

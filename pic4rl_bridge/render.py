@@ -89,6 +89,9 @@ class TopDownView:
     def track(self, frame: SensorFrame) -> None:
         self.path.append((frame.pose.x, frame.pose.y))
 
+    def close(self) -> None:
+        """Nothing to free: the pictures are arrays."""
+
     def render(self, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
         """The picture now (height × width × 3, ``uint8``)."""
         assert self.background is not None  # drawn by __init__ or begin
