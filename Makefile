@@ -22,15 +22,17 @@ $(STAMP): pyproject.toml
 # The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar) and the three baselines
 # (proportional, DWA and the privileged planner) on the paper's 5 indoor test pairs, each
 # through the sim node over ROS 2 (pic4rl-run starts and stops it), one bag per episode under
-# bags/demo*/, then the metrics table of those bags. `make demo TRAIN=1` trains TD3-LiDAR from scratch first (in process;
-# see docs/results.md for how long) and tests that run instead.
+# bags/demo*/, then the metrics table of those bags and a video of each episode beside its bag
+# (bags/demo*/<agent>/episode_NNNN.mp4; the last line says where). `make demo TRAIN=1` trains
+# TD3-LiDAR from scratch first (in process; see docs/results.md for how long) and tests that
+# run instead.
 DEMO_RUN := demo_$(shell date +%Y%m%d-%H%M%S)
 demo: setup
 ifdef TRAIN
 	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
-	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo
+	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo --video
 else
-	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --baseline proportional --baseline dwa --baseline planner --run demo
+	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --baseline proportional --baseline dwa --baseline planner --run demo --video
 endif
 
 test: setup
@@ -41,6 +43,7 @@ bench: setup
 	$(PY) benchmarks/sim_throughput.py
 	$(PY) benchmarks/env_throughput.py
 	$(PY) benchmarks/train_throughput.py
+	$(PY) benchmarks/video_throughput.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -102,6 +102,9 @@ class EvalConfig:
     seed: int = param(1000, doc="the same episodes at every evaluation")
     pair_kind: str = param("paper", doc="the eval env's episodes.pair_kind",
                            choices=tuple(PAIR_KINDS))
+    video_episodes: int = param(0, doc="videos of each evaluation's first episodes, driven "
+                                "again with rendering on: MP4s in <run>/videos/, GIFs in "
+                                "TensorBoard; 0: none", range=NON_NEGATIVE)
 
     @property
     def enabled(self) -> bool:

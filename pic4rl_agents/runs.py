@@ -6,6 +6,7 @@
     monitor/<session>_<rank>.monitor.csv                    one row per training episode
     logs/<session>/    eval/<session>/evaluations.csv    best/<session>/best_model.zip
     reward_curve.png, summary.yaml, summary-2.yaml, ...
+    videos/eval_<steps>_steps_episode_<i>.mp4          with eval.video_episodes > 0
 
 A session is one ``pic4rl-train`` process on the run: 0, then one more per resume. Files that
 every session writes anew (``config``, ``summary``) are named after it (``session_file``):
@@ -157,6 +158,11 @@ class RunDir:
     def eval(self) -> Path:
         """This session's ``evaluations.csv`` (and SB3's evaluations.npz)."""
         return self.path / "eval" / str(self.session)
+
+    @property
+    def videos(self) -> Path:
+        """Videos of evaluation episodes (every session's: their names hold the steps)."""
+        return self.path / "videos"
 
     @property
     def best(self) -> Path:

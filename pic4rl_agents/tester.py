@@ -18,9 +18,11 @@ the world is the indoor one (variant 0), else ``--episodes`` pairs drawn from ``
 collision-free path at most 1.3 times the straight line, the default; ``any``: whatever the
 simulator samples). It prints which set it used. The training pairs are never reused for
 testing.
-Bags go to ``<bags>/<run>/<agent>/episode_NNNN/``; the table is ``pic4rl_metrics``'s own
-(``pic4rl-metrics compare`` on those bags prints the same). The command line builds a
-``TestPlan``; ``run_test(plan)`` does the test and returns a ``TestResult``.
+Bags go to ``<bags>/<run>/<agent>/episode_NNNN/`` (with ``--video``, each episode's video
+beside it, ``episode_NNNN.mp4``, drawn from the bag by ``pic4rl_metrics``); the table is
+``pic4rl_metrics``'s own (``pic4rl-metrics compare`` on those bags prints the same). The
+command line builds a ``TestPlan``; ``run_test(plan)`` does the test and returns a
+``TestResult``.
 """
 
 from __future__ import annotations
@@ -65,6 +67,7 @@ class TestResult:
     outcomes: dict[str, list[str]]  # by agent, in episode order
     table: pd.DataFrame  # pic4rl_metrics.aggregate by agent
     failed: tuple[str, ...] = ()  # the errors of bags that could not be judged
+    videos: tuple[str, ...] = ()  # with --video: one per episode, beside its bag
 
 
 class Policy:
@@ -139,9 +142,22 @@ def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ..
     return table, tuple(str(failed.error) for failed in result.failed)
 
 
+def _check_video() -> None:
+    """``--video``'s encoder is there, before any episode is driven."""
+    from pic4rl_metrics.errors import MetricsError
+    from pic4rl_metrics.video_batch import ffmpeg_writer
+
+    try:
+        ffmpeg_writer()
+    except MetricsError as err:
+        raise ConfigError(f"--video: {err}") from err
+
+
 def run_test(plan: TestPlan) -> TestResult:
     """Drive every agent and baseline of ``plan`` on the same episodes, each recorded to a
     bag in a new ``<bags>/<run>``, then judge the bags."""
+    if plan.video:
+        _check_video()
     run_dir = runs.free_path(plan.bags_dir / (plan.run or time.strftime("test_%Y%m%d-%H%M%S")))
     specs = resolve_agents(plan, run_dir)
     episode_set = specs[-1].episode_set
@@ -153,7 +169,14 @@ def run_test(plan: TestPlan) -> TestResult:
         log.info("%s: %d/%d goals", spec.name, outcomes[spec.name].count("goal"),
                  len(outcomes[spec.name]))
     table, failed = judge(run_dir, with_std=plan.with_std)
-    return TestResult(run_dir, episode_set, outcomes, table, failed)
+    videos: tuple[str, ...] = ()
+    if plan.video:
+        from pic4rl_metrics.video_batch import render_videos
+
+        rows = render_videos([run_dir], progress=plan.progress)
+        videos = tuple(r.video for r in rows if r.video)
+        failed += tuple(r.error for r in rows if r.error and r.error not in failed)
+    return TestResult(run_dir, episode_set, outcomes, table, failed, videos)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -182,6 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--format", default="table",
                         choices=("table", "markdown", "latex", "csv", "json"))
     parser.add_argument("--with-std", action="store_true", help="mean ± std cells")
+    parser.add_argument("--video", action="store_true",
+                        help="an MP4 of each episode beside its bag (episode_NNNN.mp4)")
     parser.add_argument("--no-progress", action="store_true")
     return parser
 
@@ -200,7 +225,7 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
         sim_overrides=check_overrides(SIM_NODE, parse_overrides(args.sim_kwargs,
                                                                 flag="--sim-kwargs"),
                                       where="--sim-kwargs"),
-        with_std=args.with_std, progress=not args.no_progress)
+        with_std=args.with_std, video=args.video, progress=not args.no_progress)
 
 
 def _hint_env(plan: TestPlan | None) -> EnvConfig | None:
@@ -238,6 +263,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     text = render_comparison(result.table, args.format, with_std=plan.with_std)
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
     print(f"bags: {result.run_dir}", file=sys.stderr)
+    if result.videos:
+        print(f"videos: {len(result.videos)} in {result.run_dir}/<agent>/, e.g. "
+              f"{result.videos[0]}", file=sys.stderr)
     return 1 if result.failed else 0
 
 

@@ -42,6 +42,7 @@ class TestPlan:
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
     sim_overrides: Mapping[str, Any] = field(default_factory=dict)
     with_std: bool = False  # mean ± std cells in table.md
+    video: bool = False  # an MP4 per episode beside its bag (episode_NNNN.mp4)
     progress: bool = True
 
     def __post_init__(self) -> None:

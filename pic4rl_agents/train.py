@@ -237,6 +237,14 @@ class Trainer:
                 save_replay_buffer=cfg.checkpoint.replay_buffer and cfg.off_policy))
         if cfg.eval.enabled:
             callbacks.append(self._evaluation(stack, env_cfg, started))
+            if cfg.eval.video_episodes:
+                from .envs import eval_env_config
+                from .videos import EvalVideoCallback
+
+                callbacks.append(EvalVideoCallback(
+                    callbacks[-1], eval_env_config(env_cfg, cfg.eval),
+                    episodes=cfg.eval.video_episodes, seed=cfg.eval.seed,
+                    out_dir=self.layout.videos))
         if cfg.max_wall_s > 0:
             callbacks.append(WallClockLimit(cfg.max_wall_s, started))
         if self.progress:

@@ -119,19 +119,23 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     (dotted: ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are
     ``sim_defaults`` (the registered env's), then the config's, then ``sim``. ``node``: an
     rclpy node for the ROS transport (default: its own, in its own context).
+    ``render_mode="rgb_array"``: ``render()`` returns a picture (``pic4rl_bridge.render``),
+    the top-down view or, with ``render_view="mujoco"``, MuJoCo's camera; ``metadata``'s
+    ``render_fps`` is one frame per control period.
     """
 
-    metadata = {"render_modes": []}  # noqa: RUF012 - Gymnasium's convention
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - Gymnasium's way
 
     def __init__(self, config: EnvConfig | str | Path | Mapping[str, Any] | None = None, *,
                  task: str | None = None, sensor: str | None = None,
                  transport: str | None = None, sim: Mapping[str, Any] | None = None,
                  sim_defaults: Mapping[str, Any] | None = None,
                  overrides: Mapping[str, Any] | None = None, render_mode: str | None = None,
-                 node: Any = None) -> None:
-        if render_mode is not None:
-            raise ConfigError(f"render_mode: {render_mode!r} is invalid; this env renders "
-                              "nothing (watch it in rviz2 or Foxglove through ROS 2)")
+                 render_view: str = "top", node: Any = None) -> None:
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ConfigError(f"render_mode: {render_mode!r} is invalid; expected 'rgb_array' "
+                              "or None")
+        self.render_mode = render_mode
         given = {k: v for k, v in (("task", task), ("sensor", sensor), ("transport", transport))
                  if v is not None}
         self.config = _as_config(config, {**given, **(overrides or {})}, sim or {},
@@ -158,6 +162,18 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         if self.scenario.spec.lidar is not None:
             sensors |= {"scan"}
         self.transport = self._make_transport(frozenset(sensors), node)
+        self.metadata = {**self.metadata,
+                         "render_fps": round(1.0 / self.scenario.robot.control_dt_s, 6)}
+        self._view = None
+        if render_mode is not None:
+            from .render import make_view
+
+            try:
+                self._view = make_view(render_view, self.scenario, self.transport,
+                                       self.config.goal_tolerance_m, depth="depth" in sensors)
+            except BaseException:
+                self.transport.close()
+                raise
         self.recorder: RunRecorder | None = None
         if self.config.record.enabled:
             rec = self.config.record
@@ -236,6 +252,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._streak = self._steps = 0
         self._done = False
         self._facts = self._episode_facts(frame, self._context, self._seed_used)
+        if self._view is not None:
+            self._view.begin(frame, self._context)
         if self._bag is not None:
             self._bag.facts(self._facts, frame.stamp_ns)
         self._episode += 1
@@ -292,6 +310,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             judgement = dataclasses.replace(
                 judgement, terms=dict.fromkeys(judgement.terms, 0.0), outcome=None)
         self._frame, self._streak, self._last_action = frame, judgement.collision_streak, action
+        if self._view is not None:
+            self._view.track(frame)
         self._steps += 1
         terminated = judgement.outcome is not None
         truncated = not terminated and (fault is not None
@@ -320,8 +340,19 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             info["is_success"] = outcome is Outcome.GOAL  # SB3 logs the success rate from it
         return info
 
+    def render(self) -> np.ndarray | None:
+        """The picture of the current step (``render_mode="rgb_array"``), else None."""
+        if self._view is None:
+            return None
+        if self._frame is None or self._context is None:
+            raise BridgeError("render() before the first reset()")
+        return self._view.render(self._frame, self._context)
+
     def close(self) -> None:
         self._end_bag(None)
+        view = getattr(self, "_view", None)
+        if view is not None:
+            view.close()
         transport = getattr(self, "transport", None)
         if transport is not None:
             transport.close()

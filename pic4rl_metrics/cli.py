@@ -1,4 +1,4 @@
-"""``pic4rl-metrics``: compute, compare and plot navigation metrics from bags.
+"""``pic4rl-metrics``: compute, compare, plot and watch (``video``) navigation metrics from bags.
 
 Results go to stdout (or ``--out``); progress, warnings and errors go to stderr. The exit
 code is 1 when any bag failed (after all bags were judged and reported), 2 on bad usage.
@@ -23,9 +23,10 @@ from .registry import METRICS, REGISTRY
 from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, TABLE1_COLUMNS
 from .topics import TopicMap, load_topic_map, parse_frames
+from .video_cli import add_video_options, run_video_command
 
 
-def _add_input_options(parser: argparse.ArgumentParser) -> None:
+def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True) -> None:
     parser.add_argument(
         "bags", nargs="+",
         help="rosbag2 directories, metadata.yaml, .db3/.mcap files (or their .zstd), ROS 1 .bag "
@@ -57,8 +58,10 @@ def _add_input_options(parser: argparse.ArgumentParser) -> None:
     run = parser.add_argument_group("running")
     run.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
                      help="bags judged in parallel (0: one per core)")
-    run.add_argument("--metrics", type=_names, metavar="NAME[,NAME...]",
-                     help="metric columns to compute (default: all; outcome and success always)")
+    if metrics:
+        run.add_argument("--metrics", type=_names, metavar="NAME[,NAME...]",
+                         help="metric columns to compute (default: all; outcome and success "
+                              "always)")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar on stderr (default: when stderr is a terminal)")
 
@@ -115,6 +118,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_input_options(p)
     p.add_argument("--out", "-o", type=Path, required=True, help="directory for the PNG files")
     p.add_argument("--by", default="agent", help="what colours the comparison figure")
+    p = sub.add_parser("video", help="an MP4 (and a GIF) per episode, from the bag alone")
+    _add_input_options(p, metrics=False)
+    add_video_options(p)
     return parser
 
 
@@ -237,6 +243,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``pic4rl-metrics``; returns the exit code."""
     args = build_parser().parse_args(argv)
     try:
+        if args.command == "video":
+            return run_video_command(args, *_inputs(args))
         result = _run(args)
         if args.command == "compute":
             shown = _shown(result, list(EPISODE_VIEW), numeric=False)

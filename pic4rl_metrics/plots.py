@@ -21,11 +21,13 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
 from .contract import EpisodeFacts, Outcome
+from .facts import Mount
 from .errors import ConfigError
 from .kinematics import differentiate, seconds, velocity_series
+from .metrics import scan_points
 from .registry import METRICS
 from .results import EpisodeMetrics
-from .series import Episode
+from .series import Episode, ScanSeries
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.
 END_STYLE: dict[Outcome, tuple[str, str, str]] = {
@@ -38,35 +40,47 @@ END_STYLE: dict[Outcome, tuple[str, str, str]] = {
 OBSTACLE_COLOR = "0.6"
 
 
-def scan_points_world(episode: Episode, *, every: int = 1, max_points: int = 20000) -> np.ndarray:
-    """Obstacle points (N, 2) in the pose frame (m) from every ``every``-th scan.
+def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np.ndarray,
+                                                                     np.ndarray]:
+    """Returns of every ``every``-th scan in the pose frame (m): the scans' rows, and x and y
+    (rows × beams, NaN where a beam has no return).
 
     Each scan is placed at the pose interpolated linearly at its stamp (yaw on the unwrapped
-    angle), with the sensor assumed at the base origin; scans outside the pose time range are
-    dropped rather than extrapolated. At most ``max_points`` points, evenly subsampled.
+    angle), its beams by the LiDAR's mount (``facts.scan_mount``, the base origin when
+    unknown); scans outside the pose time range are dropped rather than extrapolated. The
+    still plots and the episode videos build their map from these.
     """
-    if every < 1 or max_points < 0:
-        msg = f"every={every!r} must be >= 1 and max_points={max_points!r} >= 0"
-        raise ValueError(msg)
+    if every < 1:
+        raise ValueError(f"every={every!r} must be >= 1")
     scan, pose = episode.scan, episode.pose
+    none = (np.zeros(0, dtype=np.intp), np.zeros((0, 0)), np.zeros((0, 0)))
     if scan is None or len(scan) == 0 or len(pose) == 0:
-        return np.zeros((0, 2))
+        return none
     t_pose = np.asarray(pose.t_ns, dtype=np.int64)
     t_scan = np.asarray(scan.t_ns, dtype=np.int64)
     rows = np.arange(0, len(scan), every)
     rows = rows[(t_scan[rows] >= t_pose[0]) & (t_scan[rows] <= t_pose[-1])]
     if rows.size == 0:
-        return np.zeros((0, 2))
+        return none
     # Offsets from the first pose keep ns precision that float64 epoch stamps would lose.
     tp = (t_pose - t_pose[0]).astype(float)
     ts = (t_scan[rows] - t_pose[0]).astype(float)
     x = np.interp(ts, tp, np.asarray(pose.x, float))[:, None]
     y = np.interp(ts, tp, np.asarray(pose.y, float))[:, None]
     yaw = np.interp(ts, tp, np.unwrap(np.asarray(pose.yaw, float)))[:, None]
-    ranges = scan.valid_ranges()[rows]
-    bearing = yaw + np.asarray(scan.angles, float)[rows]
-    px = x + ranges * np.cos(bearing)
-    py = y + ranges * np.sin(bearing)
+    some = ScanSeries(t_scan[rows], scan.ranges[rows], scan.angles[rows],
+                      scan.range_min[rows], scan.range_max[rows])
+    bx, by = scan_points(some, episode.facts.scan_mount or Mount())
+    return rows, x + np.cos(yaw) * bx - np.sin(yaw) * by, y + np.sin(yaw) * bx + np.cos(yaw) * by
+
+
+def scan_points_world(episode: Episode, *, every: int = 1, max_points: int = 20000) -> np.ndarray:
+    """Obstacle points (N, 2) in the pose frame (m) from every ``every``-th scan
+    (``scan_hits_world``), at most ``max_points`` of them, evenly subsampled."""
+    if every < 1 or max_points < 0:
+        msg = f"every={every!r} must be >= 1 and max_points={max_points!r} >= 0"
+        raise ValueError(msg)
+    _, px, py = scan_hits_world(episode, every=every)
     keep = np.isfinite(px) & np.isfinite(py)
     points = np.column_stack([px[keep], py[keep]])
     if len(points) > max_points:
