@@ -383,6 +383,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             safety_margin_m=c.warning_tolerance_m, max_speed_mps=robot.max_linear_m_s,
             shortest_path_m=shortest, straight_line_m=straight,
             scan_mount=None if mount is None else Mount(mount.x, mount.y, mount.yaw),
+            time_budget_s=c.episode_max_steps * robot.control_dt_s,
         )
         task_facts, given = parse_facts(self.task.facts(context), source=f"task {c.task}")
         return facts.merged(task_facts, given=given)

@@ -31,6 +31,7 @@ DASH = "–"
 #: Outcomes counted in a column of their own (``n_<outcome>``).
 COUNTED_OUTCOMES: tuple[str, ...] = (
     Outcome.COLLISION.value, Outcome.TIMEOUT.value, Outcome.DIVERGED.value,
+    Outcome.ABORTED.value,
 )
 #: Episodes the trajectory-quality columns average over: the successful ones, or all.
 OVER_CHOICES: tuple[str, ...] = ("success", "all")
@@ -75,18 +76,20 @@ def numeric_metric_columns(df: pd.DataFrame) -> list[str]:
 
 
 def aggregate(
-    df: pd.DataFrame, by: str | Sequence[str] = "agent", *, over: str = "success"
+    df: pd.DataFrame, by: str | Sequence[str] = "agent", *, over: str = "success",
+    count_aborted: bool = False,
 ) -> pd.DataFrame:
     """Mean and sample std (ddof=1, NaN-skipping) of every numeric metric per group.
 
     Error rows are left out of every statistic and counted in ``n_failed``. Columns:
     ``n_episodes`` (good rows), ``n_failed``, ``n_judged`` (success not NaN), ``n_success``
     (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), ``n_collision``,
-    ``n_timeout``, ``n_diverged`` (by outcome), ``n_averaged`` (episodes in the
+    ``n_timeout``, ``n_diverged``, ``n_aborted`` (by outcome), ``n_averaged`` (episodes in the
     trajectory-quality means: the successful ones for ``over="success"``, every good row for
     ``"all"``), ``over``, then ``<m>_mean`` and ``<m>_std`` per metric. The std of a single
     value is NaN; a quality column of a group without a success is NaN. Index: the group
-    name(s), in order of first appearance.
+    name(s), in order of first appearance. Aborted episodes (cut short, no outcome) are out of
+    the success rate, unless ``count_aborted`` counts them as failures.
     """
     by_cols = _check_request(df, by, over)
     metrics = numeric_metric_columns(df)
@@ -101,6 +104,8 @@ def aggregate(
         df["outcome"].reset_index(drop=True) if "outcome" in df.columns
         else pd.Series([None] * len(df), dtype=object)
     )
+    if count_aborted and "success" in values.columns:
+        values.loc[(outcomes == Outcome.ABORTED.value).to_numpy(), "success"] = 0.0
     groups: dict[tuple[object, ...], list[int]] = {}
     for pos, key in enumerate(keys.itertuples(index=False, name=None)):
         groups.setdefault(key, []).append(pos)

@@ -114,6 +114,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--over", choices=("success", "all"), default="success",
                    help="episodes the trajectory-quality columns average: the successful "
                         "ones (default, as the paper's table) or all")
+    p.add_argument("--count-aborted", action="store_true",
+                   help="count aborted episodes (cut short, no outcome recorded) as failures "
+                        "in the success rate; by default they are counted apart (n_aborted)")
     p = sub.add_parser("plot", help="a figure per episode and a comparison figure")
     _add_input_options(p)
     p.add_argument("--out", "-o", type=Path, required=True, help="directory for the PNG files")
@@ -250,7 +253,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             shown = _shown(result, list(EPISODE_VIEW), numeric=False)
             _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
         elif args.command == "compare":
-            table = aggregate(result.frame, by=args.by, over=args.over)
+            table = aggregate(result.frame, by=args.by, over=args.over,
+                              count_aborted=args.count_aborted)
             columns = _shown(result, TABLE1_COLUMNS, numeric=True)
             text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
             _emit(text, args.out, args.force)

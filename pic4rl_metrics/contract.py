@@ -55,7 +55,8 @@ TF_STATIC_TOPIC = "/tf_static"
 #: ``{"length_m": l, "width_m": w}``, ``row_centerline`` is ``[[x, y], ...]`` (JSON).
 #: ``shortest_path_m`` is the shortest collision-free start-goal path of a simulated episode and
 #: ``straight_line_m`` the straight start-goal distance (m); ``scan_mount`` is the LiDAR's pose
-#: in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``.
+#: in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``; ``time_budget_s`` is the
+#: episode's time limit (s).
 FACT_KEYS = (
     "agent",
     "task",
@@ -75,6 +76,7 @@ FACT_KEYS = (
     "shortest_path_m",
     "straight_line_m",
     "scan_mount",
+    "time_budget_s",
     "outcome",
 )
 
@@ -93,12 +95,15 @@ def typestore() -> Typestore:
 
 class Outcome(str, Enum):
     """How an episode ended. ``DIVERGED``: the physics diverged and the episode was cut (not a
-    success, not a collision). ``UNKNOWN`` when nothing recorded it and it cannot be inferred."""
+    success, not a collision). ``ABORTED``: no outcome was recorded and the episode is shorter
+    than its time budget (the sim or the tester died mid-episode): not the agent's timeout.
+    ``UNKNOWN`` when nothing recorded it and it cannot be inferred."""
 
     GOAL = "goal"
     COLLISION = "collision"
     TIMEOUT = "timeout"
     DIVERGED = "diverged"
+    ABORTED = "aborted"
     UNKNOWN = "unknown"
 
     @classmethod
@@ -112,8 +117,11 @@ class Outcome(str, Enum):
             raise ConfigError(msg) from err
 
 
-#: The outcome words a writer records (``UNKNOWN`` is only the reader's verdict).
-OUTCOMES = tuple(o.value for o in Outcome if o is not Outcome.UNKNOWN)
+#: The outcome words a writer records (``ABORTED`` and ``UNKNOWN`` are only the reader's
+#: verdicts).
+OUTCOMES = tuple(o.value for o in Outcome if o not in (Outcome.ABORTED, Outcome.UNKNOWN))
+#: Outcomes that say nothing of the agent: out of the success rate's denominator.
+UNJUDGED = (Outcome.ABORTED, Outcome.UNKNOWN)
 
 #: What the metrics assume for a tolerance (m) the facts do not give.
 TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": 0.3, "collision_tolerance_m": 0.05,
@@ -150,6 +158,8 @@ class EpisodeFacts:
     straight_line_m: float | None = None
     #: The LiDAR's pose in the base frame; ``None``: not recorded (see ``reader`` for tf).
     scan_mount: Mount | None = None
+    #: The episode's time budget (s): an unrecorded end before it is ``ABORTED``, not a timeout.
+    time_budget_s: float | None = None
     outcome: Outcome | None = None
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
@@ -320,7 +330,7 @@ def _parse_value(key: str, raw: Any, source: str) -> Any:
         return Outcome.parse(str(raw), source=f"{source}: outcome")
     if key == "shortest_path_m" and str(raw).strip().lower() in ("inf", "infinity"):
         return math.inf  # no collision-free path: the straight line stands in
-    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m")
+    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m", "time_budget_s")
     return _number(raw, key, source, positive=positive)
 
 

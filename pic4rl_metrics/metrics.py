@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .contract import EpisodeFacts, Outcome
+from .contract import UNJUDGED, EpisodeFacts, Outcome
 from .facts import Mount
 from .kinematics import (
     Derivative,
@@ -49,6 +49,9 @@ BARN_CLIP = (4.0, 8.0)
 PLAUSIBLE_SPEED_MPS = 20.0
 PLAUSIBLE_YAW_RATE_RADPS = 50.0
 PLAUSIBLE_ACC_MPS2 = 100.0
+#: An unrecorded end this far (fraction) or more before the time budget is ``ABORTED``: a
+#: timed-out episode's bag may lack its last step or two, a killed one lacks much more.
+ABORT_SLACK = 0.05
 
 
 def _finite(values: np.ndarray) -> np.ndarray:
@@ -198,11 +201,28 @@ class Derived:
                     return Outcome.GOAL
         if first_collision is not None:
             return Outcome.COLLISION
+        if self.cut_short:
+            return Outcome.ABORTED
         return Outcome.TIMEOUT if facts.goal is not None else Outcome.UNKNOWN
 
     @cached_property
+    def cut_short(self) -> bool:
+        """No outcome recorded and the poses end well before the episode's time budget (the
+        sim or the tester died): the end says nothing of the agent."""
+        budget = self.facts.time_budget_s
+        if self.facts.outcome is not None or budget is None:
+            return False
+        return self.duration_s < budget * (1.0 - ABORT_SLACK)
+
+    @cached_property
+    def duration_s(self) -> float:
+        """From the first pose to the last (s)."""
+        return (int(self.pose.t_ns[-1]) - int(self.pose.t_ns[0])) * 1e-9
+
+    @cached_property
     def success(self) -> float:
-        return NAN if self.outcome is Outcome.UNKNOWN else float(self.outcome is Outcome.GOAL)
+        """1 or 0; NaN when the end says nothing of the agent (``UNJUDGED``)."""
+        return NAN if self.outcome in UNJUDGED else float(self.outcome is Outcome.GOAL)
 
     @cached_property
     def time_s(self) -> float:
@@ -515,6 +535,10 @@ def data_warnings(d: Derived) -> list[str]:
                 f"{name}: {what} up to {worst:.3g} {unit} in {int(bad.sum())} sample(s), beyond "
                 f"{limit:g} {unit}: physically impossible (damaged bag?); metrics kept as read"
             )
+    if d.cut_short and d.outcome is Outcome.ABORTED:
+        out.append(f"no outcome recorded and {d.duration_s:.1f} s of its "
+                   f"{d.facts.time_budget_s:g} s budget: judged aborted (cut short), out of the "
+                   "success rate")
     if d.scan is not None:
         bad_limits = int(np.sum(~(d.scan.range_min <= d.scan.range_max)))
         if bad_limits:

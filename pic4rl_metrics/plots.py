@@ -35,6 +35,7 @@ END_STYLE: dict[Outcome, tuple[str, str, str]] = {
     Outcome.COLLISION: ("X", "tab:red", "end: collision"),
     Outcome.TIMEOUT: ("s", "tab:orange", "end: timeout"),
     Outcome.DIVERGED: ("P", "tab:purple", "end: diverged"),
+    Outcome.ABORTED: ("v", "0.6", "end: aborted"),
     Outcome.UNKNOWN: ("D", "0.4", "end: unknown"),
 }
 OBSTACLE_COLOR = "0.6"

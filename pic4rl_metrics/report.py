@@ -219,6 +219,11 @@ def _comparison_cell(row: pd.Series, col: str, with_std: bool, pm: str) -> str |
 def footnote(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
     """What the quality columns among ``columns`` average over, or None when ``agg`` does not
     say (an aggregate from before ``over`` existed) or no column is a quality column."""
+    notes = [note for note in (_over_note(agg, columns), _aborted_note(agg)) if note]
+    return " ".join(notes) or None
+
+
+def _over_note(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
     quality = [c for c in columns if METRICS[c].quality]
     if "over" not in agg.columns or not quality or agg.empty:
         return None
@@ -230,6 +235,15 @@ def footnote(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
         f"{labels}: mean over the row's successful episodes only (n = {counts}); the other "
         "columns over every judged episode. --over all averages every episode."
     )
+
+
+def _aborted_note(agg: pd.DataFrame) -> str | None:
+    """Aborted episodes (cut short, no outcome) per row, when any: they are not in "success"."""
+    if "n_aborted" not in agg.columns or not agg["n_aborted"].any():
+        return None
+    counts = ", ".join(str(int(n)) for n in agg["n_aborted"])
+    return (f"Aborted (cut short with no outcome recorded): n = {counts}; in the success "
+            "rate only with --count-aborted, as failures.")
 
 
 def render_comparison(

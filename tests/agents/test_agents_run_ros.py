@@ -9,8 +9,11 @@ even though they run in sessions of their own).
 
 from __future__ import annotations
 
+import math
 import os
 import signal
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -27,7 +30,7 @@ from agents_helpers import (
     Launcher,
     processes_with,
 )
-from ros_helpers import next_domain
+from ros_helpers import SimProcess, next_domain, sim_command, sim_env
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import ALGORITHMS, load_model
@@ -202,3 +205,54 @@ def test_the_no_sim_hint_names_the_configured_domain(
     code, err = train_without_a_sim(tmp_path, capfd, "-p", f"ros.domain_id:={domain}")
     assert code == 2
     assert f"Is a sim answering in ROS domain {domain}?" in err
+
+
+# --- a sim killed mid-episode -------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_a_sim_killed_mid_episode_leaves_an_aborted_episode_out_of_the_success_rate(
+        tmp_path: Path) -> None:
+    """The sim runs in real time; it is killed 3 s into the episode under way. The tester stops
+    (exit 2), the bag is kept without an outcome, and the metrics judge it ``aborted``: counted
+    apart, not a timeout, not in the success rate unless asked."""
+    domain = next_domain()
+    sim = SimProcess(sim_command("--params-file", str(LIDAR_TD3), "-p", "clock_mode:=realtime"),
+                     domain, tmp_path / "sim.log")
+    bags = tmp_path / "bags"
+    log = (tmp_path / "tester.log").open("wb")
+    tester = subprocess.Popen(
+        [sys.executable, "-m", "pic4rl_agents.tester", "--baseline", "proportional",
+         "--episodes", "2", "--bags", str(bags), "--run", "killed", "--no-progress",
+         "--env-kwargs", "episode_max_steps:600", "--ros-args", "--params-file", str(LIDAR_TD3),
+         "-p", "transport:=ros", "-p", "ros.timeout_s:=20.0"],
+        env=sim_env(domain), stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(bags.glob("killed/*/*/metadata.yaml")) and not list(
+                bags.glob("killed/*/*/*.mcap")) and not list(bags.glob("killed/*/*/*.db3")):
+            assert tester.poll() is None, (tmp_path / "tester.log").read_text()
+            assert time.monotonic() < deadline, (tmp_path / "tester.log").read_text()
+            time.sleep(0.2)
+        time.sleep(3.0)
+        os.killpg(sim.proc.pid, signal.SIGKILL)
+        assert tester.wait(120) == 2
+    finally:
+        if tester.poll() is None:
+            os.killpg(tester.pid, signal.SIGKILL)
+        sim.stop()
+        log.close()
+    output = (tmp_path / "tester.log").read_text()
+    assert "closed without an outcome" in output
+    result = compute([bags / "killed"])
+    assert result.results and not result.failed
+    frame = result.frame.sort_values("bag")
+    *finished, killed = frame.to_dict("records")  # the killed episode is the last one
+    assert killed["outcome"] == "aborted" and math.isnan(killed["success"])
+    assert "judged aborted (cut short)" in killed["warnings"]
+    assert all(row["outcome"] != "aborted" for row in finished)
+    table = aggregate(frame, by="agent").loc["proportional"]
+    assert table["n_aborted"] == 1 and table["n_judged"] == len(finished)
+    counted = aggregate(frame, by="agent", count_aborted=True).loc["proportional"]
+    assert counted["n_judged"] == len(finished) + 1
+    assert counted["n_success"] == table["n_success"]

@@ -133,3 +133,19 @@ def test_aggregate_counts_diverged_episodes_apart(episodes: pd.DataFrame) -> Non
     td3 = aggregate(diverged).loc["td3_lidar"]
     assert td3["success"] == "1/3" and td3["n_diverged"] == 1 and td3["n_collision"] == 1
     assert td3["n_averaged"] == 1 and td3["clearance_time_s_mean"] == pytest.approx(10.0)
+
+
+def test_aborted_episodes_are_counted_apart_and_out_of_the_success_rate(
+        episodes: pd.DataFrame) -> None:
+    """Cut short with no outcome: in n_aborted, not judged, unless count_aborted."""
+    cut = episodes.assign(
+        outcome=["goal", "timeout", "aborted", "unknown", None, "collision"],
+        success=[1.0, 0.0, NAN, NAN, NAN, 0.0],
+    )
+    td3 = aggregate(cut).loc["td3_lidar"]
+    assert td3["success"] == "1/2" and td3["n_aborted"] == 1 and td3["n_collision"] == 1
+    counted = aggregate(cut, count_aborted=True).loc["td3_lidar"]
+    assert counted["success"] == "1/3" and counted["n_aborted"] == 1
+    assert counted["success_mean"] == pytest.approx(1 / 3)
+    text = render_comparison(aggregate(cut), "markdown")
+    assert "Aborted (cut short with no outcome recorded): n = 1, 0" in text

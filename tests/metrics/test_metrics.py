@@ -121,6 +121,24 @@ def test_time_not_moving_of_a_stop_then_go(tmp_path: Path) -> None:
     assert m["lin_acc_mean_mps2"] == pytest.approx(5.0 / 40, abs=DIFF)
 
 
+@pytest.mark.parametrize(("budget_s", "recorded", "expected"), [
+    (30.0, None, "aborted"),   # 10 s of a 30 s budget, no outcome: the sim died
+    (10.2, None, "timeout"),   # within 5 % of the budget: the last steps went unrecorded
+    (30.0, "timeout", "timeout"),  # a recorded outcome stands
+    (None, None, "timeout"),   # no budget known (a real bag): as before
+])
+def test_an_unrecorded_end_before_the_budget_is_aborted(tmp_path: Path, budget_s, recorded,
+                                                        expected) -> None:
+    facts = {} if budget_s is None else {"time_budget_s": budget_s}
+    bag = write_episode_bag(tmp_path / "cut", LINE, goal=(10.0, 0.0), facts=facts,
+                            outcome=recorded)
+    m = _row(bag)
+    assert m["outcome"] == expected
+    assert math.isnan(m["success"]) if expected == "aborted" else m["success"] == 0.0
+    warned = "no outcome recorded and 10.0 s of its 30 s budget: judged aborted"
+    assert (warned in m["warnings"]) == (expected == "aborted")
+
+
 def test_goal_inferred_from_final_distance(line_bags) -> None:
     m = _row(line_bags["goal_inferred"])
     assert m["outcome"] == "goal" and m["success"] == 1.0
