@@ -123,6 +123,7 @@ def test_a_resume_says_which_checkpoint_it_loaded_and_which_it_skipped(
     assert yaml.safe_load((run / "summary-2.yaml").read_text())["session"] == 1
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize("target", ["run", "zip"])
 def test_bad_arguments_resume_with_no_checkpoint_that_loads_is_one_line_exit_2(
         trained_run: TrainedRun, tmp_path: Path, target: str) -> None:
@@ -143,6 +144,7 @@ def test_bad_arguments_resume_with_no_checkpoint_that_loads_is_one_line_exit_2(
     assert files(run) == before  # no config-2.yaml, nothing else either
 
 
+@pytest.mark.bad_input
 def test_bad_arguments_a_resume_whose_model_does_not_fit_its_env_is_one_line_and_no_config(
         trained_run: TrainedRun, tmp_path: Path) -> None:
     """The LiDAR checkpoint resumed with 24 observation sectors instead of 36: one line with

@@ -31,6 +31,7 @@ def test_help_prints_the_usage_and_no_command_is_an_error() -> None:
     assert code == 2 and out.startswith("usage: pic4rl-run")
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "message"), [
     (["fly"], "pic4rl-run: unknown command 'fly'"),
     (["train", "--hyperparams", "learning_rat:0.1", "--ros-args", "--params-file",

@@ -155,6 +155,7 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
     assert not list(tmp_path.rglob("*.db3"))
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "message"), [
     (["--agent", "{tmp}/nope"], "--agent {tmp}/nope: no such model"),
     (["--agent", "{tmp}"], "--agent {tmp}: no model.zip in it"),
@@ -176,6 +177,7 @@ def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> 
     assert not (tmp_path / "bags").exists()
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "line"), [
     (["--episodes", "-5"], "--episodes -5: expected a positive number of episodes"),
     (["--random", "0"], "--random 0: expected a positive number of episodes"),

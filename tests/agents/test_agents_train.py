@@ -259,6 +259,7 @@ def test_a_shipped_training_file_works_from_any_directory(
 # --- bad arguments --------------------------------------------------------------------------------
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "message"), [
     ([], "no --params-file given"),
     (["--ros-args", "--params-file", "/nonexistent/t.yaml"], "/nonexistent/t.yaml"),
@@ -285,6 +286,7 @@ def test_bad_arguments_exit_2_naming_the_key_or_file(
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "line"), [
     (["-n", "-5"], "-n/--max-steps: max_steps: -5 is invalid; expected a positive number"),
     (["--n-envs", "0"], "--n-envs: n_envs: 0 is invalid; expected a positive number"),

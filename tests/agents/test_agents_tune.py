@@ -105,6 +105,7 @@ def test_every_algorithms_sampler_gives_a_valid_config(algorithm: str) -> None:
             assert 1 <= train.gradient_steps <= train.train_freq
 
 
+@pytest.mark.bad_input
 def test_bad_arguments_exit_2_naming_the_flag(tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     assert tune.main(["--base", str(tmp_path / "none.yaml")]) == 2
@@ -116,6 +117,7 @@ def test_bad_arguments_exit_2_naming_the_flag(tmp_path: Path,
     assert "learning_rate" in capsys.readouterr().err  # did you mean
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("argv", "line"), [
     (["--hyperparams", "batch_size:abc"],
      "--hyperparams: batch_size: 'abc' is invalid; expected an integer"),

@@ -74,6 +74,7 @@ def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, domain: int,
         local.close()
 
 
+@pytest.mark.bad_input
 def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_sim,
                                                             ros_client) -> None:
     """A twin ``sim`` publishing the goal (as a forgotten sim would): the reset refuses with

@@ -43,6 +43,8 @@ from pic4rl_metrics.synthetic import (
 )
 from pic4rl_metrics.topics import TopicMap
 
+pytestmark = pytest.mark.bad_input
+
 TS = get_typestore(Stores.ROS2_JAZZY)
 T = TS.types
 ODOMETRY = "nav_msgs/msg/Odometry"

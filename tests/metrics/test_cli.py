@@ -163,6 +163,7 @@ def _disk_full(*_: object, **__: object) -> None:
     raise OSError(errno.ENOSPC, "No space left on device")
 
 
+@pytest.mark.bad_input
 def test_a_full_disk_is_one_line_exit_2_and_no_file(capsys, runs: Path, tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """The write fails (a full disk, simulated): exit 2, one line naming the path and the
@@ -179,6 +180,7 @@ def test_a_full_disk_is_one_line_exit_2_and_no_file(capsys, runs: Path, tmp_path
     assert code == 0 and target.is_file(), err
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize("where", ["parent_is_a_file", "proc"])
 def test_an_output_that_cannot_exist_is_one_line_exit_2(capsys, runs: Path, tmp_path: Path,
                                                         where: str) -> None:
@@ -194,6 +196,7 @@ def test_an_output_that_cannot_exist_is_one_line_exit_2(capsys, runs: Path, tmp_
                                                    "cannot write it: ")
 
 
+@pytest.mark.bad_input
 def test_plot_on_a_full_disk_is_one_line_exit_2_and_no_partial_png(
         capsys, runs: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from matplotlib.figure import Figure

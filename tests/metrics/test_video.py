@@ -146,6 +146,7 @@ def test_names_repeat_only_with_their_folders(tmp_path: Path) -> None:
     assert video_names(single) == {single[0]: "episode_0003"}
 
 
+@pytest.mark.bad_input
 def test_bad_speed_is_a_usage_error(tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as exc, contextlib.redirect_stderr(io.StringIO()) as err:
         main(["video", str(tmp_path), "--out", str(tmp_path), "--speed", "0"])

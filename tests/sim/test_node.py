@@ -307,6 +307,7 @@ def test_two_namespaced_sims_run_side_by_side(start_sim, ros_client, domain, are
     assert latest_at(client, truth2, CONTROL_DT_NS).pose.pose.position.x == pytest.approx(-2.0)
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("line", "expected"), [
     ("lidar.beems: 3", "unknown key 'lidar.beems'; did you mean 'lidar.beams'?"),
     ("control_dt_s: -1", "control_dt_s: -1.0 is invalid"),
@@ -323,6 +324,7 @@ def test_a_bad_params_file_stops_the_node_with_one_line(start_sim, domain, tmp_p
     assert len(sim.output.strip().splitlines()) == 1
 
 
+@pytest.mark.bad_input
 @pytest.mark.parametrize(("rule", "expected"), [
     ("lidar.beams:=abc", "lidar.beams: 'abc' is invalid; expected an integer"),
     ("lidar.beams:=2.5", "lidar.beams: 2.5 is invalid; expected an integer"),
