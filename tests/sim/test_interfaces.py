@@ -29,8 +29,9 @@ from pic4rl_sim.node.ros_interfaces import PROFILES, qos_profile, ros_type
 
 REPO = Path(__file__).resolve().parents[2]
 #: The contract's topics that the recorder writes itself (facts, outcome) or that only a real
-#: robot's bag holds (static transforms): not the sim's.
-NOT_THE_SIMS = {contract.FACTS_TOPIC, contract.OUTCOME_TOPIC, contract.TF_STATIC_TOPIC}
+#: robot's bag holds (transforms): not the sim's.
+NOT_THE_SIMS = {contract.FACTS_TOPIC, contract.OUTCOME_TOPIC, contract.TF_TOPIC,
+                contract.TF_STATIC_TOPIC}
 #: Recorded topics no metric reads.
 UNREAD_BY_METRICS = {"/camera/depth/image_raw", "/camera/depth/camera_info", "/plan"}
 
