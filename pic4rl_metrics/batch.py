@@ -8,11 +8,12 @@ from __future__ import annotations
 import logging
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 from tqdm import tqdm
@@ -153,17 +154,27 @@ def compute(
     unmatched = [BagResult(item, None, None, f"{item!r}: {why}") for item, why in found.unmatched]
     chosen = names if metrics is not None else None
     work = [(bag, topic_map, facts, given, chosen) for bag in found.bags]
-    bar = tqdm(total=len(work), desc="bags", unit="bag", disable=not progress, leave=False)
-    results: list[BagResult] = []
+    results = run_parallel(_judge_args, work, jobs=jobs, progress=progress, what="bags")
+    return MetricsResult(tuple(unmatched + results), result_columns(names))
+
+
+def run_parallel(fn: Callable[[Any], Any], work: Sequence[Any], *, jobs: int, progress: bool,
+                 what: str) -> list[Any]:
+    """``fn`` over ``work`` in order, in ``jobs`` processes (one: in this one), with a progress
+    bar counting ``what`` (a plural noun) on stderr when ``progress``."""
+    bar = tqdm(total=len(work), desc=what, unit=what.rstrip("s"), disable=not progress,
+               leave=False)
+    out: list[Any] = []
     with bar:
         if jobs > 1 and len(work) > 1:
-            with ProcessPoolExecutor(max_workers=jobs) as pool:
-                for result in pool.map(_judge_args, work, chunksize=max(1, len(work) // (4 * jobs))):
-                    results.append(result)
+            with ProcessPoolExecutor(max_workers=min(jobs, len(work))) as pool:
+                chunks = max(1, len(work) // (4 * jobs))
+                for item in pool.map(fn, work, chunksize=chunks):
+                    out.append(item)
                     bar.update()
         else:
-            for args in work:
-                results.append(_judge_args(args))
+            for item in work:
+                out.append(fn(item))
                 bar.update()
-    return MetricsResult(tuple(unmatched + results), result_columns(names))
+    return out
 

@@ -12,7 +12,6 @@ import contextlib
 import os
 import tempfile
 from collections.abc import Iterable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +19,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from .batch import BagResult, judge_bag, resolve_jobs
+from .batch import BagResult, judge_bag, resolve_jobs, run_parallel
 from .contract import EpisodeFacts
 from .errors import ConfigError, MetricsError, OutputError
 from .inputs import discover
@@ -208,24 +207,6 @@ def pair_key(result: BagResult) -> tuple[float, ...] | None:
     return tuple(round(float(v), 2) for v in (*start, *ep.facts.goal))
 
 
-def _run(fn: Any, work: Sequence[Any], jobs: int, progress: bool, what: str) -> list[Any]:
-    """``fn`` over ``work``, ``jobs`` processes at a time, in order."""
-    bar = tqdm(total=len(work), desc=what, unit=what.rstrip("s"), disable=not progress,
-               leave=False)
-    out: list[Any] = []
-    with bar:
-        if jobs > 1 and len(work) > 1:
-            with ProcessPoolExecutor(max_workers=min(jobs, len(work))) as pool:
-                for item in pool.map(fn, work):
-                    out.append(item)
-                    bar.update()
-        else:
-            for item in work:
-                out.append(fn(item))
-                bar.update()
-    return out
-
-
 def _pairs(judged: Sequence[BagResult]) -> list[list[BagResult]]:
     """Judged bags grouped by start–goal pair, in bag order; a bag without one alone."""
     groups: dict[object, list[BagResult]] = {}
@@ -260,7 +241,8 @@ def render_videos(inputs: Iterable[str | Path], out: Path | None = None, *,
         work = [_Job((bag,), reading, target(bag), options, overwrite, threads)
                 for bag in found.bags]
     else:
-        judged = _run(reading.judge, list(found.bags), jobs, progress, "bags")
+        judged = run_parallel(reading.judge, list(found.bags), jobs=jobs, progress=progress,
+                              what="bags")
         rows += [VideoResult(r.bag, error=r.error) for r in judged if r.error]
         work, pairs = [], 0
         for group in _pairs([r for r in judged if not r.error]):
@@ -268,7 +250,7 @@ def render_videos(inputs: Iterable[str | Path], out: Path | None = None, *,
             stem = f"pair_{pairs:02d}" if len(group) > 1 else None
             work.append(_Job(tuple(group), reading, target(Path(group[0].bag), stem), options,
                              overwrite, threads))
-    for made in _run(_render, work, jobs, progress, "videos"):
+    for made in run_parallel(_render, work, jobs=jobs, progress=progress, what="videos"):
         rows += made
     order = {str(bag): i for i, bag in enumerate(found.bags)}
     return tuple(sorted(rows, key=lambda r: order.get(r.bag, -1)))

@@ -28,15 +28,8 @@ from pic4rl_bridge.config import load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import BridgeError, ConfigError, EpisodeRejected
 from pic4rl_metrics import compute
+from bridge_helpers import ENV_CONFIGS, LIDAR_CONFIG, REPO
 
-REPO = Path(__file__).resolve().parents[2]
-LIDAR_CONFIG = REPO / "config" / "env_goto_lidar.yaml"
-ENV_CONFIGS = {
-    "pic4rl/GoToPoseLidar-v0": LIDAR_CONFIG,
-    "pic4rl/GoToPoseDepth-v0": REPO / "config" / "env_goto_depth.yaml",
-    "pic4rl/Vineyard-v0": REPO / "config" / "env_vineyard_depth.yaml",
-    "pic4rl/PersonMonitoring-v0": REPO / "config" / "env_person_omni.yaml",
-}
 BEAMS = 36  # lidar.beams of env_goto_lidar.yaml: obs[BEAMS] is the goal distance (m)
 STOP = np.array([-1.0, 0.0], np.float32)  # v = min_linear = 0, no turn
 START, GOAL = [-2.0, 0.0, 0.0], [0.0, 0.0]  # 2 m of free floor along +x

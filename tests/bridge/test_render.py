@@ -23,15 +23,8 @@ from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_bridge.render import make_view
 from pic4rl_metrics.raster import COLORS
+from bridge_helpers import ENV_CONFIGS, LIDAR_CONFIG, REPO
 
-REPO = Path(__file__).resolve().parents[2]
-LIDAR_CONFIG = REPO / "config" / "env_goto_lidar.yaml"
-ENV_CONFIGS = {
-    "pic4rl/GoToPoseLidar-v0": LIDAR_CONFIG,
-    "pic4rl/GoToPoseDepth-v0": REPO / "config" / "env_goto_depth.yaml",
-    "pic4rl/Vineyard-v0": REPO / "config" / "env_vineyard_depth.yaml",
-    "pic4rl/PersonMonitoring-v0": REPO / "config" / "env_person_omni.yaml",
-}
 FORWARD = np.array([1.0, 0.0], np.float32)  # full speed ahead, no turn
 
 
