@@ -22,7 +22,7 @@ from torch import nn
 
 from pic4rl_bridge.errors import ConfigError
 
-from .atomic import replacing
+from pic4rl_metrics.atomic import replacing
 from .config import TrainConfig
 from .exploration import EpsilonGreedy
 from .extractors import DepthGoalExtractor

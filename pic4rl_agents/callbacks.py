@@ -19,7 +19,7 @@ from tqdm import tqdm
 
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 
-from . import atomic
+from pic4rl_metrics import atomic
 from .curves import save_reward_curve
 from .runs import EVALUATIONS
 

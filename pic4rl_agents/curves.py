@@ -19,7 +19,9 @@ from stable_baselines3.common.monitor import LoadMonitorResultsError, load_resul
 
 from pic4rl_bridge.errors import ConfigError
 
-from . import atomic, runs
+from pic4rl_metrics import atomic
+
+from . import runs
 
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:

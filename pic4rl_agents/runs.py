@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from pic4rl_bridge.errors import ConfigError
 
-from . import atomic
+from pic4rl_metrics import atomic
 
 if TYPE_CHECKING:
     import pandas as pd

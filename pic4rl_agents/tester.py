@@ -45,7 +45,9 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-from . import atomic, runs
+from pic4rl_metrics import atomic
+
+from . import runs
 from .config import ENV_NODE, SIM_NODE
 from .overrides import check_overrides, parse_overrides
 from .console import console_logging

@@ -28,7 +28,9 @@ import yaml
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 
-from . import atomic, runs
+from pic4rl_metrics import atomic
+
+from . import runs
 from .config import RunConfig, load_run_config
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args

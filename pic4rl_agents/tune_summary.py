@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import optuna
 import yaml
 
-from . import atomic
+from pic4rl_metrics import atomic
 
 if TYPE_CHECKING:
     from .tune import TuneSettings

@@ -10,11 +10,11 @@ import argparse
 import contextlib
 import os
 import sys
-import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from . import atomic
 from .aggregate import aggregate
 from .batch import MetricsResult, compute
 from .contract import EpisodeFacts, parse_facts
@@ -173,16 +173,8 @@ def _emit(text: str, out: Path | None, force: bool) -> None:
         msg = f"--out {str(out)!r} exists; pass --force to replace it"
         raise ConfigError(msg)
     data = (text if text.endswith("\n") else text + "\n").encode()
-    with _writing(out):
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", dir=out.parent)
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                _write_all(handle, data)
-            os.replace(tmp, out)  # whole or not at all: a failed write leaves no file
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+    with _writing(out), atomic.replacing(out) as tmp, tmp.open("wb") as handle:
+        _write_all(handle, data)  # whole or not at all: a failed write leaves no file
     print(f"wrote {out}", file=sys.stderr)
 
 

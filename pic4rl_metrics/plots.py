@@ -8,8 +8,6 @@ display and no global state, so plots can be made headless and in parallel.
 from __future__ import annotations
 
 import difflib
-import os
-import tempfile
 from collections.abc import Sequence
 from dataclasses import fields, replace
 from pathlib import Path
@@ -20,6 +18,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
+from . import atomic
 from .contract import EpisodeFacts, Outcome
 from .facts import Mount
 from .errors import ConfigError
@@ -291,14 +290,8 @@ def save_figure(fig: Figure, path: str | Path, *, overwrite: bool = False,
         raise FileExistsError(msg)
     path.parent.mkdir(parents=True, exist_ok=True)
     if overwrite:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                fig.savefig(handle, format=fmt, dpi=dpi)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic.replacing(path) as tmp, tmp.open("wb") as handle:
+            fig.savefig(handle, format=fmt, dpi=dpi)
         return path
     try:
         handle = path.open("xb")

@@ -8,17 +8,15 @@ absent; an existing one is kept unless ``overwrite``. imageio-ffmpeg brings its 
 
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
+from . import atomic
 from .batch import BagResult, judge_bag, resolve_jobs, run_parallel
 from .contract import EpisodeFacts
 from .errors import ConfigError, MetricsError, OutputError
@@ -64,18 +62,6 @@ def _publish(tmp: Path, target: Path, overwrite: bool) -> None:
         tmp.unlink(missing_ok=True)
 
 
-@contextlib.contextmanager
-def _temporary(target: Path) -> Iterator[Path]:
-    fd, name = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=target.suffix,
-                                dir=target.parent)
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        yield tmp
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 def write_video(frames: Iterable[np.ndarray], target: Path, *, fps: float,
                 gif: Path | None = None, overwrite: bool = False, threads: int = 0) -> int:
     """Encode ``frames`` (equal ``uint8`` height × width × 3) as H.264 MP4 at ``target``, and
@@ -86,7 +72,7 @@ def write_video(frames: Iterable[np.ndarray], target: Path, *, fps: float,
     small: list[np.ndarray] = []
     count = 0
     try:
-        with _temporary(target) as tmp:
+        with atomic.temporary(target) as tmp:
             writer = None
             for frame in frames:
                 if writer is None:
@@ -116,7 +102,7 @@ def _write_gif(frames: Sequence[np.ndarray], target: Path, *, fps: float,
                overwrite: bool) -> None:
     import imageio.v3 as iio
 
-    with _temporary(target) as tmp:
+    with atomic.temporary(target) as tmp:
         iio.imwrite(tmp, np.stack(frames), extension=".gif", duration=1000 / fps, loop=0)
         _publish(tmp, target, overwrite)
 

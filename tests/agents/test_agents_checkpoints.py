@@ -24,7 +24,7 @@ from stable_baselines3.common.save_util import load_from_pkl
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import load_model
-from pic4rl_agents.atomic import replacing
+from pic4rl_metrics.atomic import replacing
 from pic4rl_agents.runs import find_resume
 from pic4rl_bridge.errors import ConfigError
 

@@ -1,6 +1,7 @@
 """Files written whole or not at all: each goes to a temporary file beside it, then is renamed
 over it (``os.replace``), so a process killed mid-write leaves the previous file (or none),
-never half of one. Checkpoints, replay buffers, configs, summaries and curves go this way.
+never half of one. The metrics' tables, figures and videos go this way, and the agents'
+checkpoints, replay buffers, configs, summaries and curves.
 
 A temporary file is hidden (``.<name>.<random>.tmp<suffix>``): no run-directory glob sees it,
 and the suffix is the target's, since SB3 appends ``.zip`` or ``.pkl`` to a path without one.
@@ -19,12 +20,12 @@ PARTIAL_GLOB = ".*.tmp*"
 
 
 @contextlib.contextmanager
-def replacing(path: str | Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` to write; when the block ends it replaces ``path``
-    (after an ``fsync``), and when the block raises it is removed and ``path`` is untouched."""
+def temporary(path: str | Path) -> Iterator[Path]:
+    """A new, empty, hidden file beside ``path`` (the umask's permissions, not mkstemp's 0600),
+    removed when the block ends unless the block moved it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    while True:  # created here, with the umask's permissions (mkstemp's are 0600)
+    while True:
         tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp{path.suffix}")
         try:
             tmp.open("xb").close()
@@ -33,12 +34,19 @@ def replacing(path: str | Path) -> Iterator[Path]:
             continue
     try:
         yield tmp
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def replacing(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` to write; when the block ends it replaces ``path``
+    (after an ``fsync``), and when the block raises it is removed and ``path`` is untouched."""
+    with temporary(path) as tmp:
+        yield tmp
         with tmp.open("rb+") as written:
             os.fsync(written.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def write_text(path: str | Path, text: str) -> Path:
