@@ -81,6 +81,8 @@ _BEST_EFFORT = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.BEST_EFFOR
 _LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
                       history=HistoryPolicy.KEEP_LAST)
+#: How the ROS graph names a node whose name record has not arrived yet.
+_UNNAMED = "_NODE_NAME_UNKNOWN_"
 #: The sim node's state and episode topics by relative name, recordable by name alone.
 _KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
 
@@ -355,9 +357,12 @@ class RosTransport(Transport):
                              self._timeout_s, f"topic {self._cmd_name}: a subscriber")
 
     def _check_one_sim(self) -> None:
-        """``SimConflict`` when more than one node named like ``ros.sim_node`` publishes our
-        goal or pose topic: a second sim (a forgotten ``pic4rl-sim``) answers every command
-        too, so frames and bags would mix two worlds. A graph query: cheap, once an episode."""
+        """``SimConflict`` when a second simulator answers on our names (a forgotten
+        ``pic4rl-sim``), so that frames and bags would mix two worlds: more than one node
+        named like ``ros.sim_node`` publishes the goal or the pose topic, or the pose topic
+        (which only a simulator or a robot's driver publishes) has a second publisher whose
+        node the graph cannot name yet (DDS may lose a node's name record while several
+        participants start). A graph query: cheap, once an episode."""
         if not self._ros.sim_node:
             return
         sim = self.node.resolve_topic_name(self._ros.sim_node)
@@ -365,12 +370,15 @@ class RosTransport(Transport):
             topic = self._topics[self._roles[role]].name
             nodes = [f"{info.node_namespace.rstrip('/')}/{info.node_name}"
                      for info in self.node.get_publishers_info_by_topic(topic)]
-            twins = [name for name in nodes if name == sim]
+            twins = [name for name in nodes if name == sim or (
+                role == "pose" and _UNNAMED in name)]
             if len(twins) > 1:
+                shown = " and ".join(name if _UNNAMED not in name else "a node not yet named"
+                                     for name in twins)
                 raise SimConflict(
-                    f"{len(twins)} simulator nodes named {sim} publish {topic} in ROS domain "
-                    f"{self.node.context.get_domain_id()}: {' and '.join(twins)} (a pic4rl-sim "
-                    "left running?); stop all but one, or give each its own namespace "
+                    f"{len(twins)} simulator nodes publish {topic} in ROS domain "
+                    f"{self.node.context.get_domain_id()}: {shown} (a pic4rl-sim left "
+                    "running?); stop all but one, or give each its own namespace "
                     "(-r __ns:=/robot2) or ROS_DOMAIN_ID")
 
     def _set_episode(self, request: EpisodeRequest) -> None:

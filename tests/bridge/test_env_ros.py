@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import rclpy
 from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from gymnasium.utils.env_checker import check_env
 from rosbags.rosbag2 import Reader
@@ -77,8 +78,9 @@ def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, domain: int,
 @pytest.mark.bad_input
 def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_sim,
                                                             ros_client) -> None:
-    """A twin ``sim`` publishing the goal (as a forgotten sim would): the reset refuses with
-    one message naming both nodes, not the "is a sim answering?" hint of a silent graph."""
+    """A twin ``sim`` publishing the goal and odometry (as a forgotten sim would): the reset
+    refuses with one message naming both nodes, not the "is a sim answering?" hint of a
+    silent graph."""
     config = ROOT / CONFIGS["pic4rl/GoToPoseLidar-v0"]
     start_sim(domain, "--params-file", str(config))
     client = ros_client(domain)
@@ -88,12 +90,14 @@ def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_si
     client.spin_for(2.0)  # past the sim's own look for a twin, which would stop it
     twin = rclpy.create_node("sim", context=client.context)
     twin.create_publisher(PoseStamped, "goal_pose", latched).publish(PoseStamped())
+    twin.create_publisher(Odometry, "odom", 10)
     env = gym.make("pic4rl/GoToPoseLidar-v0", config=config, transport="ros",
                    overrides={"ros.domain_id": domain, "ros.timeout_s": 5.0})
     try:
         with pytest.raises(SimConflict, match=(
-                rf"^2 simulator nodes named /sim publish /goal_pose in ROS domain {domain}: "
-                r"/sim and /sim \(a pic4rl-sim left running\?\)")):
+                rf"^2 simulator nodes publish /(goal_pose|odom) in ROS domain {domain}: "
+                r"(/sim|a node not yet named) and (/sim|a node not yet named) "
+                r"\(a pic4rl-sim left running\?\)")):
             env.reset(seed=1)
     finally:
         env.close()
