@@ -27,8 +27,14 @@ $(STAMP): pyproject.toml
 # TD3-LiDAR from scratch first (in process; see docs/results.md for how long) and tests that
 # run instead.
 DEMO_RUN := demo_$(shell date +%Y%m%d-%H%M%S)
+# `make demo CASE=person`: the person-monitoring RL-DWA hybrid (checkpoints/person_hybrid)
+# against DWA with a proportional heading law, on person-world variants training never saw.
+PERSON_DEMO := --agent checkpoints/person_hybrid --baseline dwa_heading \
+	--sim-kwargs world_variant:101 --episodes 5 --seed 1000 --run demo_person --video
 demo: setup
-ifdef TRAIN
+ifeq ($(CASE),person)
+	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
+else ifdef TRAIN
 	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
 	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo --video
 else

@@ -153,8 +153,10 @@ class ImitationConfig:
     counts in ``max_steps``, and the expert's time in every clock."""
 
     enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
-    expert: str = param("planner", doc="the expert that labels states: planner (the "
-                        "privileged planner, pic4rl_bridge.planner)", choices=("planner",))
+    expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
+                        "privileged planner, pic4rl_bridge.planner) | heading "
+                        "(personMonitoring: DWA with a proportional heading law)",
+                        choices=("planner", "heading"))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)
     dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",

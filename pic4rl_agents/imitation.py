@@ -30,6 +30,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.follow import HeadingController
 from pic4rl_bridge.planner import PlannerController
 from pic4rl_bridge.robot_info import Scenario
 
@@ -40,17 +41,27 @@ log = logging.getLogger(__name__)
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
-def make_expert(name: str, env: EnvConfig) -> PlannerController:
-    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges."""
-    if name != "planner":
-        raise ConfigError(f"imitation.expert: {name!r} is invalid; expected planner")
+#: The experts that label states, and the task each drives.
+EXPERTS = {"planner": "goToPose", "heading": "personMonitoring"}
+
+
+def make_expert(name: str, env: EnvConfig) -> PlannerController | HeadingController:
+    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
+    (``planner``: the privileged planner on the world's map, goToPose; ``heading``: DWA with a
+    proportional heading law, personMonitoring, either control)."""
+    if name not in EXPERTS:
+        raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
+                          f"{', '.join(EXPERTS)}")
+    if env.task != EXPERTS[name]:
+        fits = [e for e, task in EXPERTS.items() if task == env.task]
+        raise ConfigError(f"imitation.expert: {name} drives {EXPERTS[name]}; the env's task is "
+                          f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
     scenario = Scenario(env)
+    if name == "heading":
+        return HeadingController(env, scenario.robot)
     if scenario.world is None:
         raise ConfigError("imitation.expert: planner plans on the simulated world's map, and "
                           "the env has none (no 'sim:' section)")
-    if env.task != "goToPose":
-        raise ConfigError(f"imitation.expert: planner drives goToPose; the env's task is "
-                          f"{env.task!r}")
     return PlannerController(scenario.robot, scenario.world)
 
 

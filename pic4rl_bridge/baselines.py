@@ -1,4 +1,4 @@
-"""Classical references for goToPose, run by ``pic4rl-test --baseline NAME`` like an agent.
+"""Classical references, run by ``pic4rl-test --baseline NAME`` like an agent.
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -7,6 +7,9 @@
   nav2 and the BARN challenge compare learned planners with.
 - ``planner``: the privileged planner (``pic4rl_bridge.planner``): the world's shortest path
   with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
+- ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
+  bearing turns the base (``pic4rl_bridge.follow``): the classical version of the RL-DWA
+  hybrid.
 
 The first two are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
 simulator.
@@ -259,8 +262,9 @@ class DwaController:
 
 
 #: The baselines ``pic4rl-test --baseline`` knows, and the tasks they drive.
-BASELINES = ("proportional", "dwa", "planner")
-BASELINE_TASKS = (TaskName.GO_TO_POSE.value,)
+BASELINES = ("proportional", "dwa", "planner", "dwa_heading")
+BASELINE_TASKS = {name: (TaskName.GO_TO_POSE.value,) for name in BASELINES[:3]} | {
+    "dwa_heading": (TaskName.PERSON_MONITORING.value,)}
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
@@ -280,13 +284,20 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
         from .planner import PlannerController
 
         return PlannerController(robot, world)
+    if name == "dwa_heading":
+        from .follow import HeadingController
+
+        return HeadingController(config, robot)
     return GoToGoalController(robot)
 
 
 def check_fits(name: str, config: EnvConfig) -> None:
-    """``ConfigError`` unless baseline ``name`` can drive ``config``'s task: both steer to a
-    goal with goToPose's 2-D action."""
-    if config.task not in BASELINE_TASKS:
-        raise ConfigError(f"--baseline {name}: the baselines drive goToPose (a goal and a (v, ω) "
-                          f"action); this env's task is {config.task!r}. Test it with an "
-                          "--agent, or give a goToPose config")
+    """``ConfigError`` unless baseline ``name`` can drive ``config``'s task (``BASELINE_TASKS``:
+    goToPose's goal and (v, ω) action, or personMonitoring's person)."""
+    tasks = BASELINE_TASKS[name]
+    if config.task not in tasks:
+        fits = [b for b, t in BASELINE_TASKS.items() if config.task in t]
+        other = f"--baseline {' or '.join(fits)}" if fits else "an --agent"
+        raise ConfigError(f"--baseline {name}: it drives {' or '.join(tasks)}; this env's task "
+                          f"is {config.task!r}. Test it with {other}, or give a "
+                          f"{tasks[0]} config")

@@ -57,6 +57,15 @@ class TaskName(ParamEnum):
     PERSON_MONITORING = "personMonitoring"
 
 
+class PersonControl(ParamEnum):
+    """personMonitoring: ``end_to_end``: the agent gives (vx, vy, ω); ``hybrid``: DWA gives
+    (vx, vy), following the person and avoiding obstacles, and the agent only ω (Eirale et
+    al. 2022)."""
+
+    END_TO_END = "end_to_end"
+    HYBRID = "hybrid"
+
+
 class SensorName(ParamEnum):
     LIDAR = "lidar"
     DEPTH = "depth"
@@ -122,6 +131,8 @@ class RewardConfig:
                           "person)")
     person_distance: float = param(0.5, doc="personMonitoring: times -|distance - desired "
                                    "distance| (m)")
+    bearing: float = param(0.0, doc="personMonitoring: times -|bearing of the person| (rad): "
+                           "sharper near 0 than facing's cos")
 
 
 @dataclass(frozen=True)
@@ -157,6 +168,9 @@ class VineyardConfig:
 class PersonConfig:
     distance_m: float = param(2.0, doc="desired distance to the person", unit="m",
                               range=NON_NEGATIVE)
+    control: PersonControl = param(PersonControl.END_TO_END, doc="end_to_end (the agent gives "
+                                   "vx, vy, yaw rate) | hybrid (DWA gives vx, vy following the "
+                                   "person, the agent the yaw rate)")
 
 
 @dataclass(frozen=True)
@@ -195,7 +209,8 @@ class DwaConfig:
 
 @dataclass(frozen=True)
 class BaselinesConfig:
-    """The classical controllers ``pic4rl-test --baseline`` runs (the env ignores them)."""
+    """The classical controllers ``pic4rl-test --baseline`` runs; ``dwa`` also plans the
+    translation of a hybrid personMonitoring (``person.control: hybrid``)."""
 
     dwa: DwaConfig = section(DwaConfig)
 

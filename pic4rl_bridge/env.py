@@ -303,7 +303,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             raise BridgeError("step() after the episode ended: call reset() first")
         action = np.clip(np.asarray(action, dtype=np.float32).reshape(self.action_space.shape),
                          -1.0, 1.0)
-        frame = self.transport.step(self.task.command(action))
+        frame = self.transport.step(self.task.command_at(action, self._frame))
         judgement = self.task.judge(self._frame, frame, self._context, self._streak)
         fault = self.transport.fault
         if fault is not None:  # the robot was put back at its start: nothing to judge

@@ -56,7 +56,9 @@ TF_STATIC_TOPIC = "/tf_static"
 #: ``shortest_path_m`` is the shortest collision-free start-goal path of a simulated episode and
 #: ``straight_line_m`` the straight start-goal distance (m); ``scan_mount`` is the LiDAR's pose
 #: in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``; ``time_budget_s`` is the
-#: episode's time limit (s).
+#: episode's time limit (s). ``person_distance_m`` is the distance a person-monitoring robot
+#: should keep to the person (m) and ``camera_fov_rad`` the horizontal field of view of the
+#: camera that should see it (rad).
 FACT_KEYS = (
     "agent",
     "task",
@@ -77,6 +79,8 @@ FACT_KEYS = (
     "straight_line_m",
     "scan_mount",
     "time_budget_s",
+    "person_distance_m",
+    "camera_fov_rad",
     "outcome",
 )
 
@@ -160,6 +164,10 @@ class EpisodeFacts:
     scan_mount: Mount | None = None
     #: The episode's time budget (s): an unrecorded end before it is ``ABORTED``, not a timeout.
     time_budget_s: float | None = None
+    #: Person monitoring: the desired distance to the person (m).
+    person_distance_m: float | None = None
+    #: Person monitoring: the camera's horizontal field of view (rad), centred on the heading.
+    camera_fov_rad: float | None = None
     outcome: Outcome | None = None
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
@@ -330,7 +338,8 @@ def _parse_value(key: str, raw: Any, source: str) -> Any:
         return Outcome.parse(str(raw), source=f"{source}: outcome")
     if key == "shortest_path_m" and str(raw).strip().lower() in ("inf", "infinity"):
         return math.inf  # no collision-free path: the straight line stands in
-    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m", "time_budget_s")
+    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m", "time_budget_s",
+                       "camera_fov_rad")
     return _number(raw, key, source, positive=positive)
 
 

@@ -152,6 +152,8 @@ class Derived:
             "footprint": self.facts.footprint is not None,
             "max_speed": self.facts.max_speed_mps is not None,
             "row_centerline": self.facts.row_centerline is not None,
+            "person_distance": self.facts.person_distance_m is not None,
+            "camera_fov": self.facts.camera_fov_rad is not None,
         }
         return {name for name in needs if not have[name]}
 
@@ -472,37 +474,9 @@ _register("row_path_mse_m2", "m$^2$", "row path MSE", ("row_centerline",))(
     lambda d: time_mean(d.t_s, _row_deviation(d) ** 2))
 
 
-def _person_bearing(d: Derived) -> tuple[np.ndarray, np.ndarray] | None:
-    """Bearing of the person seen from the robot, at pose stamps within the person's recorded
-    time range (person position linearly interpolated), and those stamps (s)."""
-    pose, person = d.pose, d.episode.person
-    inside = (pose.t_ns >= person.t_ns[0]) & (pose.t_ns <= person.t_ns[-1])  # type: ignore[union-attr]
-    if not inside.any():
-        return None
-    t0 = pose.t_ns[0]  # float64 of epoch nanoseconds would round to 256 ns
-    at = (pose.t_ns[inside] - t0).astype(float)
-    person_t = (person.t_ns - t0).astype(float)  # type: ignore[union-attr]
-    px = np.interp(at, person_t, person.x)  # type: ignore[union-attr]
-    py = np.interp(at, person_t, person.y)  # type: ignore[union-attr]
-    bearing = bearing_in_body(pose.x[inside], pose.y[inside], pose.yaw[inside], px, py)
-    return bearing, seconds(pose.t_ns[inside])
+# The person-monitoring columns (follow_heading_*, person_*) come here, in table order.
+from . import person_metrics  # noqa: E402, F401
 
-
-def _follow(stat):  # noqa: ANN001, ANN202
-    def value(d: Derived) -> float:
-        seen = _person_bearing(d)
-        return NAN if seen is None else float(stat(*seen))
-    return value
-
-
-_register("follow_heading_mean_rad", "rad", "following heading mean", ("person",))(
-    _follow(lambda b, t: time_mean(t, b)))
-_register("follow_heading_mae_rad", "rad", "following heading MAE", ("person",))(
-    _follow(lambda b, t: time_mean(t, np.abs(b))))
-_register("follow_heading_rmse_rad", "rad", "following heading RMSE", ("person",))(
-    _follow(lambda b, t: math.sqrt(time_mean(t, b**2))))
-_register("follow_heading_max_rad", "rad", "following heading max", ("person",))(
-    _follow(lambda b, t: np.abs(b).max()))
 _register("n_poses", "count", "poses")(lambda d: len(d.pose))
 _register("n_scans", "count", "scans")(lambda d: len(d.scan) if d.scan is not None else 0)
 

@@ -44,6 +44,7 @@ ENTRY_POINT_GROUP = "pic4rl.metrics"
 #: Inputs a metric may need; ``Derived.missing`` says which of them a bag lacks.
 INPUTS: frozenset[str] = frozenset({
     "pose", "scan", "cmd_vel", "person", "goal", "footprint", "max_speed", "row_centerline",
+    "person_distance", "camera_fov",
 })  # fmt: skip
 
 

@@ -73,6 +73,11 @@ class Task(ABC):
     def command(self, action: np.ndarray) -> Twist2D:
         """The velocity command (body frame) for a normalized ``action`` (clipped to [-1, 1])."""
 
+    def command_at(self, action: np.ndarray, frame: SensorFrame) -> Twist2D:
+        """The command the env sends for ``action`` at ``frame`` (the frame before the step):
+        ``command``, unless a planner of the task's own reads the frame for its share."""
+        return self.command(action)
+
     @abstractmethod
     def begin(self, frame: SensorFrame) -> EpisodeContext:
         """The episode's context from its first frame."""

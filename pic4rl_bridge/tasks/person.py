@@ -1,14 +1,17 @@
 """personMonitoring: an omnidirectional robot keeps a walking person in view, at a distance.
 
-An omni base can strafe while turning, so the action is 3-D (forward, left, yaw rate). The
-reward pays facing the person (``cos`` of the bearing: 1 ahead, -1 behind) and penalizes the
-error from the desired distance. There is no goal: an episode ends on a collision or on the
-env's time limit.
+An omni base can strafe while turning. With ``person.control: end_to_end`` the action is 3-D
+(forward, left, yaw rate); with ``hybrid`` it is the yaw rate alone, and DWA
+(``pic4rl_bridge.follow.PersonFollower``) adds the translation that follows the person and
+avoids obstacles (Eirale et al. 2022). The reward pays facing the person (``cos`` of the
+bearing: 1 ahead, -1 behind) and penalizes the error from the desired distance. There is no
+goal: an episode ends on a collision or on the env's time limit.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -16,7 +19,7 @@ import numpy as np
 from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
 
-from ..config import EnvConfig
+from ..config import EnvConfig, PersonControl
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
 from .base import EpisodeContext, Judgement, Task
@@ -26,26 +29,47 @@ from .observations import MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors, 
 
 class PersonMonitoringTask(Task):
     """Observation: [LiDAR sectors (m), person distance (m), person bearing (rad, left
-    positive), last action (3)]; action: forward, left, yaw rate, each in [-1, 1]."""
+    positive), the person's walking direction seen from the robot's heading (rad), last
+    action]; action, each in [-1, 1]: forward, left, yaw rate (end to end) or
+    the yaw rate alone (hybrid)."""
 
     name = "personMonitoring"
     required = frozenset({"scan", "person"})
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.follower = None
+        if config.person.control == PersonControl.HYBRID.value:
+            from ..follow import PersonFollower
+
+            self.follower = PersonFollower(robot, config.baselines.dwa,
+                                           distance_m=config.person.distance_m,
+                                           collision_tolerance_m=config.collision_tolerance_m)
+        size = 1 if self.follower is not None else 3
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
         beams = config.lidar.beams
-        low = np.concatenate((np.zeros(beams), [0.0, -math.pi, -1.0, -1.0, -1.0]))
+        low = np.concatenate((np.zeros(beams), [0.0, -math.pi, -math.pi], -np.ones(size)))
         high = np.concatenate((np.full(beams, config.lidar.max_range_m),
-                               [MAX_TARGET_DISTANCE_M, math.pi, 1.0, 1.0, 1.0]))
+                               [MAX_TARGET_DISTANCE_M, math.pi, math.pi], np.ones(size)))
         self.observation_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32),
                                                 dtype=np.float32)
 
     def command(self, action: np.ndarray) -> Twist2D:
-        a = clipped_action(action, 3).astype(np.float64)
+        """The agent's share of the command: all of it end to end; hybrid, ω alone
+        (``command_at`` adds DWA's translation)."""
         r = self.robot
+        if self.follower is not None:
+            return Twist2D(wz=float(clipped_action(action, 1)[0]) * r.max_angular_rad_s)
+        a = clipped_action(action, 3).astype(np.float64)
         return Twist2D(vx=float(a[0] * r.max_linear_m_s), vy=float(a[1] * r.max_lateral_m_s),
                        wz=float(a[2] * r.max_angular_rad_s))
+
+    def command_at(self, action: np.ndarray, frame: SensorFrame) -> Twist2D:
+        own = self.command(action)
+        if self.follower is None:
+            return own
+        vx, vy = self.follower.translation(frame, own.wz)
+        return Twist2D(vx=vx, vy=vy, wz=own.wz)
 
     def begin(self, frame: SensorFrame) -> EpisodeContext:
         return EpisodeContext(start=frame.pose)
@@ -57,8 +81,10 @@ class PersonMonitoringTask(Task):
         lidar = self.config.lidar
         sectors = lidar_sectors(frame.scan.ranges, lidar.beams, lidar.max_range_m)
         distance, bearing = _person(frame)
-        return np.concatenate((sectors, np.array([distance, bearing], np.float32),
-                               clipped_action(last_action, 3)))
+        assert frame.person is not None  # _person checked it
+        walking = math.remainder(frame.person.yaw - frame.pose.yaw, math.tau)
+        return np.concatenate((sectors, np.array([distance, bearing, walking], np.float32),
+                               clipped_action(last_action, self.action_space.shape[0])))
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:
@@ -67,12 +93,20 @@ class PersonMonitoringTask(Task):
         safety = assess(frame, self.robot, self.config, collision_streak)
         error = abs(distance - self.config.person.distance_m)
         terms = {"facing": reward.facing * math.cos(bearing),
+                 "bearing": -reward.bearing * abs(bearing),
                  "person_distance": -reward.person_distance * error,
                  "collision": reward.collision if safety.ended else 0.0,
                  "step": reward.step}
         return Judgement(terms=terms, outcome=Outcome.COLLISION if safety.ended else None,
                          collision=safety.collision, collision_streak=safety.streak,
                          warning=safety.warning, min_obstacle_m=safety.min_obstacle_m)
+
+    def facts(self, context: EpisodeContext) -> dict[str, Any]:
+        """The desired distance and the camera's field of view, which the person metrics
+        judge by, and who gave which part of the command."""
+        return {"person_distance_m": self.config.person.distance_m,
+                "camera_fov_rad": self.robot.depth_hfov_rad,
+                "person_control": self.config.person.control}
 
 
 def _person(frame: SensorFrame) -> tuple[float, float]:

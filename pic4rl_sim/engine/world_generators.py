@@ -19,6 +19,7 @@ from ..errors import ConfigError, require, unknown_key
 from ..schema import coerce, param_type
 from .geometry import Pose2D
 from .mjcf_world import world_from_mjcf
+from .person_walk import corner_occluders, leg_speeds
 from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 
 WALL_THICKNESS_M = 0.1
@@ -53,6 +54,8 @@ PARAM_DOCS: dict[str, str] = {
     "cylinder_fraction": "fraction of obstacles that are cylinders, the rest boxes",
     "waypoints": "number of waypoints on the person's closed loop",
     "speed_m_s": "walking speed of the person (m/s)",
+    "speed_spread_fraction": "each leg walked at speed_m_s x [1 - f, 1 + f], drawn per leg",
+    "occluders": "obstacles inside the loop's corners that hide the person from a follower",
     "rows": "number of vine rows",
     "row_spacing_m": "distance between neighbouring rows (m)",
     "row_length_m": "length of the middle row (m)",
@@ -245,28 +248,38 @@ def obstacles(seed: int = 0, *, size_m: float = 10.0, count: int = 20, min_size_
 
 def person(seed: int = 0, *, size_m: float = 8.0, count: int = 6, min_size_m: float = 0.3,
            max_size_m: float = 1.0, min_gap_m: float = 0.8, cylinder_fraction: float = 0.5,
-           waypoints: int = 4, speed_m_s: float = 0.6) -> WorldSpec:
+           waypoints: int = 4, speed_m_s: float = 0.6, speed_spread_fraction: float = 0.3,
+           occluders: int = 2) -> WorldSpec:
     """A person walking a closed loop around the arena's centre, among a few obstacles.
 
     The loop is drawn first and the obstacles kept off it, so it never needs repair: waypoint
     i lies in the direction of angle 2 pi i / n (the loop never crosses itself) at a random
-    distance from the centre."""
+    distance from the centre. Then each leg gets its speed and up to ``occluders`` corners a
+    cylinder on their inside (``person_walk``; how many stand is ``occluders_placed`` in
+    ``params``)."""
     params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
     _count("world.person.waypoints", waypoints, 2, 20)
     _within("world.person.speed_m_s", speed_m_s, 0.0, 3.0)
     _within("world.person.size_m", size_m, 2.0, 100.0)
+    _within("world.person.speed_spread_fraction", speed_spread_fraction, 0.0, 0.9)
+    _count("world.person.occluders", occluders, 0, waypoints)
     rng = _rng(seed)
     need = PERSON_RADIUS_M + PERSON_MARGIN_M
     angles = rng.uniform(0, 2 * math.pi) + 2 * math.pi * np.arange(waypoints) / waypoints
     reach = rng.uniform(0.4, 1.0, waypoints) * (size_m / 2 - need)
     loop = np.column_stack([reach * np.cos(angles), reach * np.sin(angles)])
-    legs = [a + np.linspace(0, 1, int(np.hypot(*(b - a)) / 0.05) + 2)[:, None] * (b - a)
-            for a, b in zip(loop, np.roll(loop, -1, axis=0))]  # samples at most 5 cm apart
+    path = np.concatenate([a + np.linspace(0, 1, int(np.hypot(*(b - a)) / 0.05) + 2)[:, None]
+                           * (b - a) for a, b in zip(loop, np.roll(loop, -1, axis=0))])
     boxes, cylinders = _field(rng, "person", size_m, count, min_size_m, max_size_m, min_gap_m,
-                              cylinder_fraction, np.concatenate(legs), need + 0.025)
-    walk = PersonSpec(tuple((float(x), float(y)) for x, y in loop), speed_m_s, PERSON_RADIUS_M)
+                              cylinder_fraction, path, need + 0.025)  # path: 5 cm samples
+    hiding = corner_occluders(rng, loop, path, occluders, keep_off_m=need + 0.025,
+                              sizes_m=(min_size_m, max_size_m),
+                              half_size_m=size_m / 2, obstacles=(tuple(boxes), tuple(cylinders)))
+    params["occluders_placed"] = len(hiding)
+    walk = PersonSpec(tuple((float(x), float(y)) for x, y in loop), speed_m_s, PERSON_RADIUS_M,
+                      leg_speeds_m_s=leg_speeds(rng, waypoints, speed_m_s, speed_spread_fraction))
     bounds = (-size_m / 2, -size_m / 2, size_m / 2, size_m / 2)
-    return WorldSpec("person", bounds, tuple(_walls(bounds) + boxes), tuple(cylinders),
+    return WorldSpec("person", bounds, tuple(_walls(bounds) + boxes), (*cylinders, *hiding),
                      person=walk, seed=seed, params=params)
 
 

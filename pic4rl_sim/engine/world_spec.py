@@ -55,35 +55,42 @@ class Cylinder:
 
 @dataclass(frozen=True)
 class PersonSpec:
-    """A person (a cylinder) walking a closed loop of waypoints at constant speed."""
+    """A person (a cylinder) walking a closed loop of waypoints: leg i (waypoint i to i + 1)
+    at ``leg_speeds_m_s[i]``, or every leg at ``speed_m_s`` when none are given."""
 
     waypoints: tuple[tuple[float, float], ...]
     speed_m_s: float = 0.6
     radius_m: float = 0.25
     height_m: float = 1.7
+    leg_speeds_m_s: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         require(len(self.waypoints) >= 2, "person.waypoints", self.waypoints, "two or more points")
         require(self.speed_m_s >= 0, "person.speed_m_s", self.speed_m_s, "a speed >= 0")
+        legs = self.leg_speeds_m_s
+        require(not legs or (len(legs) == len(self.waypoints)
+                             and all(math.isfinite(v) and v > 0 for v in legs)),
+                "person.leg_speeds_m_s", legs,
+                f"() or one speed > 0 per leg ({len(self.waypoints)} legs)")
 
     def pose_at(self, t_s: float) -> tuple[Pose2D, tuple[float, float]]:
         """Pose (facing the walking direction) and world velocity (m/s) at time ``t_s``."""
         pts = np.asarray(self.waypoints + self.waypoints[:1], dtype=float)
         seg = np.diff(pts, axis=0)
         lengths = np.hypot(seg[:, 0], seg[:, 1])
-        total = float(lengths.sum())
-        if total == 0 or self.speed_m_s == 0:
+        speeds = np.asarray(self.leg_speeds_m_s or (self.speed_m_s,) * len(lengths))
+        if lengths.sum() == 0 or speeds.min() == 0:
             yaw = math.atan2(seg[0, 1], seg[0, 0]) if lengths[0] > 0 else 0.0
             return Pose2D(float(pts[0, 0]), float(pts[0, 1]), yaw), (0.0, 0.0)
-        s = (self.speed_m_s * t_s) % total
-        i = int(np.searchsorted(np.cumsum(lengths), s, side="right"))
-        i = min(i, len(lengths) - 1)
-        start = float(np.cumsum(lengths)[i] - lengths[i])
+        durations = lengths / speeds
+        ends = np.cumsum(durations)
+        t = t_s % float(ends[-1])
+        i = min(int(np.searchsorted(ends, t, side="right")), len(lengths) - 1)
         u = seg[i] / lengths[i] if lengths[i] > 0 else np.zeros(2)
-        p = pts[i] + u * (s - start)
+        p = pts[i] + u * speeds[i] * (t - float(ends[i] - durations[i]))
         yaw = math.atan2(u[1], u[0])
-        return Pose2D(float(p[0]), float(p[1]), yaw), (float(u[0] * self.speed_m_s),
-                                                        float(u[1] * self.speed_m_s))
+        return Pose2D(float(p[0]), float(p[1]), yaw), (float(u[0] * speeds[i]),
+                                                        float(u[1] * speeds[i]))
 
 
 @dataclass(frozen=True)

@@ -166,8 +166,10 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
       "--params-file", str(LIDAR_TD3)], "did you mean 'sensor'"),
     (["--baseline", "proportional", "--ros-args", "--params-file",
       str(CONFIG / "env_person_omni.yaml")],
-     "the baselines drive goToPose (a goal and a (v, ω) action); this env's task is "
-     "'personMonitoring'"),
+     "--baseline proportional: it drives goToPose; this env's task is 'personMonitoring'. "
+     "Test it with --baseline dwa_heading"),
+    (["--baseline", "dwa_heading", "--ros-args", "--params-file", str(LIDAR_TD3)],
+     "--baseline dwa_heading: it drives personMonitoring; this env's task is 'goToPose'"),
 ])
 def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]

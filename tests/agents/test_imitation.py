@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 import torch
 import yaml
-from agents_helpers import LIDAR_TD3, ROS_ARGS, TINY, Launcher
+from agents_helpers import CONFIG, LIDAR_TD3, ROS_ARGS, TINY, Launcher
 from ros_helpers import next_domain
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
@@ -152,3 +152,25 @@ def test_imitation_trains_through_ros(tmp_path: Path) -> None:
     assert model.num_timesteps == 120
     config = yaml.safe_load((tmp_path / "il_ros" / "config.yaml").read_text())
     assert config["nav_env"]["ros__parameters"]["transport"] == "ros"
+
+
+def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
+    """In a hybrid person env the expert labels ω alone, end to end (vx, vy, ω); it drives
+    personMonitoring only, and the planner goToPose only."""
+    from pic4rl_agents.imitation import make_expert
+    from pic4rl_bridge.config import load_env_config
+    from pic4rl_bridge.follow import HeadingController
+
+    person = load_env_config(CONFIG / "env_person_omni.yaml")
+    for control, size in (("hybrid", 1), ("end_to_end", 3)):
+        expert = make_expert("heading", person.replace(**{"person.control": control}))
+        assert isinstance(expert, HeadingController) and expert.hybrid == (size == 1)
+    with pytest.raises(ConfigError, match="heading drives personMonitoring; the env's task is "
+                                          "'goToPose' \\(use planner\\)"):
+        make_expert("heading", load_run_config([LIDAR_TD3]).env)
+    with pytest.raises(ConfigError, match="planner drives goToPose; .*'personMonitoring' "
+                                          "\\(use heading\\)"):
+        make_expert("planner", person)
+    with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
+                                          "heading"):
+        make_expert("nobody", person)

@@ -99,7 +99,7 @@ def test_spaces_follow_task_and_sensor() -> None:
     vineyard_obs, _ = spaces["pic4rl/Vineyard-v0"]
     assert vineyard_obs.shape == (1, 60, 80)
     person_obs, person_act = spaces["pic4rl/PersonMonitoring-v0"]
-    assert person_obs.shape == (BEAMS + 5,) and person_act.shape == (3,)
+    assert person_obs.shape == (BEAMS + 6,) and person_act.shape == (3,)  # + walking direction
 
 
 def test_import_is_light() -> None:

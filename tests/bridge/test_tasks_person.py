@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -40,12 +41,13 @@ def test_action_to_omni_command():
     (Pose2D(2.0, 2.0), 0.0, math.pi / 4), (Pose2D(-2.0, 0.0), 0.0, math.pi),
     (Pose2D(0.0, 3.0), math.pi / 2, 0.0), (Pose2D(1.0, 0.0), -math.pi / 3, math.pi / 3)])
 def test_facing_and_distance_terms(person, yaw, bearing):
-    task = PersonMonitoringTask(CONFIG, OMNI)
+    task = PersonMonitoringTask(CONFIG.replace(**{"reward.bearing": 0.3}), OMNI)
     f = frame(person, yaw)
     j = task.judge(f, f, task.begin(f), 0)
     distance = math.hypot(person.x, person.y)
-    assert set(j.terms) == {"facing", "person_distance", "collision", "step"}
+    assert set(j.terms) == {"facing", "bearing", "person_distance", "collision", "step"}
     assert j.terms["facing"] == pytest.approx(math.cos(bearing))
+    assert j.terms["bearing"] == pytest.approx(-0.3 * bearing)
     assert j.terms["person_distance"] == pytest.approx(-0.5 * abs(distance - 2.0))
     assert j.outcome is None and j.terms["collision"] == 0.0
 
@@ -53,9 +55,12 @@ def test_facing_and_distance_terms(person, yaw, bearing):
 def test_observation_in_space():
     task = PersonMonitoringTask(CONFIG, OMNI)
     f = frame(Pose2D(0.0, -3.0), ahead_m=1.5)
+    f = dataclasses.replace(f, person=Pose2D(0.0, -3.0, math.pi))  # walking toward -x
     obs = task.observe(f, task.begin(f), np.array([0.1, 2.0, -0.3]))
-    assert obs.shape == (CONFIG.lidar.beams + 5,) and task.observation_space.contains(obs)
-    np.testing.assert_allclose(obs[-5:], [3.0, -math.pi / 2, 0.1, 1.0, -0.3], rtol=1e-6)
+    assert obs.shape == (CONFIG.lidar.beams + 6,) and task.observation_space.contains(obs)
+    np.testing.assert_allclose(np.abs(obs[-4]), math.pi, rtol=1e-6)  # walking at the robot's back
+    np.testing.assert_allclose(obs[[-6, -5, -3, -2, -1]], [3.0, -math.pi / 2, 0.1, 1.0, -0.3],
+                               rtol=1e-6)
     assert obs[CONFIG.lidar.beams // 2] == 1.5
     assert task.required == {"scan", "person"}
 

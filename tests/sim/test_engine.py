@@ -108,6 +108,18 @@ def test_a_wall_stops_the_robot_by_contact():
     assert not engine.in_collision()
 
 
+def test_the_person_walks_each_leg_at_its_own_speed():
+    """A 4 m square walked at 1, 2, 1 and 0.5 m/s: 4 + 2 + 4 + 8 = 18 s a lap."""
+    walk = PersonSpec(((0, 0), (4, 0), (4, 4), (0, 4)), leg_speeds_m_s=(1.0, 2.0, 1.0, 0.5))
+    for t, xy, velocity in [(1.0, (1, 0), (1, 0)), (5.0, (4, 2), (0, 2)),
+                            (8.0, (2, 4), (-1, 0)), (14.0, (0, 2), (0, -0.5)),
+                            (19.0, (1, 0), (1, 0))]:
+        pose, v = walk.pose_at(t)
+        assert (pose.x, pose.y) == pytest.approx(xy) and v == pytest.approx(velocity)
+    with pytest.raises(ConfigError, match=r"person\.leg_speeds_m_s"):
+        PersonSpec(((0, 0), (4, 0)), leg_speeds_m_s=(1.0,))
+
+
 def test_the_walking_person_moves_and_bumps_into_a_standing_robot():
     person = PersonSpec(((2.0, -3.0), (2.0, 3.0)), speed_m_s=1.0)
     engine = Engine(OMNI, open_field(person=person), seed=1)

@@ -205,7 +205,48 @@ def test_person_walks_clear_of_every_obstacle(seed: int) -> None:
     times = np.linspace(0, 60, 500)
     xy = np.array([walk.pose_at(t)[0][:2] for t in times])
     assert world.clearance(xy).min() >= need
-    assert len([s for s in world.boxes + world.cylinders if s.kind != "wall"]) == 6
+    placed = world.params["occluders_placed"]
+    assert placed == 2  # every seed here has two corners with room inside
+    assert len([s for s in world.boxes + world.cylinders if s.kind != "wall"]) == 6 + placed
+
+
+def _corner_sight_blocked(world, back_m: float = 2.0, ahead_m: float = 1.0) -> int:
+    """Corners where the line from ``back_m`` before the corner (on the incoming leg) to
+    ``ahead_m`` after it (on the outgoing leg) crosses an obstacle: a follower there has lost
+    the person."""
+    loop, blocked = np.array(world.person.waypoints), 0
+    for i, corner in enumerate(loop):
+        before, after = loop[i - 1], loop[(i + 1) % len(loop)]
+        p = corner + (before - corner) / np.hypot(*(before - corner)) * back_m
+        q = corner + (after - corner) / np.hypot(*(after - corner)) * ahead_m
+        blocked += bool(world.clearance(p + np.linspace(0, 1, 400)[:, None] * (q - p)).min() < 0)
+    return blocked
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_person_is_hidden_at_a_corner_only_with_occluders(seed: int) -> None:
+    assert _corner_sight_blocked(person(seed)) >= 1
+    assert _corner_sight_blocked(person(seed, occluders=0)) == 0
+
+
+def test_person_paths_and_speeds_vary_with_the_seed() -> None:
+    worlds = [person(seed, speed_m_s=0.8, speed_spread_fraction=0.25) for seed in range(5)]
+    loops = {tuple(np.round(np.ravel(w.person.waypoints), 6)) for w in worlds}
+    speeds = {w.person.leg_speeds_m_s for w in worlds}
+    assert len(loops) == 5 and len(speeds) == 5
+    every = np.concatenate([w.person.leg_speeds_m_s for w in worlds])
+    assert every.min() >= 0.8 * 0.75 and every.max() <= 0.8 * 1.25 and every.std() > 0.05
+    assert person(3, speed_m_s=0.8, speed_spread_fraction=0.25) == worlds[3]  # the seed says it all
+    assert person(0, speed_spread_fraction=0.0).person.leg_speeds_m_s == ()
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("speed_spread_fraction", 0.95, r"world\.person\.speed_spread_fraction: 0\.95"),
+    ("occluders", 5, r"world\.person\.occluders: 5 .*\[0, 4\]"),
+])
+def test_bad_person_walk_parameters_are_config_errors(key, value, match) -> None:
+    with pytest.raises(ConfigError, match=match):
+        person(0, **{key: value})
 
 
 def test_vineyard_straight_rows_and_lanes() -> None:
