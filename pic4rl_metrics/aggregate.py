@@ -164,3 +164,21 @@ def _group_row(group: pd.DataFrame, outcomes: pd.Series, metrics: list[str],
         row[f"{m}_mean"] = float(mean[m]) if len(group) else math.nan
         row[f"{m}_std"] = float(std[m]) if len(group) else math.nan
     return row
+
+
+#: The normal quantile of a two-sided 95 % interval.
+Z_95 = 1.959963984540054
+
+
+def wilson_interval(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
+    """Wilson score interval of a success rate ``successes/n`` (as statsmodels'
+    ``proportion_confint(method="wilson")``): unlike the normal one it stays inside [0, 1]
+    and says something at 0/n and n/n, where benchmark rows often sit. ``(nan, nan)`` for
+    ``n == 0``."""
+    if n <= 0:
+        return math.nan, math.nan
+    p = successes / n
+    denom = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)

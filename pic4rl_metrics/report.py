@@ -140,6 +140,23 @@ def _csv(header: list[str], rows: list[list[str | None]]) -> str:
     return buf.getvalue()
 
 
+def render_rows(header: Sequence[str], rows: Sequence[Sequence[str | None]], fmt: str) -> str:
+    """A plain table of text cells (None = missing) in table, markdown, csv or latex (a
+    booktabs tabular, cells escaped): for tables whose columns are not metrics alone."""
+    if _check_format(fmt) == "json":
+        return json.dumps([dict(zip(header, r)) for r in rows], indent=2, ensure_ascii=False) + "\n"
+    head, body = list(header), [list(r) for r in rows]
+    right = [False] * len(head)
+    if fmt == "csv":
+        return _csv(head, body)
+    if fmt == "markdown":
+        return _markdown(head, body, right)
+    if fmt == "table":
+        return _fixed_width([head], body, right)
+    tex = [[None if c is None else latex_escape(c) for c in r] for r in body]
+    return "\n".join(_tabular([[latex_escape(h) for h in head]], tex)) + "\n"
+
+
 # --- per-episode rows -----------------------------------------------------------------------
 
 

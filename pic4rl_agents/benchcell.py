@@ -1,0 +1,166 @@
+"""One cell of a benchmark suite, resumable: ``run_cell`` drives only the episodes whose bags
+are not finished yet, through the tester (``resolve_agents``, ``run_agent``).
+
+A cell's bags are ``<suite root>/<cell>/<agent>/episode_NNNN/``. A bag is finished when its
+``metadata.yaml`` is there (the recorder writes it on close). A worker killed mid-episode
+leaves one unfinished bag; the retry moves it, kept, to ``<suite root>/_unfinished/`` and
+drives the cell's episodes from that index on: the same pairs in the same order (episode k
+drives pair k of the cell's pairs file), so no bag is duplicated or lost. A finished cell gets
+``cell.json`` (written atomically); a rerun skips it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
+from pic4rl_metrics import atomic
+from pic4rl_metrics.inputs import METADATA
+from pic4rl_sim import params_file
+
+from .suite import Cell
+from .testplan import AgentSpec, TestPlan, resolve_agents
+
+DONE = "cell.json"  # a finished cell's marker
+ERROR = "cell.error"  # the last attempt's error, in one line
+PAIRS = "pairs.json"  # a random pair set, drawn once per cell
+UNFINISHED = "_unfinished"  # beside the cells: killed episodes' bags, kept out of the table
+#: ROS domains of sim-node cells: 1 + (cell index mod 100), so cells side by side never share.
+DOMAINS = 100
+
+
+@dataclass(frozen=True)
+class CellState:
+    """What is on disk of a cell: its finished episodes' bags, and whether it is done."""
+
+    finished: tuple[Path, ...]
+    unfinished: tuple[Path, ...]
+    done: bool
+
+
+def cell_dir(root: Path, cell: Cell) -> Path:
+    return root / cell.name
+
+
+def state(root: Path, cell: Cell) -> CellState:
+    agent_dir = cell_dir(root, cell) / cell.agent
+    bags = sorted(agent_dir.glob("episode_*")) if agent_dir.is_dir() else []
+    finished = tuple(b for b in bags if (b / METADATA).is_file())
+    unfinished = tuple(b for b in bags if not (b / METADATA).is_file())
+    return CellState(finished, unfinished, (cell_dir(root, cell) / DONE).is_file())
+
+
+def _plan(cell: Cell, root: Path, *, episodes: int, pairs: str, domain: int) -> TestPlan:
+    env: dict[str, Any] = {"episodes.file": pairs} if pairs else {}
+    if cell.transport == "ros":
+        env.update({"transport": "ros", "ros.domain_id": domain})
+    sim = {k: v for k, v in (("world", cell.world), ("world_variant", cell.variant),
+                             ("robot", cell.robot)) if v not in ("", None)}
+    return TestPlan(agents=(f"{cell.agent}={cell.agent_path}",) if cell.agent_path else (),
+                    baselines=(cell.baseline,) if cell.baseline else (), episodes=episodes,
+                    seed=cell.seed, bags_dir=root, run=cell.name, params_files=(cell.env,),
+                    env_overrides=env, sim_overrides=sim, progress=False)
+
+
+def _cell_pairs(cell: Cell, root: Path) -> GoalsAndPoses | None:
+    """The cell's pairs in episode order: its file's, or drawn once from the pair set's seed
+    into ``<cell>/pairs.json``; ``None`` for the env's own episodes."""
+    if cell.pairs.file:
+        return load_goals_and_poses(cell.pairs.file)
+    if not cell.pairs.random:
+        return None
+    path = cell_dir(root, cell) / PAIRS
+    if not path.is_file():
+        from pic4rl_bridge.episodes import PairSampler
+        from pic4rl_bridge.robot_info import Scenario
+        from pic4rl_sim.engine.sampling import PAIR_KINDS
+
+        spec = resolve_agents(_plan(cell, root, episodes=1, pairs="", domain=0))[0]
+        sampler = PairSampler.for_scenario(Scenario(spec.run.env))
+        drawn = sampler.goals_and_poses(cell.pairs.random, seed=cell.pairs.seed,  # type: ignore[union-attr]
+                                        kind=PAIR_KINDS[cell.pairs.kind])
+        with atomic.replacing(path) as tmp:
+            save_goals_and_poses(drawn, tmp, overwrite=True,
+                                 comment=f"{cell.pairs.label}: drawn by pic4rl-bench")
+    return load_goals_and_poses(path)
+
+
+def _pairs_from(pairs: GoalsAndPoses, first: int, folder: Path) -> str:
+    """A pairs file whose pair i is the cell's pair ``first + i`` (cycling)."""
+    n = len(pairs.goals)
+    order = [(first + i) % n for i in range(n)]
+    rotated = GoalsAndPoses(pairs.initial_pose, tuple(pairs.goals[i] for i in order),
+                            tuple(pairs.poses[i] for i in order))
+    path = folder / f"pairs_from_{first:04d}.json"
+    with atomic.replacing(path) as tmp:
+        save_goals_and_poses(rotated, tmp, overwrite=True)
+    return str(path)
+
+
+def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:
+    """Move unfinished bags out of the cell (kept, never deleted), stamped with the time."""
+    for bag in bags:
+        target = root / UNFINISHED / cell.name / cell.agent / f"{bag.name}.{time.time_ns()}"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        os.replace(bag, target)
+
+
+def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int) -> None:
+    """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
+    drives sim nodes."""
+    from .run import _stop
+    from .tester import run_agent
+
+    if cell.transport != "ros":
+        run_agent(spec, episodes=episodes, seed=seed, progress=False)
+        return
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
+           os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
+    with tempfile.TemporaryDirectory(prefix="pic4rl-bench-") as tmp:
+        sim_file = Path(tmp) / "sim.yaml"
+        sim_file.write_text(params_file.dump({"/**": spec.run.env.sim_params}))
+        sim = subprocess.Popen([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
+                                "--params-file", str(sim_file)], env=env, start_new_session=True)
+        try:
+            run_agent(spec, episodes=episodes, seed=seed, progress=False)
+        finally:
+            _stop(sim, 10.0)
+
+
+def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
+    """Drive what is missing of ``cell`` and mark it done; ``"skipped"`` when it was done
+    already, else ``"done"``. Errors propagate (the caller retries)."""
+    current = state(root, cell)
+    if current.done:
+        return "skipped"
+    folder = cell_dir(root, cell)
+    folder.mkdir(parents=True, exist_ok=True)
+    _set_aside(root, cell, current.unfinished)
+    pairs = _cell_pairs(cell, root)
+    total, first = expected_episodes(cell), len(current.finished)
+    domain = 1 + index % DOMAINS
+    if first < total:
+        file = _pairs_from(pairs, first, folder) if pairs is not None else ""
+        # A resumed cell's episodes draw their simulator seeds from seed + first.
+        seed = cell.seed + first
+        spec = resolve_agents(_plan(cell, root, episodes=total - first, pairs=file,
+                                    domain=domain), folder)[0]
+        _drive(spec, cell, episodes=total - first, seed=seed, domain=domain)
+    (folder / ERROR).unlink(missing_ok=True)
+    atomic.write_text(folder / DONE, json.dumps({"cell": cell.name, "episodes": total}) + "\n")
+    return "done"
+
+
+def expected_episodes(cell: Cell) -> int:
+    """How many episodes the cell drives (its pair set's), without drawing anything."""
+    if cell.pairs.file:
+        return cell.pairs.episodes or len(load_goals_and_poses(cell.pairs.file).goals)
+    return cell.pairs.random or cell.pairs.episodes

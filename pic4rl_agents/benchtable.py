@@ -1,0 +1,124 @@
+"""A suite's results, from its bags alone through ``pic4rl_metrics``: one table (one row per
+task × agent × world × robot × pair set, every repetition's episodes together) with the
+paper's columns, SPL, the success rate's Wilson 95 % interval and n, and a leaderboard per
+task (success, then SPL). A cell that failed makes its row read ``failed: <error>``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from pic4rl_metrics import atomic
+from pic4rl_metrics.aggregate import aggregate, wilson_interval
+from pic4rl_metrics.batch import compute
+from pic4rl_metrics.registry import METRICS
+from pic4rl_metrics.report import plain_text, render_rows
+from pic4rl_metrics.results import TABLE1_COLUMNS
+
+from .suite import Cell, Suite
+
+ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
+METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
+TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
+
+
+@dataclass(frozen=True)
+class SuiteTable:
+    header: tuple[str, ...]
+    rows: tuple[tuple[str | None, ...], ...]
+    files: tuple[Path, ...]  # the tables and leaderboards written
+    bag_errors: tuple[str, ...]  # bags that could not be judged
+
+
+def _num(value: object) -> str | None:
+    return None if value is None or pd.isna(value) else f"{float(value):.2f}"
+
+
+def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """Every cell's episodes with the cell's row keys, and the errors of unjudged bags."""
+    folders = [suite.root / c.name / c.agent for c in cells]
+    folders = [f for f in folders if f.is_dir()]
+    if not folders:
+        return pd.DataFrame(columns=[*ROW_KEYS, "success"]), ()
+    result = compute(folders)
+    frame = result.frame
+    by_name = {c.name: c for c in cells}
+    rows = [by_name[Path(str(b)).resolve().relative_to(suite.root.resolve()).parts[0]].row
+            for b in frame["bag"]]
+    keys = pd.DataFrame(rows, index=frame.index, columns=list(ROW_KEYS))
+    frame = pd.concat([keys, frame.drop(columns=[c for c in ROW_KEYS if c in frame])], axis=1)
+    return frame, tuple(str(f.error) for f in result.failed)
+
+
+def _row(key: Mapping[str, str], stats: pd.Series | None, error: str) -> list[str | None]:
+    cells: list[str | None] = list(key.values())
+    if stats is None:
+        return [*cells, "0", None, None, *[None] * len(METRIC_COLUMNS), f"failed: {error}"]
+    k, n = int(stats["n_success"]), int(stats["n_judged"])
+    low, high = wilson_interval(k, n)
+    ci = None if n == 0 else f"[{low:.2f}, {high:.2f}]"
+    metrics = [_num(stats.get(f"{c}_mean")) for c in METRIC_COLUMNS]
+    return [*cells, str(int(stats["n_episodes"])), f"{k}/{n}" if n else None, ci, *metrics,
+            f"failed: {error}" if error else "ok"]
+
+
+def build_rows(suite: Suite, errors: Mapping[str, str]) -> tuple[
+        tuple[str, ...], list[list[str | None]], tuple[str, ...]]:
+    """The table's header and rows (in the suite's order) and the unjudged bags' errors;
+    ``errors``: the failed cells' errors by cell name."""
+    frame, bad = _judged(suite, suite.cells)
+    agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
+    header = (*ROW_KEYS, "n", "success", "success 95% CI",
+              *(f"{plain_text(METRICS[c].label)} [{plain_text(METRICS[c].unit)}]"
+                for c in METRIC_COLUMNS), "status")
+    rows: dict[tuple[str, ...], tuple[dict[str, str], list[str]]] = {}
+    for cell in suite.cells:
+        key = tuple(cell.row.values())
+        rows.setdefault(key, (cell.row, []))
+        if cell.name in errors:
+            rows[key][1].append(f"{cell.name}: {errors[cell.name]}")
+    out = []
+    for key, (row, errs) in rows.items():
+        stats = agg.loc[key] if agg is not None and key in agg.index else None
+        out.append(_row(row, stats, "; ".join(errs)))
+    return header, out, bad
+
+
+def _rate(row: Sequence[str | None], col: int) -> float:
+    text = row[col]
+    if text is None:
+        return -1.0
+    if "/" in text:
+        k, n = text.split("/")
+        return int(k) / int(n)
+    return float(text)
+
+
+def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]]
+                 ) -> dict[str, str]:
+    """Markdown per task: its rows by success rate, then SPL, best first."""
+    success, spl = header.index("success"), len(header) - 2
+    boards = {}
+    for task in dict.fromkeys(r[0] for r in rows):
+        mine = sorted((r for r in rows if r[0] == task),
+                      key=lambda r: (_rate(r, success), _rate(r, spl)), reverse=True)
+        cols = ["rank", *header[1:5], "n", "success", "success 95% CI", "SPL", "status"]
+        body = [[str(i + 1), *r[1:5], r[5], r[success], r[success + 1], r[spl], r[-1]]
+                for i, r in enumerate(mine)]
+        boards[str(task)] = render_rows(cols, body, "markdown")
+    return boards
+
+
+def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
+    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX) and leaderboards
+    into the suite's bags folder, each atomically."""
+    header, rows, bad = build_rows(suite, errors)
+    files = [atomic.write_text(suite.root / name, render_rows(header, rows, fmt))
+             for fmt, name in TABLE_FORMATS.items()]
+    files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
+              for task, text in leaderboards(header, rows).items()]
+    return SuiteTable(tuple(header), tuple(tuple(r) for r in rows), tuple(files), bad)
