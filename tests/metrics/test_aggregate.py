@@ -149,3 +149,31 @@ def test_aborted_episodes_are_counted_apart_and_out_of_the_success_rate(
     assert counted["success_mean"] == pytest.approx(1 / 3)
     text = render_comparison(aggregate(cut), "markdown")
     assert "Aborted (cut short with no outcome recorded): n = 1, 0" in text
+
+
+# --- Wilson interval --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("k", "n", "low", "high"), [
+    (8, 10, 0.4901624715, 0.9433178485),  # statsmodels proportion_confint(8, 10, method="wilson")
+    (0, 5, 0.0, 0.4344824648),
+    (5, 5, 0.5655175352, 1.0),
+    (1, 2, 0.0945312057, 0.9054687943),
+])
+def test_wilson_interval_matches_the_score_interval(k: int, n: int, low: float,
+                                                     high: float) -> None:
+    from pic4rl_metrics.aggregate import wilson_interval
+
+    got = wilson_interval(k, n)
+    assert got == pytest.approx((low, high), abs=1e-9)
+    # by hand: the score interval's bounds solve |p - p_hat| = z sqrt(p (1 - p) / n)
+    z = 1.959963984540054
+    for p in got:
+        if 0.0 < p < 1.0:
+            assert abs(p - k / n) == pytest.approx(z * math.sqrt(p * (1 - p) / n), abs=1e-9)
+
+
+def test_wilson_interval_of_nothing_is_nan() -> None:
+    from pic4rl_metrics.aggregate import wilson_interval
+
+    assert all(math.isnan(v) for v in wilson_interval(0, 0))
