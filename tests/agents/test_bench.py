@@ -106,7 +106,7 @@ def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) 
 
 
 def test_a_cell_that_keeps_failing_is_a_failed_row(tmp_path: Path) -> None:
-    pairs = tmp_path / "bad_pairs.json"  # a start inside a wall's reach: no such pair
+    pairs = tmp_path / "bad_pairs.json"  # a pair far outside the world: refused
     pairs.write_text(json.dumps({"goals": [[100.0, 100.0]], "poses": [[100.0, 100.0, 0.0]]}))
     suite = load_suite(_files(tmp_path, baselines=["proportional"],
                               pairs=[{"file": str(pairs)}, {"file": str(PAIRS), "episodes": 1}]))
