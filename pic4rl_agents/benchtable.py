@@ -44,7 +44,7 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
     folders = [f for f in folders if f.is_dir()]
     if not folders:
         return pd.DataFrame(columns=[*ROW_KEYS, "success"]), ()
-    result = compute(folders)
+    result = compute(folders, jobs=0)  # one process per core: the pass runs on the driver
     frame = result.frame
     by_name = {c.name: c for c in cells}
     rows = [by_name[Path(str(b)).resolve().relative_to(suite.root.resolve()).parts[0]].row

@@ -153,3 +153,13 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
             goal = json.loads(facts["rosbag2_bagfile_information"]["custom_data"]["goal"])
             assert goal == pytest.approx(pairs[k], abs=1e-3)
     assert out.count("| goto | dwa |") == 2 and "failed" not in out
+
+
+def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
+    pytest.importorskip("ray")
+    suite = load_suite(_files(tmp_path, baselines=["proportional", "dwa"],
+                              pairs=[{"file": str(PAIRS), "episodes": 1}]))
+    table = bench.run_suite(suite, workers=2, progress=False)
+    assert [(r[1], r[5], r[-1]) for r in table.rows] == [("proportional", "1", "ok"),
+                                                          ("dwa", "1", "ok")]
+    assert all((suite.root / c.name / benchcell.DONE).is_file() for c in suite.cells)
