@@ -6,15 +6,19 @@ task (success, then SPL). A cell that failed makes its row read ``failed: <error
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
 from pic4rl_metrics.aggregate import aggregate, wilson_interval
 from pic4rl_metrics.batch import compute
+from pic4rl_metrics.plots import save_figure
 from pic4rl_metrics.registry import METRICS
 from pic4rl_metrics.report import plain_text, render_rows
 from pic4rl_metrics.results import TABLE1_COLUMNS
@@ -113,12 +117,42 @@ def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]]
     return boards
 
 
+def comparison_figure(task: str, header: Sequence[str],
+                      rows: Sequence[Sequence[str | None]]) -> Figure:
+    """One task's rows as bars of their success rate with its Wilson 95 % interval (a failed
+    or unjudged row is an empty bar, labelled so)."""
+    success = header.index("success")
+    mine = [r for r in rows if r[0] == task]
+    labels, rates, lows, highs = [], [], [], []
+    for r in mine:
+        k, _, n = (r[success] or "0/0").partition("/")
+        low, high = wilson_interval(int(k), int(n or 0))
+        rate = int(k) / int(n) if n and int(n) else math.nan
+        labels.append(" · ".join(str(v) for v in r[1:5]) + ("" if r[-1] == "ok" else " (failed)"))
+        rates.append(rate)
+        lows.append(rate - low if n and int(n) else 0.0)
+        highs.append(high - rate if n and int(n) else 0.0)
+    fig = Figure(figsize=(9, 1.2 + 0.45 * len(mine)), layout="constrained")
+    ax = fig.subplots()
+    y = np.arange(len(mine))[::-1]
+    ax.barh(y, np.nan_to_num(rates), xerr=[lows, highs], color="tab:blue", capsize=3)
+    ax.set_yticks(y, labels, fontsize=8)
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("success rate (bars: Wilson 95 % interval)")
+    ax.set_title(f"{task}: agent · world · robot · pairs")
+    return fig
+
+
 def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
-    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX) and leaderboards
-    into the suite's bags folder, each atomically."""
+    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX), leaderboards and
+    comparison figures (``comparison_<task>.png``) into the suite's bags folder, each
+    atomically."""
     header, rows, bad = build_rows(suite, errors)
     files = [atomic.write_text(suite.root / name, render_rows(header, rows, fmt))
              for fmt, name in TABLE_FORMATS.items()]
     files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
               for task, text in leaderboards(header, rows).items()]
+    files += [save_figure(comparison_figure(task, header, rows),
+                          suite.root / f"comparison_{task}.png", overwrite=True)
+              for task in dict.fromkeys(r[0] for r in rows)]
     return SuiteTable(tuple(header), tuple(tuple(r) for r in rows), tuple(files), bad)

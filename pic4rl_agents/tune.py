@@ -7,6 +7,8 @@ written out as a params file that ``pic4rl-train`` takes as it is.
     pic4rl-tune --base config/train_goto_lidar_td3.yaml --n-trials 50 --max-steps 50000
     pic4rl-tune --base config/train_goto_lidar_td3.yaml --trial-seconds 600 --n-jobs 2 \\
         --storage postgresql://user@host/optuna --study-name td3_lidar   # several machines
+    pic4rl-tune --base config/train_goto_lidar_td3.yaml --address auto --n-jobs 16 \
+        --storage postgresql://user@host/optuna       # the trials as tasks of a Ray cluster
 
 The study lives in ``<study-dir>`` (default ``<runs_dir>/tune/<study-name>``): ``study.db``
 (the default storage), ``trials/trial_<n>/`` (each trial's run directory), and the summary,
@@ -182,6 +184,38 @@ def optimize(settings: TuneSettings, *, n_trials: int, timeout_s: float | None =
     return study
 
 
+def _shares(settings: TuneSettings, n_jobs: int, seed: int,
+            options: dict[str, Any]) -> list[dict[str, Any]]:
+    """Each worker's ``optimize`` options: the trials split among ``n_jobs`` workers, TPE
+    seeded per worker so that they do not sample alike. Creates the study first, once, before
+    the workers load it."""
+    create_study(settings)
+    counts = [options["n_trials"] // n_jobs + (i < options["n_trials"] % n_jobs)
+              for i in range(n_jobs)]
+    return [{**options, "n_trials": count, "seed": seed + i}
+            for i, count in enumerate(counts) if count > 0]
+
+
+def _optimize_on_ray(settings: TuneSettings, n_jobs: int, seed: int, options: dict[str, Any],
+                     address: str) -> Any:
+    """The workers as Ray tasks (one CPU each) on the cluster at ``address``, sharing the
+    study's storage; Ray is the ``cluster`` extra."""
+    try:
+        import ray
+    except ImportError as err:
+        raise ConfigError("--address: Ray is not installed (pip install 'pic4rl[cluster]')") \
+            from err
+    shares = _shares(settings, n_jobs, seed, options)
+    ray.init(address=address, num_cpus=n_jobs if address == "local" else None,
+             include_dashboard=False, logging_level="ERROR", log_to_driver=True)
+    try:
+        task = ray.remote(num_cpus=1, max_retries=0)(_worker)
+        ray.get([task.remote(settings, share) for share in shares])
+    finally:
+        ray.shutdown()
+    return create_study(settings)
+
+
 def _worker(settings: TuneSettings, options: dict[str, Any]) -> None:
     with _console(), contextlib.suppress(KeyboardInterrupt):  # the parent reports it
         optimize(settings, **options)
@@ -207,6 +241,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="stop starting trials after S seconds")
     parser.add_argument("--n-jobs", type=int, default=1,
                         help="worker processes sharing the study (default 1)")
+    parser.add_argument("--address", metavar="RAY",
+                        help="run the --n-jobs workers as Ray tasks on this cluster ('auto': "
+                             "the one this machine joined, 'local': a new local Ray); every "
+                             "node must reach --storage (an RDB server URL across machines)")
     parser.add_argument("--storage", metavar="URL",
                         help="Optuna RDB storage (default sqlite:///<study-dir>/study.db)")
     parser.add_argument("--study-name", help="default: the base run's name")
@@ -283,7 +321,9 @@ def _tune(args: argparse.Namespace) -> int:
               f"({settings.storage}), {args.n_trials} trials of {settings.base.train.algorithm}"
               f", {args.n_jobs} job(s)", flush=True)
         started = time.perf_counter()
-        if args.n_jobs == 1:
+        if args.address:
+            study = _optimize_on_ray(settings, args.n_jobs, args.seed, options, args.address)
+        elif args.n_jobs == 1:
             study = optimize(settings, seed=args.seed, **options)
         else:
             study = _optimize_in_processes(settings, args.n_jobs, args.seed, options)
@@ -313,12 +353,8 @@ def _optimize_in_processes(settings: TuneSettings, n_jobs: int, seed: int,
     share one interpreter lock: the env and SB3's loop are Python); trials are split among
     them and TPE is seeded per worker so that they do not sample alike."""
     context = multiprocessing.get_context("spawn")
-    counts = [options["n_trials"] // n_jobs + (i < options["n_trials"] % n_jobs)
-              for i in range(n_jobs)]
-    create_study(settings)  # created once, before the workers load it
-    workers = [context.Process(target=_worker, args=(settings, {
-        **options, "n_trials": count, "seed": seed + i})) for i, count in enumerate(counts)
-        if count > 0]
+    workers = [context.Process(target=_worker, args=(settings, share))
+               for share in _shares(settings, n_jobs, seed, options)]
     for worker in workers:
         worker.start()
     try:

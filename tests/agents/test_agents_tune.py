@@ -89,6 +89,22 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
     assert (study_dir / "eval_curves.png").is_file()
 
 
+@pytest.mark.slow
+def test_trials_run_as_tasks_of_a_ray_cluster_sharing_the_study(tmp_path: Path) -> None:
+    """``--address local``: a local Ray of 2 CPUs runs the 2 workers as tasks; both trials
+    land in the one SQLite study, each with its own run directory."""
+    pytest.importorskip("ray")
+    study_dir = tmp_path / "study"
+    code, out = run_tune(["--base", str(LIDAR_TD3), "--study-dir", str(study_dir),
+                          "--study-name", "ray", "--n-trials", "2", "--n-jobs", "2",
+                          "--address", "local", "--pruner", "none", *TINY_TRIAL])
+    assert code == 0, out
+    study = optuna.load_study(study_name="ray", storage=f"sqlite:///{study_dir / 'study.db'}")
+    assert [t.state.name for t in study.trials] == ["COMPLETE", "COMPLETE"]
+    assert sorted(p.name for p in (study_dir / "trials").iterdir()) == ["trial_0", "trial_1"]
+    assert "2 trials in the study" in out
+
+
 @pytest.mark.parametrize("algorithm", ALGORITHM_NAMES)
 def test_every_algorithms_sampler_gives_a_valid_config(algorithm: str) -> None:
     base = load_run_config([LIDAR_TD3], train={"algorithm": algorithm, "epsilon.initial": 0.0})

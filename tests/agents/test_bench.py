@@ -15,9 +15,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents import bench, benchcell
+from pic4rl_agents import bench, benchcell, benchtable
 from pic4rl_agents.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_metrics.aggregate import wilson_interval
 
 REPO = Path(__file__).resolve().parents[2]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"
@@ -98,6 +99,7 @@ def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) 
     assert ci in ("[0.00, 0.66]", "[0.09, 0.91]", "[0.34, 1.00]")  # k/2, for k = 0, 1, 2
     for name in ("results.csv", "results.md", "results.tex", "leaderboard_goto.md"):
         assert (suite.root / name).is_file()
+    assert (suite.root / "comparison_goto.png").read_bytes().startswith(b"\x89PNG")
     before, text = _bags(suite.root), (suite.root / "results.md").read_text()
     assert len(before) == 4 * 2 * 2  # 4 cells x 2 episodes x (.db3, metadata.yaml)
     again = bench.run_suite(suite, workers=2, local=True, progress=False)
@@ -163,3 +165,22 @@ def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     assert [(r[1], r[5], r[-1]) for r in table.rows] == [("proportional", "1", "ok"),
                                                           ("dwa", "1", "ok")]
     assert all((suite.root / c.name / benchcell.DONE).is_file() for c in suite.cells)
+
+
+def test_the_comparison_figure_draws_each_rows_success_and_its_wilson_interval() -> None:
+    header = ("task", "agent", "world", "robot", "pairs", "n", "success", "success 95% CI",
+              "status")
+    rows = [("goto", "a", "indoor:0", "jackal", "paper", "2", "1/2", None, "ok"),
+            ("goto", "b", "indoor:0", "jackal", "paper", "4", "4/4", None, "ok"),
+            ("goto", "c", "indoor:0", "jackal", "paper", "0", None, None, "failed: x"),
+            ("person", "d", "person:0", "omni", "env", "1", "1/1", None, "ok")]
+    fig = benchtable.comparison_figure("goto", header, rows)
+    bars = fig.axes[0].patches
+    assert [round(b.get_width(), 6) for b in bars] == [0.5, 1.0, 0.0]
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]
+    assert labels == ["a · indoor:0 · jackal · paper", "b · indoor:0 · jackal · paper",
+                            "c · indoor:0 · jackal · paper (failed)"]
+    (errors,) = [c for c in fig.axes[0].collections if c.get_segments()]
+    low, high = wilson_interval(1, 2)
+    first = errors.get_segments()[0]  # the first row's interval, drawn at its bar
+    assert sorted(x for x, _ in first) == pytest.approx([low, high])
