@@ -1,4 +1,6 @@
-"""Classical references for goToPose, run by ``pic4rl-test --baseline NAME`` like an agent.
+"""Classical references, run by ``pic4rl-test --baseline NAME`` like an agent; goToPose's
+here, the vineyard's row followers in ``row_followers`` (``BASELINE_TASKS`` says which task
+each drives).
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -258,18 +260,29 @@ class DwaController:
         return total
 
 
-#: The baselines ``pic4rl-test --baseline`` knows, and the tasks they drive.
-BASELINES = ("proportional", "dwa", "planner")
-BASELINE_TASKS = (TaskName.GO_TO_POSE.value,)
+#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives.
+BASELINE_TASKS: dict[str, tuple[str, ...]] = {
+    "proportional": (TaskName.GO_TO_POSE.value,),
+    "dwa": (TaskName.GO_TO_POSE.value,),
+    "planner": (TaskName.GO_TO_POSE.value,),
+    "centerline": (TaskName.VINEYARD.value,),
+    "row_follower": (TaskName.VINEYARD.value,),
+}
+BASELINES = tuple(BASELINE_TASKS)
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
                   world: WorldSpec | None = None) -> Baseline:
     """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
-    simulated ``world``); ``ConfigError`` when it does not fit (before anything runs)."""
+    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``);
+    ``ConfigError`` when it does not fit (before anything runs)."""
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
+    if name in ("centerline", "row_follower"):
+        from .row_followers import make_row_follower
+
+        return make_row_follower(name, config, robot, world)
     if name == "dwa":
         return DwaController(robot, config.baselines.dwa,
                              collision_tolerance_m=config.collision_tolerance_m)
@@ -284,9 +297,11 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
 
 
 def check_fits(name: str, config: EnvConfig) -> None:
-    """``ConfigError`` unless baseline ``name`` can drive ``config``'s task: both steer to a
-    goal with goToPose's 2-D action."""
-    if config.task not in BASELINE_TASKS:
-        raise ConfigError(f"--baseline {name}: the baselines drive goToPose (a goal and a (v, ω) "
-                          f"action); this env's task is {config.task!r}. Test it with an "
-                          "--agent, or give a goToPose config")
+    """``ConfigError`` unless baseline ``name`` can drive ``config``'s task."""
+    tasks = BASELINE_TASKS.get(name, ())
+    if config.task not in tasks:
+        fitting = [b for b, t in BASELINE_TASKS.items() if config.task in t]
+        raise ConfigError(f"--baseline {name}: it drives {' or '.join(tasks)}; this env's task "
+                          f"is {config.task!r}. Test it with an --agent"
+                          + (f", or a baseline of that task: {', '.join(fitting)}"
+                             if fitting else ""))

@@ -36,16 +36,7 @@ class VineyardTask(Task):
     def __init__(self, config: EnvConfig, robot: RobotInfo,
                  lanes: Sequence[Sequence[Sequence[float]]]) -> None:
         super().__init__(config, robot)
-        flat = config.vineyard.centerline
-        chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
-        self.lanes = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
-        if not self.lanes:
-            raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
-                              "expected x0, y0, x1, y1, ... or a vineyard world")
-        for lane in self.lanes:
-            if len(lane) < 2 or polyline_length(lane) <= 0:
-                raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
-                                  "or more points spanning a positive length")
+        self.lanes = centerlines(config, lanes)
         self.action_space = planar_action_space()
         self.observation_space = depth_space(config.depth)
 
@@ -53,11 +44,7 @@ class VineyardTask(Task):
         return planar_command(action, self.robot)
 
     def begin(self, frame: SensorFrame) -> EpisodeContext:
-        start = np.array([frame.pose.x, frame.pose.y])
-        lane = min(self.lanes, key=lambda line: abs(project(line, start)[1]))
-        if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
-            lane = lane[::-1]
-        lane = np.ascontiguousarray(lane)
+        lane = row_centerline(self.lanes, (frame.pose.x, frame.pose.y))
         return EpisodeContext(start=frame.pose, goal=(float(lane[-1, 0]), float(lane[-1, 1])),
                               centerline=lane)
 
@@ -89,6 +76,33 @@ class VineyardTask(Task):
 
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         return {"row_centerline": _centerline(context).tolist()}
+
+
+def centerlines(config: EnvConfig,
+                lanes: Sequence[Sequence[Sequence[float]]]) -> list[np.ndarray]:
+    """The centre lines a vineyard env judges by: ``vineyard.centerline`` when the config gives
+    one, else the world's ``lanes``; ``ConfigError`` when there are none or one is degenerate."""
+    flat = config.vineyard.centerline
+    chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
+    out = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
+    if not out:
+        raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
+                          "expected x0, y0, x1, y1, ... or a vineyard world")
+    for lane in out:
+        if len(lane) < 2 or polyline_length(lane) <= 0:
+            raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
+                              "or more points spanning a positive length")
+    return out
+
+
+def row_centerline(lanes: Sequence[np.ndarray], xy: Sequence[float]) -> np.ndarray:
+    """The row being driven from ``xy``: the lane nearest it (n × 2, m), oriented from its end
+    nearest ``xy``; the task's centre line and the centre-line follower's path."""
+    start = np.asarray(xy, dtype=np.float64)
+    lane = min(lanes, key=lambda line: abs(project(line, start)[1]))
+    if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
+        lane = lane[::-1]
+    return np.ascontiguousarray(lane)
 
 
 def _centerline(context: EpisodeContext) -> np.ndarray:

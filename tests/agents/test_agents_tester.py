@@ -166,8 +166,11 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
       "--params-file", str(LIDAR_TD3)], "did you mean 'sensor'"),
     (["--baseline", "proportional", "--ros-args", "--params-file",
       str(CONFIG / "env_person_omni.yaml")],
-     "the baselines drive goToPose (a goal and a (v, ω) action); this env's task is "
-     "'personMonitoring'"),
+     "--baseline proportional: it drives goToPose; this env's task is 'personMonitoring'"),
+    (["--baseline", "planner", "--ros-args", "--params-file",
+      str(CONFIG / "env_vineyard_depth.yaml")],
+     "this env's task is 'vineyard'. Test it with an --agent, or a baseline of that task: "
+     "centerline, row_follower"),
 ])
 def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
