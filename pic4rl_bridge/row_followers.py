@@ -10,7 +10,8 @@
   window ahead of the robot, and steers to the middle of the two: the lateral offset of the
   middle line balances the clearance to left and right, its slope gives the heading along the
   rows. With one side unseen (a gap, the row's end) it keeps the last lane width; with neither,
-  it drives straight on.
+  it drives straight on. The fit is ``pic4rl_metrics.rows``': the row metrics of a bag with
+  no centre line read the lane the same way.
 
 Both command (v, ω) within the env's ranges as the task's 2-D normalised action; pure numpy
 over the env's decoded frame.
@@ -23,6 +24,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from pic4rl_metrics.rows import LaneFit, LaneWindow, fit_lane
 from pic4rl_sim.engine.geometry import point_along, project
 
 from .config import EnvConfig
@@ -83,59 +85,33 @@ class CenterlineFollower:
 class RowFollower:
     """The classical row follower: clearance balanced between the rows (see the module)."""
 
-    def __init__(self, robot: RobotInfo, *, ahead_m: float = 3.0, behind_m: float = 0.5,
-                 band_m: float = 0.8, offset_gain: float = 1.2, heading_gain: float = 2.0,
-                 slow_rad: float = 1.2, lane_width_m: float = 2.5,
-                 max_half_width_m: float = 1.8) -> None:
-        self.robot = robot
-        self.max_half_width_m = max_half_width_m
-        self.ahead_m, self.behind_m, self.band_m = ahead_m, behind_m, band_m
+    def __init__(self, robot: RobotInfo, *, window: LaneWindow = LaneWindow(),
+                 offset_gain: float = 1.2, heading_gain: float = 2.0, slow_rad: float = 1.2,
+                 lane_width_m: float = 2.5) -> None:
+        self.robot, self.window = robot, window
         self.offset_gain, self.heading_gain, self.slow_rad = offset_gain, heading_gain, slow_rad
         self.default_width_m = lane_width_m
-        self._width_m = lane_width_m
+        self.width_m = lane_width_m  # the last lane width seen
 
     def reset(self) -> None:
         """Forget the lane width seen: the next row may be wider or narrower."""
-        self._width_m = self.default_width_m
+        self.width_m = self.default_width_m
 
-    def _side(self, points: np.ndarray, sign: float) -> tuple[float, float] | None:
-        """The nearest row on one side (``sign`` +1 left, -1 right) as ``y = a + b x`` (base
-        frame, m), fitted to its points in the window; ``None`` with fewer than two, or when
-        the nearest is farther than ``max_half_width_m``."""
-        x, y = points[:, 0], points[:, 1] * sign
-        inside = (x > -self.behind_m) & (x < self.ahead_m) & (y > 0.05)
-        if inside.sum() < 2:
-            return None
-        x, y = x[inside], y[inside]
-        if y.min() > self.max_half_width_m:  # a gap: the row seen is the next one out
-            return None
-        near = y < y.min() + self.band_m  # this row, not the next one out
-        x, y = x[near], y[near]
-        if np.ptp(x) < 1.0:  # a trunk or two: their distance, no slope
-            return sign * float(np.mean(y)), 0.0
-        b, a = np.polyfit(x, y, 1)
-        return sign * float(a), sign * float(b)
-
-    def middle(self, frame: SensorFrame) -> tuple[float, float] | None:
-        """The lane's middle line as (offset m, heading rad) in the base frame (positive
-        left), or ``None`` when no row is seen."""
+    def lane(self, frame: SensorFrame) -> LaneFit | None:
+        """The lane's middle line in the base frame (``pic4rl_metrics.rows.fit_lane``), or
+        ``None`` when no row is seen."""
         points = sensed_points(frame, self.robot)
-        left, right = self._side(points, 1.0), self._side(points, -1.0)
-        if left is not None and right is not None:
-            self._width_m = left[0] - right[0]
-            return 0.5 * (left[0] + right[0]), math.atan(0.5 * (left[1] + right[1]))
-        if left is None and right is None:
-            return None
-        (a, b), sign = (left, 1.0) if left is not None else (right, -1.0)  # type: ignore[misc]
-        return a - sign * 0.5 * self._width_m, math.atan(b)
+        fit = fit_lane(points[:, 0], points[:, 1], self.width_m, self.window)
+        if fit is not None:
+            self.width_m = fit.width_m
+        return fit
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:
         """(v, ω) (m/s, rad/s) that steers onto the lane's middle line."""
-        seen = self.middle(frame)
-        if seen is None:
+        fit = self.lane(frame)
+        if fit is None:
             return _drive(self.robot, 0.0, 0.0, self.slow_rad)
-        offset, heading = seen
-        error = heading + math.atan(self.offset_gain * offset)
+        error = fit.heading_rad + math.atan(self.offset_gain * fit.offset_m)
         return _drive(self.robot, error, self.heading_gain, self.slow_rad)
 
     def action(self, frame: SensorFrame) -> np.ndarray:

@@ -83,10 +83,10 @@ def _rows_scan(offset_m: float, width_m: float, n: int = 720) -> ScanData:
 def test_the_row_follower_reads_the_middle_of_the_lane_and_steers_to_it(offset_m: float) -> None:
     follower = RowFollower(JACKAL)
     frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), scan=_rows_scan(offset_m, 2.2))
-    middle, heading = follower.middle(frame)  # type: ignore[misc]
+    middle, heading, width = follower.lane(frame)  # type: ignore[misc]
     assert middle == pytest.approx(-offset_m, abs=0.03)  # the middle seen from the robot
     assert heading == pytest.approx(0.0, abs=0.02)
-    assert follower._width_m == pytest.approx(2.2, abs=0.05)
+    assert width == pytest.approx(2.2, abs=0.05) and follower.width_m == width
     _, w = follower.command(frame)
     assert w == pytest.approx(0.0, abs=0.02) if offset_m == 0 else np.sign(w) == -np.sign(offset_m)
 
