@@ -154,7 +154,9 @@ class ImitationConfig:
 
     enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
     expert: str = param("planner", doc="the expert that labels states: planner (the "
-                        "privileged planner, pic4rl_bridge.planner)", choices=("planner",))
+                        "privileged planner, pic4rl_bridge.planner; goToPose) or centerline "
+                        "(the row's centre-line follower, pic4rl_bridge.row_followers; "
+                        "vineyard)", choices=("planner", "centerline"))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)
     dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",

@@ -1,8 +1,8 @@
 """Expert-guided training: behaviour cloning, then DAgger, on an SB3 off-policy model's actor.
 
 The expert is privileged at training time only: it reads the env's decoded frame and the
-simulated world's map (``pic4rl_bridge.planner``) to label any state with the action it would
-take, while the student acts from its observation alone. Behaviour cloning regresses the actor
+simulated world's map (``pic4rl_bridge.planner``) or the vineyard row's centre line
+(``pic4rl_bridge.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
 on states the expert drove through; DAgger (Ross, Gordon and Bagnell 2011) then lets the
 student drive, has the expert label every state the student visits, aggregates the labels and
 regresses again, so the student learns to recover from its own mistakes. The actor is the
@@ -32,6 +32,7 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.planner import PlannerController
 from pic4rl_bridge.robot_info import Scenario
+from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
 
 from .config import ImitationConfig
 
@@ -40,17 +41,26 @@ log = logging.getLogger(__name__)
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
-def make_expert(name: str, env: EnvConfig) -> PlannerController:
-    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges."""
-    if name != "planner":
-        raise ConfigError(f"imitation.expert: {name!r} is invalid; expected planner")
+#: The experts imitation can learn from, and the task each labels.
+EXPERT_TASKS = {"planner": "goToPose", "centerline": "vineyard"}
+
+
+def make_expert(name: str, env: EnvConfig) -> PlannerController | CenterlineFollower:
+    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges.
+    ``planner`` plans on the simulated world's map (goToPose); ``centerline`` follows the
+    row's centre line (the vineyard's lanes, or ``vineyard.centerline``)."""
+    if name not in EXPERT_TASKS:
+        raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
+                          f"{', '.join(EXPERT_TASKS)}")
+    if env.task != EXPERT_TASKS[name]:
+        raise ConfigError(f"imitation.expert: {name} drives {EXPERT_TASKS[name]}; the env's "
+                          f"task is {env.task!r}")
     scenario = Scenario(env)
+    if name == "centerline":
+        return make_row_follower(name, env, scenario.robot, scenario.world)  # type: ignore[return-value]
     if scenario.world is None:
         raise ConfigError("imitation.expert: planner plans on the simulated world's map, and "
                           "the env has none (no 'sim:' section)")
-    if env.task != "goToPose":
-        raise ConfigError(f"imitation.expert: planner drives goToPose; the env's task is "
-                          f"{env.task!r}")
     return PlannerController(scenario.robot, scenario.world)
 
 
