@@ -102,3 +102,15 @@ def test_a_bag_of_another_task_gets_no_row_metrics_from_its_scan(tmp_path: Path)
     m = row(write_episode_bag(tmp_path / "row", track, obstacles=ROWS,
                               facts={"task": "goToPose"}))
     assert math.isnan(m["row_path_mae_m"]) and "row:" not in m["warnings"]
+
+
+def test_tables_show_the_row_metrics_when_an_episode_has_them() -> None:
+    import pandas as pd
+
+    from pic4rl_metrics.results import ROW_COLUMNS, TABLE1_COLUMNS, table_columns
+
+    goto = pd.DataFrame({"success": [1.0], "row_path_mae_m": [math.nan]})
+    assert table_columns(goto) == TABLE1_COLUMNS
+    vineyard = pd.DataFrame({"success": [1.0, 0.0], "row_path_mae_m_mean": [0.1, math.nan],
+                             "row_path_mse_m2_mean": [0.02, math.nan]})
+    assert table_columns(vineyard) == TABLE1_COLUMNS + ROW_COLUMNS
