@@ -8,9 +8,11 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from metrics_helpers import row
 
+from pic4rl_metrics.results import ROW_COLUMNS, TABLE1_COLUMNS, table_columns
 from pic4rl_metrics.rows import LaneWindow, fit_lane, lane_deviations
 from pic4rl_metrics.synthetic import Obstacles, straight_line, write_episode_bag
 
@@ -105,10 +107,6 @@ def test_a_bag_of_another_task_gets_no_row_metrics_from_its_scan(tmp_path: Path)
 
 
 def test_tables_show_the_row_metrics_when_an_episode_has_them() -> None:
-    import pandas as pd
-
-    from pic4rl_metrics.results import ROW_COLUMNS, TABLE1_COLUMNS, table_columns
-
     goto = pd.DataFrame({"success": [1.0], "row_path_mae_m": [math.nan]})
     assert table_columns(goto) == TABLE1_COLUMNS
     vineyard = pd.DataFrame({"success": [1.0, 0.0], "row_path_mae_m_mean": [0.1, math.nan],
