@@ -3,7 +3,9 @@
 The policy never sees its pose (a row's GNSS-free navigation): its observation is the depth
 image only, a ``Box`` so SB3's ``CnnPolicy`` applies. The reward, computed from the pose the
 env knows, pays the advance along the row's centre line and penalizes the lateral offset from
-it; the episode succeeds at the row's end. The centre line is the world's lane nearest the
+it; the episode succeeds at the row's end, reached in the row (within
+``vineyard.max_offset_m`` of its centre line: a robot that went through a gap and down the next
+lane has not followed its row). The centre line is the world's lane nearest the
 start, oriented from the start, or ``vineyard.centerline`` when the config gives one.
 """
 
@@ -62,7 +64,8 @@ class VineyardTask(Task):
         s_prev, _ = project(line, (previous.pose.x, previous.pose.y))
         s, offset = project(line, (frame.pose.x, frame.pose.y))
         safety = assess(frame, self.robot, self.config, collision_streak)
-        done = s >= polyline_length(line) - self.config.vineyard.end_tolerance_m
+        row = self.config.vineyard
+        done = s >= polyline_length(line) - row.end_tolerance_m and abs(offset) <= row.max_offset_m
         crashed = safety.ended and not done
         terms = {"progress": reward.progress * (s - s_prev),
                  "centering": -reward.centering * abs(offset),
