@@ -26,14 +26,25 @@ $(STAMP): pyproject.toml
 # (bags/demo*/<agent>/episode_NNNN.mp4; the last line says where). `make demo TRAIN=1` trains
 # TD3-LiDAR from scratch first (in process; see docs/results.md for how long) and tests that
 # run instead.
+# `make demo CASE=vineyard`: the paper's vineyard study (its section 4.2): the shipped depth
+# agents (checkpoints/vineyard_{td3,sac}) and the two row followers (the privileged centre-line
+# one and the classical one) on every lane of vineyard variant 101, rows no agent trained on,
+# through the sim node over ROS 2; bags, table and videos under bags/demo_vineyard*/.
 DEMO_RUN := demo_$(shell date +%Y%m%d-%H%M%S)
 # `make demo CASE=person`: the person-monitoring RL-DWA hybrid (checkpoints/person_hybrid)
 # against DWA with a proportional heading law, on person-world variants training never saw.
 PERSON_DEMO := --agent checkpoints/person_hybrid --baseline dwa_heading \
 	--sim-kwargs world_variant:101 --episodes 5 --seed 1000 --run demo_person --video
+VINEYARD_LANES := build/vineyard_lanes_101.json
+VINEYARD_DEMO := --agent checkpoints/vineyard_td3 --agent checkpoints/vineyard_sac \
+	--baseline centerline --baseline row_follower --episodes 7 --sim-kwargs world_variant:101 \
+	--env-kwargs episodes.file:$(VINEYARD_LANES) --run demo_vineyard --video
 demo: setup
 ifeq ($(CASE),person)
 	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
+else ifeq ($(CASE),vineyard)
+	mkdir -p build && $(PY) tools/vineyard_lanes.py config/train_vineyard_sac.yaml 101 -o $(VINEYARD_LANES)
+	$(VENV)/bin/pic4rl-run test $(VINEYARD_DEMO)
 else ifdef TRAIN
 	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
 	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo --video

@@ -155,8 +155,9 @@ class ImitationConfig:
     enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
     expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
                         "privileged planner, pic4rl_bridge.planner) | heading "
-                        "(personMonitoring: DWA with a proportional heading law)",
-                        choices=("planner", "heading"))
+                        "(personMonitoring: DWA with a proportional heading law) | centerline "
+                        "(vineyard: the row's centre-line follower, pic4rl_bridge.row_followers)",
+                        choices=("planner", "heading", "centerline"))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)
     dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",

@@ -1,8 +1,8 @@
 """Expert-guided training: behaviour cloning, then DAgger, on an SB3 off-policy model's actor.
 
 The expert is privileged at training time only: it reads the env's decoded frame and the
-simulated world's map (``pic4rl_bridge.planner``) to label any state with the action it would
-take, while the student acts from its observation alone. Behaviour cloning regresses the actor
+simulated world's map (``pic4rl_bridge.planner``) or the vineyard row's centre line
+(``pic4rl_bridge.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
 on states the expert drove through; DAgger (Ross, Gordon and Bagnell 2011) then lets the
 student drive, has the expert label every state the student visits, aggregates the labels and
 regresses again, so the student learns to recover from its own mistakes. The actor is the
@@ -33,6 +33,7 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.follow import HeadingController
 from pic4rl_bridge.planner import PlannerController
 from pic4rl_bridge.robot_info import Scenario
+from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
 
 from .config import ImitationConfig
 
@@ -42,13 +43,15 @@ EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
 #: The experts that label states, and the task each drives.
-EXPERTS = {"planner": "goToPose", "heading": "personMonitoring"}
+EXPERTS = {"planner": "goToPose", "heading": "personMonitoring", "centerline": "vineyard"}
 
 
-def make_expert(name: str, env: EnvConfig) -> PlannerController | HeadingController:
+def make_expert(name: str, env: EnvConfig
+                ) -> PlannerController | HeadingController | CenterlineFollower:
     """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
     (``planner``: the privileged planner on the world's map, goToPose; ``heading``: DWA with a
-    proportional heading law, personMonitoring, either control)."""
+    proportional heading law, personMonitoring, either control; ``centerline``: the row's
+    centre-line follower, vineyard)."""
     if name not in EXPERTS:
         raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
                           f"{', '.join(EXPERTS)}")
@@ -59,6 +62,8 @@ def make_expert(name: str, env: EnvConfig) -> PlannerController | HeadingControl
     scenario = Scenario(env)
     if name == "heading":
         return HeadingController(env, scenario.robot)
+    if name == "centerline":
+        return make_row_follower(name, env, scenario.robot, scenario.world)  # type: ignore[return-value]
     if scenario.world is None:
         raise ConfigError("imitation.expert: planner plans on the simulated world's map, and "
                           "the env has none (no 'sim:' section)")

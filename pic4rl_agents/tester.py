@@ -136,11 +136,13 @@ def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ..
     from pic4rl_metrics.aggregate import aggregate
     from pic4rl_metrics.batch import compute
     from pic4rl_metrics.report import render_comparison, render_episodes
+    from pic4rl_metrics.results import table_columns
 
     result = compute([run_dir])
     atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
     table = aggregate(result.frame, by="agent")
-    atomic.write_text(run_dir / "table.md", render_comparison(table, "markdown", with_std=with_std))
+    atomic.write_text(run_dir / "table.md", render_comparison(
+        table, "markdown", columns=table_columns(table), with_std=with_std))
     return table, tuple(str(failed.error) for failed in result.failed)
 
 
@@ -239,6 +241,7 @@ def _hint_env(plan: TestPlan | None) -> EnvConfig | None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
     from pic4rl_metrics.report import render_comparison
+    from pic4rl_metrics.results import table_columns
 
     argv = list(sys.argv[1:] if argv is None else argv)
     # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
@@ -262,7 +265,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     for error in result.failed:
         print(f"error: {error}", file=sys.stderr)
-    text = render_comparison(result.table, args.format, with_std=plan.with_std)
+    text = render_comparison(result.table, args.format, columns=table_columns(result.table),
+                             with_std=plan.with_std)
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
     print(f"bags: {result.run_dir}", file=sys.stderr)
     if result.videos:

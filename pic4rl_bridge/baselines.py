@@ -1,4 +1,6 @@
-"""Classical references, run by ``pic4rl-test --baseline NAME`` like an agent.
+"""Classical references, run by ``pic4rl-test --baseline NAME`` like an agent; goToPose's
+here, the vineyard's row followers in ``row_followers`` and the person follower's heading law
+in ``follow`` (``BASELINE_TASKS`` says which task each drives).
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -261,19 +263,30 @@ class DwaController:
         return total
 
 
-#: The baselines ``pic4rl-test --baseline`` knows, and the tasks they drive.
-BASELINES = ("proportional", "dwa", "planner", "dwa_heading")
-BASELINE_TASKS = {name: (TaskName.GO_TO_POSE.value,) for name in BASELINES[:3]} | {
-    "dwa_heading": (TaskName.PERSON_MONITORING.value,)}
+#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives.
+BASELINE_TASKS: dict[str, tuple[str, ...]] = {
+    "proportional": (TaskName.GO_TO_POSE.value,),
+    "dwa": (TaskName.GO_TO_POSE.value,),
+    "planner": (TaskName.GO_TO_POSE.value,),
+    "dwa_heading": (TaskName.PERSON_MONITORING.value,),
+    "centerline": (TaskName.VINEYARD.value,),
+    "row_follower": (TaskName.VINEYARD.value,),
+}
+BASELINES = tuple(BASELINE_TASKS)
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
                   world: WorldSpec | None = None) -> Baseline:
     """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
-    simulated ``world``); ``ConfigError`` when it does not fit (before anything runs)."""
+    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``);
+    ``ConfigError`` when it does not fit (before anything runs)."""
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
+    if name in ("centerline", "row_follower"):
+        from .row_followers import make_row_follower
+
+        return make_row_follower(name, config, robot, world)
     if name == "dwa":
         return DwaController(robot, config.baselines.dwa,
                              collision_tolerance_m=config.collision_tolerance_m)

@@ -160,6 +160,9 @@ class DepthObsConfig:
 class VineyardConfig:
     end_tolerance_m: float = param(0.5, doc="the row ends when this close to its last point "
                                    "(along it)", unit="m", range=NON_NEGATIVE)
+    max_offset_m: float = param(0.9, doc="the row's end counts only this close to its centre "
+                                "line: farther, the robot drove down another lane (half the "
+                                "narrowest lane)", unit="m", range=POSITIVE)
     centerline: tuple[float, ...] = param((), doc="x0, y0, x1, y1, ... (m); empty: the world's "
                                           "lanes")
 

@@ -21,7 +21,7 @@ from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError, MetricsError, OutputError
 from .registry import METRICS, REGISTRY
 from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
-from .results import METRIC_COLUMNS, TABLE1_COLUMNS
+from .results import METRIC_COLUMNS, table_columns
 from .topics import TopicMap, load_topic_map, parse_frames
 from .video_cli import add_video_options, run_video_command
 
@@ -247,7 +247,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "compare":
             table = aggregate(result.frame, by=args.by, over=args.over,
                               count_aborted=args.count_aborted)
-            columns = _shown(result, TABLE1_COLUMNS, numeric=True)
+            columns = _shown(result, table_columns(result.frame), numeric=True)
             text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
             _emit(text, args.out, args.force)
         else:

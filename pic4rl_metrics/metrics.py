@@ -32,6 +32,7 @@ from .kinematics import (
     velocity_series,
 )
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
+from .rows import lane_deviations
 from .series import Episode, ScanSeries
 
 NAN = float("nan")
@@ -52,6 +53,8 @@ PLAUSIBLE_ACC_MPS2 = 100.0
 #: An unrecorded end this far (fraction) or more before the time budget is ``ABORTED``: a
 #: timed-out episode's bag may lack its last step or two, a killed one lacks much more.
 ABORT_SLACK = 0.05
+#: The task whose bags without a centre line get row metrics fitted to the scan.
+ROW_TASK = "vineyard"
 
 
 def _finite(values: np.ndarray) -> np.ndarray:
@@ -321,6 +324,24 @@ class Derived:
         return bearing_in_body(self.pose.x, self.pose.y, self.pose.yaw, gx, gy)
 
     @cached_property
+    def row_deviation(self) -> tuple[np.ndarray, np.ndarray, str] | None:
+        """(times s, signed offsets m, source) of the robot from the row's centre line: the
+        ``row_centerline`` fact at every pose (``"centerline"``), else, for a ``vineyard``
+        episode, the middle of the rows each scan sees (``"scan"``, ``rows.lane_deviations``,
+        scans where no lane is seen left out); ``None`` when neither is known."""
+        if self.facts.row_centerline is not None:
+            line = np.asarray(self.facts.row_centerline)
+            return self.t_s, distance_to_polyline(self.pose.x, self.pose.y, line), "centerline"
+        if self.facts.task != ROW_TASK or self.scan is None:
+            return None
+        x, y = scan_points(self.scan, self.facts.scan_mount or Mount(), self.valid_ranges)
+        offsets = lane_deviations(x, y)
+        seen = np.isfinite(offsets)
+        if not seen.any():
+            return None
+        return seconds(self.scan.t_ns[seen], self.pose.t_ns[0]), offsets[seen], "scan"
+
+    @cached_property
     def spl_weight(self) -> float:
         """``l / max(p, l)`` with ``l`` the optimal path, ``p`` the path travelled."""
         optimal = self.optimal[0]
@@ -464,14 +485,17 @@ _register("goal_dist_final_m", "m", "final goal distance", ("goal",))(
     lambda d: float(d.goal_dist[-1]))
 
 
-def _row_deviation(d: Derived) -> np.ndarray:
-    return distance_to_polyline(d.pose.x, d.pose.y, np.asarray(d.facts.row_centerline))
+def _row(stat):  # noqa: ANN001, ANN202
+    def value(d: Derived) -> float:
+        row = d.row_deviation
+        return NAN if row is None else float(stat(row[0], row[1]))
+    return value
 
 
-_register("row_path_mae_m", "m", "row path MAE", ("row_centerline",))(
-    lambda d: time_mean(d.t_s, np.abs(_row_deviation(d))))
-_register("row_path_mse_m2", "m$^2$", "row path MSE", ("row_centerline",))(
-    lambda d: time_mean(d.t_s, _row_deviation(d) ** 2))
+_register("row_path_mae_m", "m", "row path MAE")(_row(lambda t, e: time_mean(t, np.abs(e))))
+_register("row_path_mse_m2", "m$^2$", "row path MSE")(_row(lambda t, e: time_mean(t, e**2)))
+_register("row_reference", "", "row reference", text=True)(
+    lambda d: None if d.row_deviation is None else d.row_deviation[2])
 
 
 # The person-monitoring columns (follow_heading_*, person_*) come here, in table order.
@@ -513,6 +537,10 @@ def data_warnings(d: Derived) -> list[str]:
         out.append(f"no outcome recorded and {d.duration_s:.1f} s of its "
                    f"{d.facts.time_budget_s:g} s budget: judged aborted (cut short), out of the "
                    "success rate")
+    if d.facts.task == ROW_TASK and d.row_deviation is None:
+        why = "no scan" if d.scan is None else "no scan in which a row is seen on both sides"
+        out.append(f"row: no row_centerline fact and {why}: row_path_mae_m and "
+                   "row_path_mse_m2 NaN (give row_centerline in a topic map's facts)")
     if d.scan is not None:
         bad_limits = int(np.sum(~(d.scan.range_min <= d.scan.range_max)))
         if bad_limits:

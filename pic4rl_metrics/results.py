@@ -6,12 +6,17 @@ no scan, no footprint, ...), never zero.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from .metrics import BUILTIN_COLUMNS
 from .registry import METRICS, REGISTRY, EpisodeMetrics, Metric
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 __all__ = [
     "ERROR_COLUMN", "ID_COLUMNS", "METRICS", "METRIC_COLUMNS", "QUALITY_COLUMNS",
-    "TABLE1_COLUMNS", "EpisodeMetrics", "Metric",
+    "ROW_COLUMNS", "TABLE1_COLUMNS", "EpisodeMetrics", "Metric", "table_columns",
 ]
 
 #: Columns of the paper's Table 1, in its order.
@@ -28,6 +33,18 @@ TABLE1_COLUMNS: tuple[str, ...] = (
     "obstacle_dist_min_m",
     "obstacle_dist_mean_m",
 )
+
+#: The vineyard's columns: a comparison shows them after Table 1's when some episode has them.
+ROW_COLUMNS: tuple[str, ...] = ("row_path_mae_m", "row_path_mse_m2")
+
+
+def table_columns(table: pd.DataFrame) -> tuple[str, ...]:
+    """Table 1's columns, then ``ROW_COLUMNS`` that hold a value in ``table`` (per episode,
+    or aggregated: ``<metric>_mean``)."""
+    def has(name: str) -> bool:
+        return any(c in table.columns and table[c].notna().any() for c in (name, f"{name}_mean"))
+    return TABLE1_COLUMNS + tuple(c for c in ROW_COLUMNS if has(c))
+
 
 #: Columns a result DataFrame holds besides the metrics: where the row came from.
 ID_COLUMNS: tuple[str, ...] = ("bag", "agent", "task", "world", "run", "episode", "pose_topic")

@@ -3,7 +3,9 @@
 The policy never sees its pose (a row's GNSS-free navigation): its observation is the depth
 image only, a ``Box`` so SB3's ``CnnPolicy`` applies. The reward, computed from the pose the
 env knows, pays the advance along the row's centre line and penalizes the lateral offset from
-it; the episode succeeds at the row's end. The centre line is the world's lane nearest the
+it; the episode succeeds at the row's end, reached in the row (within
+``vineyard.max_offset_m`` of its centre line: a robot that went through a gap and down the next
+lane has not followed its row). The centre line is the world's lane nearest the
 start, oriented from the start, or ``vineyard.centerline`` when the config gives one.
 """
 
@@ -36,16 +38,7 @@ class VineyardTask(Task):
     def __init__(self, config: EnvConfig, robot: RobotInfo,
                  lanes: Sequence[Sequence[Sequence[float]]]) -> None:
         super().__init__(config, robot)
-        flat = config.vineyard.centerline
-        chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
-        self.lanes = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
-        if not self.lanes:
-            raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
-                              "expected x0, y0, x1, y1, ... or a vineyard world")
-        for lane in self.lanes:
-            if len(lane) < 2 or polyline_length(lane) <= 0:
-                raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
-                                  "or more points spanning a positive length")
+        self.lanes = centerlines(config, lanes)
         self.action_space = planar_action_space()
         self.observation_space = depth_space(config.depth)
 
@@ -53,11 +46,7 @@ class VineyardTask(Task):
         return planar_command(action, self.robot)
 
     def begin(self, frame: SensorFrame) -> EpisodeContext:
-        start = np.array([frame.pose.x, frame.pose.y])
-        lane = min(self.lanes, key=lambda line: abs(project(line, start)[1]))
-        if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
-            lane = lane[::-1]
-        lane = np.ascontiguousarray(lane)
+        lane = row_centerline(self.lanes, (frame.pose.x, frame.pose.y))
         return EpisodeContext(start=frame.pose, goal=(float(lane[-1, 0]), float(lane[-1, 1])),
                               centerline=lane)
 
@@ -75,7 +64,8 @@ class VineyardTask(Task):
         s_prev, _ = project(line, (previous.pose.x, previous.pose.y))
         s, offset = project(line, (frame.pose.x, frame.pose.y))
         safety = assess(frame, self.robot, self.config, collision_streak)
-        done = s >= polyline_length(line) - self.config.vineyard.end_tolerance_m
+        row = self.config.vineyard
+        done = s >= polyline_length(line) - row.end_tolerance_m and abs(offset) <= row.max_offset_m
         crashed = safety.ended and not done
         terms = {"progress": reward.progress * (s - s_prev),
                  "centering": -reward.centering * abs(offset),
@@ -89,6 +79,33 @@ class VineyardTask(Task):
 
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         return {"row_centerline": _centerline(context).tolist()}
+
+
+def centerlines(config: EnvConfig,
+                lanes: Sequence[Sequence[Sequence[float]]]) -> list[np.ndarray]:
+    """The centre lines a vineyard env judges by: ``vineyard.centerline`` when the config gives
+    one, else the world's ``lanes``; ``ConfigError`` when there are none or one is degenerate."""
+    flat = config.vineyard.centerline
+    chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
+    out = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
+    if not out:
+        raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
+                          "expected x0, y0, x1, y1, ... or a vineyard world")
+    for lane in out:
+        if len(lane) < 2 or polyline_length(lane) <= 0:
+            raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
+                              "or more points spanning a positive length")
+    return out
+
+
+def row_centerline(lanes: Sequence[np.ndarray], xy: Sequence[float]) -> np.ndarray:
+    """The row being driven from ``xy``: the lane nearest it (n × 2, m), oriented from its end
+    nearest ``xy``; the task's centre line and the centre-line follower's path."""
+    start = np.asarray(xy, dtype=np.float64)
+    lane = min(lanes, key=lambda line: abs(project(line, start)[1]))
+    if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
+        lane = lane[::-1]
+    return np.ascontiguousarray(lane)
 
 
 def _centerline(context: EpisodeContext) -> np.ndarray:

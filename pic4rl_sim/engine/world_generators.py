@@ -17,23 +17,15 @@ import numpy as np
 
 from ..errors import ConfigError, require, unknown_key
 from ..schema import coerce, param_type
-from .geometry import Pose2D
+from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, check_count, check_within, rng_for, walls
 from .mjcf_world import world_from_mjcf
 from .person_walk import corner_occluders, leg_speeds
+from .vineyard_world import VINEYARD_PARAM_DOCS, vineyard
 from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 
-WALL_THICKNESS_M = 0.1
-WALL_HEIGHT_M = 1.0
 OBSTACLE_HEIGHT_M = 1.0
 JUNCTION_MARGIN_M = 0.4  # a door's edge to the nearest crossing wall
 FURNITURE_GAP_M = 0.7  # furniture to walls, doors' wall lines and other furniture: a robot fits
-TRUNK_RADIUS_M = 0.05
-TRUNK_HEIGHT_M = 1.2
-CANOPY_WIDTH_M = 0.5
-CANOPY_Z_BASE_M = 0.8
-CANOPY_HEIGHT_M = 1.0
-HEADLAND_M = 3.0  # free ground between the outermost trunks and the vineyard's wall
-LANE_STEP_M = 0.5
 PERSON_RADIUS_M = 0.25
 PERSON_MARGIN_M = 0.2  # a walking person's clearance from obstacles beyond its radius
 
@@ -56,39 +48,8 @@ PARAM_DOCS: dict[str, str] = {
     "speed_m_s": "walking speed of the person (m/s)",
     "speed_spread_fraction": "each leg walked at speed_m_s x [1 - f, 1 + f], drawn per leg",
     "occluders": "obstacles inside the loop's corners that hide the person from a follower",
-    "rows": "number of vine rows",
-    "row_spacing_m": "distance between neighbouring rows (m)",
-    "row_length_m": "length of the middle row (m)",
-    "trunk_spacing_m": "distance between trunks along a row (m)",
-    "gap_prob": "probability that a trunk is missing",
-    "row_radius_m": "radius of the innermost row's arc; 0 for straight rows (m)",
+    **VINEYARD_PARAM_DOCS,
 }
-
-
-def _rng(seed: int) -> np.random.Generator:
-    ok = isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0
-    require(ok, "world.seed", seed, "an integer >= 0")
-    return np.random.default_rng(seed)
-
-
-def _count(key: str, value: int, lo: int, hi: int) -> None:
-    ok = isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi
-    require(ok, key, value, f"an integer in [{lo}, {hi}]")
-
-
-def _within(key: str, value: float, lo: float, hi: float) -> None:
-    require(math.isfinite(value) and lo <= value <= hi, key, value, f"a value in [{lo}, {hi}]")
-
-
-def _walls(bounds: tuple[float, float, float, float]) -> list[Box]:
-    """Four wall boxes just outside the free rectangle ``bounds``."""
-    xmin, ymin, xmax, ymax = bounds
-    t, cx, cy = WALL_THICKNESS_M, 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-    long_x, long_y = xmax - xmin + 2 * t, ymax - ymin
-    return [Box(cx, ymin - t / 2, long_x, t, WALL_HEIGHT_M),
-            Box(cx, ymax + t / 2, long_x, t, WALL_HEIGHT_M),
-            Box(xmin - t / 2, cy, t, long_y, WALL_HEIGHT_M),
-            Box(xmax + t / 2, cy, t, long_y, WALL_HEIGHT_M)]
 
 
 def _wall_line(fixed: float, lo: float, hi: float, openings: list[tuple[float, float]],
@@ -117,20 +78,20 @@ def indoor(seed: int = 0, *, size_x_m: float = 12.0, size_y_m: float = 10.0, roo
     kept in ``params`` (``narrow_x_m``, ``narrow_y_m``, ``narrow_along_x``) for checks.
     """
     params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    _count("world.indoor.rooms_x", rooms_x, 1, 10)
-    _count("world.indoor.rooms_y", rooms_y, 1, 10)
-    _count("world.indoor.furniture_per_room", furniture_per_room, 0, 10)
-    _within("world.indoor.door_width_m", door_width_m, 0.6, 3.0)
+    check_count("world.indoor.rooms_x", rooms_x, 1, 10)
+    check_count("world.indoor.rooms_y", rooms_y, 1, 10)
+    check_count("world.indoor.furniture_per_room", furniture_per_room, 0, 10)
+    check_within("world.indoor.door_width_m", door_width_m, 0.6, 3.0)
     require(0.5 <= narrow_width_m < door_width_m, "world.indoor.narrow_width_m", narrow_width_m,
             f"a width in [0.5, door_width_m={door_width_m}) m")
-    _within("world.indoor.corridor_width_m", corridor_width_m, 1.0, 10.0)
+    check_within("world.indoor.corridor_width_m", corridor_width_m, 1.0, 10.0)
     room_min = door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
     require(math.isfinite(size_x_m) and size_x_m / rooms_x >= room_min, "world.indoor.size_x_m",
             size_x_m, f"at least rooms_x * {room_min:.2f} m so that doors fit")
     room_y = (size_y_m - corridor_width_m) / rooms_y
     require(math.isfinite(size_y_m) and room_y >= room_min, "world.indoor.size_y_m", size_y_m,
             f"at least corridor_width_m + rooms_y * {room_min:.2f} m so that doors fit")
-    rng = _rng(seed)
+    rng = rng_for(seed)
     x0, y0 = -size_x_m / 2, -size_y_m / 2
     room_x, y_rooms = size_x_m / rooms_x, y0 + corridor_width_m
     n_doors = rooms_x * rooms_y + (rooms_x - 1) * rooms_y
@@ -141,7 +102,7 @@ def indoor(seed: int = 0, *, size_x_m: float = 12.0, size_y_m: float = 10.0, roo
         span = (room_x if index < rooms_x * rooms_y else room_y) - width - 2 * JUNCTION_MARGIN_M
         return lo + JUNCTION_MARGIN_M + width / 2 + float(rng.uniform(0, span)), width
 
-    boxes = _walls((x0, y0, -x0, -y0))
+    boxes = walls((x0, y0, -x0, -y0))
     doors: list[tuple[float, float]] = []
     index = 0
     for j in range(rooms_y):  # the corridor's wall, then the walls between rows of rooms
@@ -198,12 +159,12 @@ def _field(rng: np.random.Generator, kind: str, size_m: float, count: int, min_s
     one at least ``min_gap_m`` from the others and from the walls, and ``keep_off_m`` from
     the points ``keep_off_xy``."""
     key = f"world.{kind}"
-    _within(f"{key}.size_m", size_m, 2.0, 100.0)
-    _count(f"{key}.count", count, 0, 300)
-    _within(f"{key}.min_size_m", min_size_m, 0.05, size_m / 4)
-    _within(f"{key}.max_size_m", max_size_m, min_size_m, size_m / 4)
-    _within(f"{key}.min_gap_m", min_gap_m, 0.0, size_m / 2)
-    _within(f"{key}.cylinder_fraction", cylinder_fraction, 0.0, 1.0)
+    check_within(f"{key}.size_m", size_m, 2.0, 100.0)
+    check_count(f"{key}.count", count, 0, 300)
+    check_within(f"{key}.min_size_m", min_size_m, 0.05, size_m / 4)
+    check_within(f"{key}.max_size_m", max_size_m, min_size_m, size_m / 4)
+    check_within(f"{key}.min_gap_m", min_gap_m, 0.0, size_m / 2)
+    check_within(f"{key}.cylinder_fraction", cylinder_fraction, 0.0, 1.0)
     boxes: list[Box] = []
     cylinders: list[Cylinder] = []
     misses = 0  # draws rejected since the last obstacle placed: many mean the arena is full
@@ -238,11 +199,11 @@ def obstacles(seed: int = 0, *, size_m: float = 10.0, count: int = 20, min_size_
               cylinder_fraction: float = 0.5) -> WorldSpec:
     """A walled square arena with a random field of cylinders and boxes, ``min_gap_m`` apart."""
     params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    rng = _rng(seed)
+    rng = rng_for(seed)
     boxes, cylinders = _field(rng, "obstacles", size_m, count, min_size_m, max_size_m,
                               min_gap_m, cylinder_fraction)
     bounds = (-size_m / 2, -size_m / 2, size_m / 2, size_m / 2)
-    return WorldSpec("obstacles", bounds, tuple(_walls(bounds) + boxes), tuple(cylinders),
+    return WorldSpec("obstacles", bounds, tuple(walls(bounds) + boxes), tuple(cylinders),
                      seed=seed, params=params)
 
 
@@ -258,12 +219,12 @@ def person(seed: int = 0, *, size_m: float = 8.0, count: int = 6, min_size_m: fl
     cylinder on their inside (``person_walk``; how many stand is ``occluders_placed`` in
     ``params``)."""
     params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    _count("world.person.waypoints", waypoints, 2, 20)
-    _within("world.person.speed_m_s", speed_m_s, 0.0, 3.0)
-    _within("world.person.size_m", size_m, 2.0, 100.0)
-    _within("world.person.speed_spread_fraction", speed_spread_fraction, 0.0, 0.9)
-    _count("world.person.occluders", occluders, 0, waypoints)
-    rng = _rng(seed)
+    check_count("world.person.waypoints", waypoints, 2, 20)
+    check_within("world.person.speed_m_s", speed_m_s, 0.0, 3.0)
+    check_within("world.person.size_m", size_m, 2.0, 100.0)
+    check_within("world.person.speed_spread_fraction", speed_spread_fraction, 0.0, 0.9)
+    check_count("world.person.occluders", occluders, 0, waypoints)
+    rng = rng_for(seed)
     need = PERSON_RADIUS_M + PERSON_MARGIN_M
     angles = rng.uniform(0, 2 * math.pi) + 2 * math.pi * np.arange(waypoints) / waypoints
     reach = rng.uniform(0.4, 1.0, waypoints) * (size_m / 2 - need)
@@ -279,81 +240,8 @@ def person(seed: int = 0, *, size_m: float = 8.0, count: int = 6, min_size_m: fl
     walk = PersonSpec(tuple((float(x), float(y)) for x, y in loop), speed_m_s, PERSON_RADIUS_M,
                       leg_speeds_m_s=leg_speeds(rng, waypoints, speed_m_s, speed_spread_fraction))
     bounds = (-size_m / 2, -size_m / 2, size_m / 2, size_m / 2)
-    return WorldSpec("person", bounds, tuple(_walls(bounds) + boxes), (*cylinders, *hiding),
+    return WorldSpec("person", bounds, tuple(walls(bounds) + boxes), (*cylinders, *hiding),
                      person=walk, seed=seed, params=params)
-
-
-def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
-             row_length_m: float = 10.0, trunk_spacing_m: float = 1.0, gap_prob: float = 0.1,
-             row_radius_m: float = 0.0) -> WorldSpec:
-    """Vine rows (trunks under a canopy hedge), straight or concentric arcs, inside a far wall.
-
-    Lanes are the centre lines between neighbouring rows; each starts at a spawn pose facing
-    along it and ends at its goal point. Curved rows keep their centre in ``params``
-    (``arc_center_x_m``, ``arc_center_y_m``); row k lies at ``row_radius_m + k * row_spacing_m``.
-    """
-    params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    _count("world.vineyard.rows", rows, 2, 30)
-    _within("world.vineyard.row_spacing_m", row_spacing_m, CANOPY_WIDTH_M + 0.6, 20.0)
-    _within("world.vineyard.row_length_m", row_length_m, 1.0, 200.0)
-    _within("world.vineyard.trunk_spacing_m", trunk_spacing_m, 0.2, row_length_m)
-    require(0.0 <= gap_prob < 1.0, "world.vineyard.gap_prob", gap_prob, "a probability in [0, 1)")
-    middle_m = row_radius_m + 0.5 * (rows - 1) * row_spacing_m  # radius of the middle row
-    require(row_radius_m == 0 or (row_radius_m > 0 and row_length_m <= math.pi * middle_m),
-            "world.vineyard.row_radius_m", row_radius_m,
-            "0 (straight rows), or a radius that bends the middle row by at most 180 degrees")
-    rng = _rng(seed)
-    span_rad = row_length_m / middle_m if row_radius_m > 0 else 0.0
-    center_y = -middle_m
-
-    def line(offset_m: float, n: int) -> np.ndarray:
-        """``n + 1`` evenly spaced points along the row or lane ``offset_m`` from the middle."""
-        t = np.linspace(0.0, 1.0, n + 1)
-        if row_radius_m == 0:
-            return np.column_stack([(t - 0.5) * row_length_m, np.full_like(t, offset_m)])
-        phi = 0.5 * math.pi + span_rad * (0.5 - t)
-        radius = middle_m + offset_m
-        return np.column_stack([radius * np.cos(phi), center_y + radius * np.sin(phi)])
-
-    def length(offset_m: float) -> float:
-        return row_length_m if row_radius_m == 0 else (middle_m + offset_m) * span_rad
-
-    offsets = (np.arange(rows) - 0.5 * (rows - 1)) * row_spacing_m
-    rows_xy = [line(offset, max(1, round(length(offset) / trunk_spacing_m)))
-               for offset in offsets]
-    boxes, trunks = _vine_rows(rng, rows_xy, gap_prob)
-    lanes = tuple(line(offset, max(2, math.ceil(length(offset) / LANE_STEP_M)))
-                  for offset in offsets[:-1] + 0.5 * row_spacing_m)
-    spawns = tuple(Pose2D(float(p[0, 0]), float(p[0, 1]),
-                          math.atan2(p[1, 1] - p[0, 1], p[1, 0] - p[0, 0])) for p in lanes)
-    xy = np.array([(c.x, c.y) for c in trunks])
-    lo, hi = xy.min(axis=0) - HEADLAND_M, xy.max(axis=0) + HEADLAND_M
-    bounds = (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
-    if row_radius_m > 0:
-        params.update(arc_center_x_m=0.0, arc_center_y_m=center_y)
-    lane_xy = tuple(tuple((float(x), float(y)) for x, y in p) for p in lanes)
-    return WorldSpec("vineyard", bounds, tuple(_walls(bounds) + boxes), tuple(trunks),
-                     spawn_poses=spawns, goal_points=tuple(p[-1] for p in lane_xy),
-                     lanes=lane_xy, seed=seed, params=params)
-
-
-def _vine_rows(rng: np.random.Generator, rows_xy: list[np.ndarray],
-               gap_prob: float) -> tuple[list[Box], list[Cylinder]]:
-    """Each row's canopy (a box between neighbouring trunk places) and its trunks, a few
-    missing at random but never a row's ends."""
-    boxes: list[Box] = []
-    trunks: list[Cylinder] = []
-    for pts in rows_xy:
-        keep = rng.random(len(pts)) >= gap_prob
-        keep[[0, -1]] = True  # row ends stay visible
-        trunks += [Cylinder(float(x), float(y), TRUNK_RADIUS_M, TRUNK_HEIGHT_M, kind="trunk")
-                   for x, y in pts[keep]]
-        for a, b in zip(pts[:-1], pts[1:]):
-            mid, d = 0.5 * (a + b), b - a
-            boxes.append(Box(float(mid[0]), float(mid[1]), float(np.hypot(*d)), CANOPY_WIDTH_M,
-                             CANOPY_HEIGHT_M, float(math.atan2(d[1], d[0])), CANOPY_Z_BASE_M,
-                             kind="canopy"))
-    return boxes, trunks
 
 
 GENERATORS: dict[str, Callable[..., WorldSpec]] = {

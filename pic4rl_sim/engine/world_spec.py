@@ -45,7 +45,7 @@ class Cylinder:
     radius_m: float
     height_m: float
     z_base_m: float = 0.0
-    kind: str = "obstacle"  # obstacle | trunk | person
+    kind: str = "obstacle"  # obstacle | trunk | post | person
 
     def __post_init__(self) -> None:
         for key in ("radius_m", "height_m"):

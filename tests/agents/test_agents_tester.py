@@ -170,6 +170,9 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
      "Test it with --baseline dwa_heading"),
     (["--baseline", "dwa_heading", "--ros-args", "--params-file", str(LIDAR_TD3)],
      "--baseline dwa_heading: it drives personMonitoring; this env's task is 'goToPose'"),
+    (["--baseline", "planner", "--ros-args", "--params-file",
+      str(CONFIG / "env_vineyard_depth.yaml")],
+     "this env's task is 'vineyard'. Test it with --baseline centerline or row_follower"),
 ])
 def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]

@@ -88,6 +88,11 @@ def test_row_end_and_collision():
     assert set(j.terms) == keys and j.outcome is Outcome.GOAL
     assert j.terms["row_end"] == 100.0 and j.terms["step"] == -0.5
     assert j.reward == pytest.approx(2.0 * 0.5 - 0.2 + 100.0 - 0.5)
+    # The end of the row reached from the next lane (through a gap) is not this row's end.
+    beside = task.judge(frame(9.0, 2.4), frame(9.5, 2.5), context, 0)
+    assert beside.outcome is None and beside.terms["row_end"] == 0.0
+    edge = task.judge(frame(9.0), frame(9.5, -0.9), context, 0)
+    assert edge.outcome is Outcome.GOAL  # max_offset_m 0.9: within it is still the row
     ranges = np.full(360, np.inf, np.float32)
     ranges[180] = 0.3  # touching ahead
     wall = ScanData(ranges, -math.pi, 2 * math.pi / 360, 0.1, 30.0)

@@ -18,7 +18,6 @@ from pic4rl_sim.engine.world_generators import (
     make_world,
     obstacles,
     person,
-    vineyard,
 )
 from pic4rl_sim.engine.mjcf_world import world_from_mjcf
 
@@ -247,47 +246,6 @@ def test_person_paths_and_speeds_vary_with_the_seed() -> None:
 def test_bad_person_walk_parameters_are_config_errors(key, value, match) -> None:
     with pytest.raises(ConfigError, match=match):
         person(0, **{key: value})
-
-
-def test_vineyard_straight_rows_and_lanes() -> None:
-    world = vineyard(0, rows=4, row_spacing_m=2.5, gap_prob=0.2)
-    ys = np.array([c.y for c in world.cylinders])
-    rows = np.unique(ys.round(9))
-    assert len(rows) == 4 and np.diff(rows) == pytest.approx([2.5] * 3)
-    xs = np.array([c.x for c in world.cylinders])
-    assert len(world.cylinders) < 4 * 11  # some trunks missing
-    assert np.allclose(np.diff(np.unique(xs.round(6))), 1.0)
-    assert all(c.kind == "trunk" and c.radius_m == 0.05 for c in world.cylinders)
-    canopy = [b for b in world.boxes if b.kind == "canopy"]
-    assert all(b.z_base_m == 0.8 and b.size_y_m == 0.5 and b.yaw_rad == 0 for b in canopy)
-    assert len(world.lanes) == 3
-    for k, lane in enumerate(world.lanes):
-        pts = np.array(lane)
-        assert pts[:, 1] == pytest.approx(np.full(len(pts), 0.5 * (rows[k] + rows[k + 1])))
-        to_trunks = clearance(pts, (), world.cylinders)
-        assert to_trunks.min() == pytest.approx(2.5 / 2 - 0.05, abs=1e-6)
-        assert world.clearance(pts).min() == pytest.approx(2.5 / 2 - 0.25, abs=1e-6)
-        assert world.spawn_poses[k][:2] == pytest.approx(lane[0])
-        assert world.spawn_poses[k].yaw == pytest.approx(0.0)
-        assert world.goal_points[k] == pytest.approx(lane[-1])
-        assert np.hypot(*(pts[-1] - pts[0])) == pytest.approx(10.0)
-
-
-@pytest.mark.parametrize("radius_m", [6.0, 15.0])
-def test_vineyard_curved_rows_are_concentric_arcs(radius_m: float) -> None:
-    world = vineyard(1, rows=5, row_spacing_m=2.5, row_radius_m=radius_m)
-    centre = np.array([world.params["arc_center_x_m"], world.params["arc_center_y_m"]])
-    r = np.hypot(*(np.array([(c.x, c.y) for c in world.cylinders]) - centre).T)
-    k = (r - radius_m) / 2.5
-    assert np.allclose(k, k.round(), atol=1e-9) and set(k.round()) == {0, 1, 2, 3, 4}
-    for i, lane in enumerate(world.lanes):
-        lane_r = np.hypot(*(np.array(lane) - centre).T)
-        assert lane_r == pytest.approx(np.full(len(lane), radius_m + (i + 0.5) * 2.5))
-        assert clearance(np.array(lane), (), world.cylinders).min() >= 2.5 / 2 - 0.05 - 1e-6
-        d = np.subtract(lane[1], lane[0])
-        assert world.spawn_poses[i].yaw == pytest.approx(math.atan2(d[1], d[0]))
-    with pytest.raises(ConfigError, match=r"world\.vineyard\.row_radius_m"):
-        vineyard(row_radius_m=1.0, row_length_m=30.0)
 
 
 MJCF = """<mujoco>

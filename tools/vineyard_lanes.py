@@ -1,0 +1,47 @@
+"""Write the test episodes of a vineyard variant: every lane once, start to end, as a
+PIC4rl-gym ``goals_and_poses`` JSON that ``pic4rl-test`` walks in order.
+
+    .venv/bin/python tools/vineyard_lanes.py config/train_vineyard_sac.yaml 101 -o lanes.json
+    .venv/bin/python tools/vineyard_lanes.py config/train_vineyard_sac.yaml 101 --straight ...
+    pic4rl-test --agent checkpoints/vineyard_sac --episodes 7 --sim-kwargs world_variant:101 \
+        --env-kwargs episodes.file:lanes.json
+
+The world is the recipe's vineyard with ``world_variant`` set to the variant (and, with
+``--straight``, ``bend_m`` 0): the same geometry ``--sim-kwargs`` gives the test's sim.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from pic4rl_agents.config import load_run_config
+from pic4rl_sim.params import build_world_choice, parameter_table, resolve
+from pic4rl_sim.engine.robot_specs import load_robot
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("recipe", type=Path, help="a training recipe with a vineyard sim")
+    parser.add_argument("variant", type=int, help="world_variant of the test rows")
+    parser.add_argument("--straight", action="store_true", help="bend_m 0: straight rows")
+    parser.add_argument("-o", "--out", type=Path, required=True)
+    args = parser.parse_args(argv)
+    sim = dict(load_run_config([args.recipe]).env.sim_params)
+    sim["world_variant"] = args.variant
+    if args.straight:
+        sim["world.vineyard.bend_m"] = 0.0
+    values = resolve(parameter_table(load_robot(sim.get("robot", "jackal"))), sim)
+    world = build_world_choice(values).build()
+    poses = [[round(p.x, 4), round(p.y, 4), round(p.yaw, 5)] for p in world.spawn_poses]
+    goals = [[round(x, 4), round(y, 4)] for x, y in world.goal_points]
+    doc = {"comment": f"every lane of vineyard variant {args.variant} of {args.recipe}"
+                      f"{' (straight rows)' if args.straight else ''}, start to end",
+           "initial_pose": poses[0], "goals": goals, "poses": poses}
+    args.out.write_text(json.dumps(doc))
+    print(f"wrote {len(goals)} lanes to {args.out}")
+
+
+if __name__ == "__main__":
+    main()
