@@ -30,6 +30,8 @@ SHIPPED = {
     "train_person_hybrid_sac.yaml": ("sac", "lidar", "sac_person_hybrid"),
     "train_person_hybrid_td3.yaml": ("td3", "lidar", "td3_person_hybrid"),
     "train_person_e2e_sac.yaml": ("sac", "lidar", "sac_person_e2e"),
+    "train_vineyard_sac.yaml": ("sac", "depth", "vineyard_sac"),
+    "train_vineyard_td3.yaml": ("td3", "depth", "vineyard_td3"),
 }
 
 
