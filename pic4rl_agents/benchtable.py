@@ -130,8 +130,8 @@ def comparison_figure(task: str, header: Sequence[str],
         rate = int(k) / int(n) if n and int(n) else math.nan
         labels.append(" · ".join(str(v) for v in r[1:5]) + ("" if r[-1] == "ok" else " (failed)"))
         rates.append(rate)
-        lows.append(rate - low if n and int(n) else 0.0)
-        highs.append(high - rate if n and int(n) else 0.0)
+        lows.append(max(rate - low, 0.0) if n and int(n) else 0.0)  # rounding: never < 0
+        highs.append(max(high - rate, 0.0) if n and int(n) else 0.0)
     fig = Figure(figsize=(9, 1.2 + 0.45 * len(mine)), layout="constrained")
     ax = fig.subplots()
     y = np.arange(len(mine))[::-1]

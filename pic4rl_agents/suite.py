@@ -29,13 +29,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
 
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.config import TransportName
 from pic4rl_bridge.errors import ConfigError, require, unknown_key
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
+from pic4rl_sim.schema import read_yaml
 
 from .config import SIM_NODE
 from .testplan import DEFAULT_PAIRS
@@ -209,12 +209,7 @@ def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite
     """The suite of ``path``, checked whole before any cell runs; ``ConfigError`` naming the
     file and the key otherwise."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as err:
-        raise ConfigError(f"{path}: cannot read the suite file: {err.strerror}") from err
-    except yaml.YAMLError as err:
-        raise ConfigError(f"{path}: not YAML: {err}") from err
+    data = read_yaml(path, "suite file")
     data = _keys(data, SUITE_KEYS, str(path))
     for key in ("suite", "tasks"):
         if key not in data:

@@ -22,7 +22,7 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError
-from .schema import flatten
+from .schema import flatten, read_yaml
 
 SIM_NODE = "sim"
 ENV_NODE = "nav_env"
@@ -33,13 +33,7 @@ FILE_KEYS = {ENV_NODE: ("episodes.file",)}
 
 def read(path: str | Path) -> Mapping[str, Any]:
     """The node sections of a ROS 2 parameter YAML, or ``ConfigError`` naming the file."""
-    path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as err:
-        raise ConfigError(f"{path}: cannot read the config file: {err.strerror}") from err
-    except yaml.YAMLError as err:
-        raise ConfigError(f"{path}: not valid YAML: {err}") from err
+    data = read_yaml(path, "config file")
     if not isinstance(data, Mapping):
         raise ConfigError(f"{path}: expected a mapping of node sections "
                           "(sim:, nav_env:, ...: ros__parameters: ...)")

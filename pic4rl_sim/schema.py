@@ -17,6 +17,7 @@ import typing
 from collections.abc import Iterator, Mapping
 from dataclasses import MISSING, dataclass, field
 from enum import Enum
+from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
@@ -366,3 +367,15 @@ def help_text(table: tuple[ParamSpec, ...]) -> str:
 def param_names(cls: type) -> tuple[str, ...]:
     """The dotted names of every parameter of the config dataclass ``cls``."""
     return tuple(spec.name for spec in specs(cls))
+
+
+def read_yaml(path: str | Path, what: str) -> Any:
+    """The YAML document of ``path`` (a ``what``: "config file", "robot file", ...), or
+    ``ConfigError`` naming the file: unreadable, or not valid YAML."""
+    path = Path(path)
+    try:
+        return yaml.safe_load(path.read_text())
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot read the {what}: {err.strerror}") from err
+    except yaml.YAMLError as err:
+        raise ConfigError(f"{path}: not valid YAML: {err}") from err

@@ -15,10 +15,9 @@ from enum import Enum
 from pathlib import Path
 from typing import Any, TypeVar
 
-import yaml
 
 from ..errors import ConfigError, require, unknown_key
-from ..schema import FRACTION, NON_NEGATIVE, POSITIVE, Range, check, param
+from ..schema import FRACTION, NON_NEGATIVE, POSITIVE, Range, check, param, read_yaml
 from .geometry import Footprint
 
 _SCALE_ERROR = Range(-1.0, 1.0, lo_open=True, hi_open=True)
@@ -251,12 +250,7 @@ def load_robot(name_or_path: str | Path) -> RobotSpec:
     path = Path(text)
     if path.suffix not in (".yaml", ".yml"):
         raise unknown_key(text, BUILT_IN, where="robot")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as err:
-        raise ConfigError(f"robot: cannot read {str(path)!r}: {err.strerror}") from err
-    except yaml.YAMLError as err:
-        raise ConfigError(f"robot: {str(path)!r} is not valid YAML: {err}") from err
+    data = read_yaml(path, "robot file")
     if not isinstance(data, Mapping):
         raise ConfigError(f"robot: {str(path)!r} must hold a mapping of robot keys")
     return robot_from_mapping(data, where=str(path))
