@@ -97,7 +97,7 @@ def test_a_baseline_that_does_not_fit_the_task_is_refused() -> None:
         other = EnvConfig() if "vineyard" in tasks else vineyard
         with pytest.raises(ConfigError, match=rf"--baseline {name}: it drives .*this env's task"):
             check_fits(name, other)
-    with pytest.raises(ConfigError, match="centerline, row_follower"):
+    with pytest.raises(ConfigError, match="Test it with --baseline centerline or row_follower"):
         make_baseline("dwa", vineyard, JACKAL)
     with pytest.raises(ConfigError, match="--baseline centerline: .* has none"):
         make_baseline("centerline", vineyard, JACKAL)
