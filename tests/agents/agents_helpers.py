@@ -12,6 +12,7 @@ import sys
 import time
 import uuid
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path
 
 import pytest
@@ -131,3 +132,9 @@ class Launcher:
         for pid in processes_with(self.tag, "python"):
             with contextlib.suppress(ProcessLookupError):  # gone meanwhile
                 os.killpg(os.getpgid(pid), signal.SIGKILL)
+
+
+def label_error(model: Any, obs: Any, labels: Any) -> float:
+    """Mean squared error of ``model``'s deterministic actions against imitation's labels."""
+    acted, _ = model.predict(obs, deterministic=True)
+    return float(((acted - labels) ** 2).mean())

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 import torch
 import yaml
-from agents_helpers import CONFIG, LIDAR_TD3, ROS_ARGS, TINY, Launcher
+from agents_helpers import CONFIG, label_error, Launcher, LIDAR_TD3, ROS_ARGS, TINY
 from ros_helpers import next_domain
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
@@ -76,13 +76,9 @@ def test_the_regression_fits_the_labels(algorithm: str) -> None:
         imitation.collect(60, EXPERT)
         obs, labels, _ = imitation.data.arrays()
 
-        def error() -> float:
-            acted, _ = model.predict(obs, deterministic=True)
-            return float(np.mean((acted - labels) ** 2))
-
-        before = error()
+        before = label_error(model, obs, labels)
         imitation.fit(300)
-        assert error() < 0.5 * before
+        assert label_error(model, obs, labels) < 0.5 * before
         with torch.no_grad():  # the loss the fit lowers is the actor's own
             loss = actor_loss(model, obs_as_tensor(obs, model.device), torch.as_tensor(labels))
         assert float(loss) == pytest.approx(imitation.losses[-1], rel=1.0)

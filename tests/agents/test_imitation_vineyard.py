@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from agents_helpers import CONFIG, LIDAR_TD3, TINY
+from agents_helpers import CONFIG, label_error, LIDAR_TD3, TINY
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 
@@ -52,13 +52,9 @@ def test_the_cnn_on_depth_learns_the_experts_labels() -> None:
         assert (labels[:, 0] > 0.9).mean() > 0.8  # the expert drives on at full speed
         assert labels[:, 1].std() > 0.01  # and steers along the bent rows
 
-        def error() -> float:
-            acted, _ = model.predict(obs, deterministic=True)
-            return float(np.mean((acted - labels) ** 2))
-
-        before = error()
+        before = label_error(model, obs, labels)
         imitation.fit(300)
-        assert error() < 0.5 * before
+        assert label_error(model, obs, labels) < 0.5 * before
     finally:
         env.close()
 
