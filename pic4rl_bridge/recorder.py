@@ -1,57 +1,32 @@
-"""Write each episode to its own rosbag2 (with rosbags), as the bag contract says.
+"""Write each episode to its own rosbag2, as the bag contract says.
 
 Bags are the contract between running a robot and judging it, so the recorder writes through
-``pic4rl_metrics.contract``, whose reader judges them: the messages as on the wire, the typed
-``EpisodeFacts`` on ``/episode/facts`` and in ``custom_data``, the outcome on
-``/episode/outcome``, with the contract's storages and typestore.
-Layout: ``<bags_dir>/<run>/<episode>/`` with the run's config beside the episodes. Nothing
-already on disk is ever overwritten: a run recorded twice into one directory appends episodes
-and keeps every config it was run with.
-
-rosbags' sqlite3 writer keeps the whole bag in one open transaction until ``close()``, so a
-recorder killed mid-episode would lose it all; ``EpisodeBag`` commits every
-``flush_interval_s`` instead, and a killed recorder leaves a ``.db3`` (without
-``metadata.yaml``) that the metrics read.
+``pic4rl_metrics.bagwriter``, the metrics' one bag writer: the messages as on the wire, the
+typed ``EpisodeFacts`` on ``/episode/facts`` and in ``custom_data``, the outcome on
+``/episode/outcome``, with the contract's storages and typestore. What the recorder adds is
+the run: the offered QoS of the sim's topics, the episode's run and name, the layout
+``<bags_dir>/<run>/<episode>/`` with the run's config beside the episodes. Nothing already on
+disk is ever overwritten: a run recorded twice into one directory appends episodes and keeps
+every config it was run with.
 """
 
 from __future__ import annotations
 
 import logging
 import re
-import sqlite3
-import struct
-import time
-import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
 import yaml
-from rosbags.interfaces import (
-    Connection,
-    Qos,
-    QosDurability,
-    QosHistory,
-    QosLiveliness,
-    QosReliability,
-    QosTime,
-)
-from rosbags.rosbag2 import Writer, WriterError
+from rosbags.interfaces import Qos
 
-from pic4rl_metrics.contract import (
-    FACTS_TOPIC,
-    OUTCOME_TOPIC,
-    OUTCOMES,
-    ROS_DISTRO,
-    STORAGES,
-    EpisodeFacts,
-    Outcome,
-    outcome_event,
-    plain,
-    typestore,
-)
+from pic4rl_metrics.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
+from pic4rl_metrics.contract import STORAGES, EpisodeFacts, Outcome, plain
+from pic4rl_metrics.errors import OutputError
 from pic4rl_sim.interfaces import QosKind, find
 
 from .errors import RecorderError
@@ -59,17 +34,9 @@ from .transport import OfferedQos, RawMessage
 
 log = logging.getLogger(__name__)
 
-STRING = "std_msgs/msg/String"
 CONFIG_NAME = "config"
 EPISODE_PREFIX = "episode_"
 
-_UNSET = QosTime(0, 0)  # rmw's "unspecified": the default (infinite) deadline, lifespan, lease
-#: Offered QoS of the sim's latched topics (goal, markers), so ``ros2 bag play`` re-latches them.
-LATCHED_QOS = Qos(QosHistory.KEEP_LAST, 1, QosReliability.RELIABLE, QosDurability.TRANSIENT_LOCAL,
-                  _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
-#: Offered QoS of every other topic (when the transport does not know better).
-DEFAULT_QOS = Qos(QosHistory.KEEP_LAST, 10, QosReliability.RELIABLE, QosDurability.VOLATILE,
-                  _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
 #: How a transport tells how a topic was offered (``Transport.offered_qos``).
 QosSource = Callable[[str], OfferedQos | None]
 
@@ -82,110 +49,58 @@ def offered_qos(topic: str, offered: OfferedQos | None = None) -> Qos:
         sim_topic = find(topic)
         latched = sim_topic is not None and sim_topic.qos is QosKind.LATCHED
         return LATCHED_QOS if latched else DEFAULT_QOS
-    return Qos(QosHistory.KEEP_LAST if offered.depth > 0 else QosHistory.UNKNOWN, offered.depth,
-               QosReliability.RELIABLE if offered.reliable else QosReliability.BEST_EFFORT,
-               QosDurability.TRANSIENT_LOCAL if offered.transient_local
-               else QosDurability.VOLATILE, _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET,
-               False)
+    return qos_record(offered.depth, reliable=offered.reliable,
+                      transient_local=offered.transient_local)
 
 
-def _finish_files(bag: Path) -> None:
-    """What rosbags' writer leaves out, filled in after it closed ``bag``: ``ros_distro``
-    (it writes ``rosbags``) in ``metadata.yaml`` and the storage's copy, and in MCAP files
-    each chunk's CRC-32 and the data section's, so that a reader detects a damaged chunk."""
-    meta = bag / "metadata.yaml"
-    text = meta.read_text()
-    meta.write_text(text.replace("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}", 1))
-    for db in bag.glob("*.db3"):
-        with sqlite3.connect(db) as conn:
-            conn.execute("UPDATE metadata SET metadata = replace(metadata, ?, ?)",
-                         ("ros_distro: rosbags", f"ros_distro: {ROS_DISTRO}"))
-        conn.close()
-    for mcap in bag.glob("*.mcap"):
-        data = bytearray(mcap.read_bytes())
-        # Same length, so no offset in the file moves (YAML ignores the trailing spaces).
-        old = b"ros_distro: rosbags"
-        data[:] = data.replace(old, f"ros_distro: {ROS_DISTRO}".encode().ljust(len(old)), 1)
-        _mcap_crcs(data)
-        mcap.write_bytes(bytes(data))
-
-
-def _mcap_crcs(data: bytearray) -> None:
-    """Set the CRC-32 of every uncompressed chunk's records and of the data section, in place
-    (MCAP: a CRC of 0 means "not computed", which rosbags writes)."""
-    pos = 8  # past the magic
-    while pos + 9 <= len(data):
-        op = data[pos]
-        (length,) = struct.unpack_from("<Q", data, pos + 1)
-        body = pos + 9
-        if op == 0x06:  # chunk: start, end, uncompressed size, CRC, compression, records
-            (compression_len,) = struct.unpack_from("<I", data, body + 28)
-            compression = bytes(data[body + 32:body + 32 + compression_len])
-            start = body + 40 + compression_len
-            (records_len,) = struct.unpack_from("<Q", data, start - 8)
-            if compression == b"":
-                struct.pack_into("<I", data, body + 24, zlib.crc32(data[start:start + records_len]))
-        elif op == 0x0F:  # data end: the CRC of everything before it
-            struct.pack_into("<I", data, body, zlib.crc32(data[:pos]))
-            return
-        pos = body + length
+@contextmanager
+def _as_recorder_error() -> Iterator[None]:
+    """The bag writer's ``OutputError`` as the bridge's ``RecorderError`` (same message)."""
+    try:
+        yield
+    except OutputError as err:
+        raise RecorderError(str(err)) from err
 
 
 class EpisodeBag:
     """One episode's bag being written; ``write`` is usable as the transport's tap.
 
     Durability: with ``sqlite3`` the writes are committed every ``flush_interval_s`` (s of wall
-    time; 0: every write) and right after ``facts``, with ``PRAGMA synchronous=OFF``, so a
-    process killed at any time (SIGKILL included) leaves a ``.db3`` holding everything up to
-    the last commit; only an OS crash or power loss can lose more. A kill in the middle of a
-    commit (milliseconds) leaves a hot ``-journal`` that rosbags' read-only reader ignores:
-    opening the ``.db3`` once with ``sqlite3`` rolls it back. With ``mcap`` there is no such
-    guarantee: rosbags writes the chunk index and footer only on close, so a killed recorder
-    leaves an MCAP file that may not be readable.
+    time; 0: every write) and right after ``facts`` (``BagWriter``), so a process killed at any
+    time (SIGKILL included) leaves a ``.db3`` holding everything up to the last commit. A kill
+    in the middle of a commit (milliseconds) leaves a hot ``-journal`` that rosbags' read-only
+    reader ignores: opening the ``.db3`` once with ``sqlite3`` rolls it back. With ``mcap``
+    there is no such guarantee: rosbags writes the chunk index and footer only on close, so a
+    killed recorder leaves an MCAP file that may not be readable.
     """
 
     def __init__(self, path: Path, *, storage: str = "sqlite3", flush_interval_s: float = 1.0,
                  qos: QosSource | None = None) -> None:
-        if storage not in STORAGES:
-            raise RecorderError(f"{path}: storage {storage!r} is unknown; expected "
-                                f"{' or '.join(STORAGES)}")
         self.path = Path(path)
         self.storage = storage
         self.flush_interval_s = float(flush_interval_s)
-        self._qos = qos
-        #: Messages written per topic (facts and outcome included).
-        self.counts: dict[str, int] = {}
         self._facts = EpisodeFacts(run=self.path.parent.name, episode=self.path.name)
-        self._connections: dict[tuple[str, str], Connection] = {}
-        self._writer: Writer | None = Writer(self.path, version=9,
-                                             storage_plugin=STORAGES[storage])
-        try:
-            self._writer.open()
-        except (WriterError, OSError) as err:
-            self._writer = None
-            raise RecorderError(f"{self.path}: cannot create the episode bag: {err}") from err
-        self._db: sqlite3.Connection | None = None
-        if storage == "sqlite3":
-            db = getattr(self._writer.storage, "conn", None)
-            if not isinstance(db, sqlite3.Connection):
-                self._writer.abort()
-                raise RecorderError(f"{self.path}: rosbags' sqlite3 writer exposes no "
-                                    "connection; cannot commit periodically")
-            db.execute("PRAGMA synchronous=OFF")
-            # Never write uncommitted pages into the .db3: it stays consistent between commits.
-            db.execute("PRAGMA cache_spill=OFF")
-            self._db = db
-        self._last_commit = time.monotonic()
+
+        def bag_qos(topic: str) -> Qos:
+            return offered_qos(topic, qos(topic) if qos is not None else None)
+
+        with _as_recorder_error():
+            self._bag = BagWriter(self.path, storage=storage, qos=bag_qos,
+                                  flush_interval_s=self.flush_interval_s)
 
     @property
     def is_open(self) -> bool:
-        return self._writer is not None
+        return self._bag.is_open
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Messages written per topic (facts and outcome included)."""
+        return self._bag.counts
 
     def write(self, msg: RawMessage) -> None:
         """Write one message (CDR) at its ``stamp_ns`` (bag time, ns)."""
-        self._write(msg.topic, msg.msgtype, msg.data, msg.stamp_ns)
-        if self._db is not None and time.monotonic() - self._last_commit >= self.flush_interval_s:
-            self._commit()
+        with _as_recorder_error():
+            self._bag.write(msg.topic, msg.msgtype, msg.data, msg.stamp_ns)
 
     def facts(self, facts: EpisodeFacts, stamp_ns: int) -> None:
         """Publish ``facts`` (``run`` and ``episode`` default to the bag's directories) on
@@ -194,29 +109,26 @@ class EpisodeBag:
         self._facts = replace(
             facts, run=self._facts.run if facts.run is None else facts.run,
             episode=self._facts.episode if facts.episode is None else facts.episode)
-        self._write(FACTS_TOPIC, STRING, _string_cdr(self._facts.facts_json()), stamp_ns)
-        if self._db is not None:
-            self._commit()
+        with _as_recorder_error():
+            self._bag.write_facts(self._facts, stamp_ns)
 
     def close(self, outcome: Outcome | str, stamp_ns: int) -> Path:
         """End the episode: publish the ``outcome`` (one of the contract's ``OUTCOMES``) at
         ``stamp_ns`` (ns), store every fact and the outcome in ``custom_data``, write
         ``metadata.yaml``; return the bag directory."""
-        word = plain(outcome)
-        if word not in OUTCOMES:
-            raise RecorderError(f"{self.path}: outcome {outcome!r} is not one of "
-                                f"{', '.join(OUTCOMES)}")
-        event = outcome_event(word, stamp_ns)
-        self._write(OUTCOME_TOPIC, STRING, _string_cdr(event), stamp_ns)
-        self._finish(replace(self._facts, outcome=Outcome(word)))
-        log.info("episode bag %s: %s, %d messages", self.path, word, sum(self.counts.values()))
+        with _as_recorder_error():
+            word = self._bag.write_outcome(outcome, stamp_ns)
+            self._bag.close(replace(self._facts, outcome=word))
+        log.info("episode bag %s: %s, %d messages", self.path, word.value,
+                 sum(self.counts.values()))
         return self.path
 
     def abort(self) -> Path:
         """Close without an outcome (the episode was cut short): everything written is kept
         and the bag stays readable. Does nothing when already closed."""
-        if self._writer is not None:
-            self._finish(self._facts)
+        if self._bag.is_open:
+            with _as_recorder_error():
+                self._bag.close(self._facts)
             log.warning("episode bag %s closed without an outcome", self.path)
         return self.path
 
@@ -226,56 +138,6 @@ class EpisodeBag:
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
         self.abort()
-
-    def _open_writer(self) -> Writer:
-        if self._writer is None:
-            raise RecorderError(f"{self.path}: the episode bag is closed")
-        return self._writer
-
-    def _write(self, topic: str, msgtype: str, data: bytes, stamp_ns: int) -> None:
-        writer = self._open_writer()
-        stamp = int(stamp_ns)
-        if stamp < 0:
-            raise RecorderError(f"{self.path}: {topic}: bag time {stamp} ns is negative")
-        try:
-            conn = self._connections.get((topic, msgtype))
-            if conn is None:
-                if msgtype not in typestore().fielddefs:
-                    raise RecorderError(f"{self.path}: topic {topic!r} has type {msgtype!r}, "
-                                        "which the recorder's typestore (ROS 2 Jazzy) lacks")
-                offered = self._qos(topic) if self._qos is not None else None
-                conn = writer.add_connection(topic, msgtype, typestore=typestore(),
-                                             offered_qos_profiles=[offered_qos(topic, offered)])
-                self._connections[topic, msgtype] = conn
-            writer.write(conn, stamp, data)
-        except (WriterError, sqlite3.Error, OSError) as err:
-            raise RecorderError(f"{self.path}: cannot write {topic!r}: {err}") from err
-        self.counts[topic] = self.counts.get(topic, 0) + 1
-
-    def _commit(self) -> None:
-        assert self._db is not None
-        try:
-            self._db.commit()
-        except sqlite3.Error as err:
-            raise RecorderError(f"{self.path}: cannot commit: {err}") from err
-        self._last_commit = time.monotonic()
-
-    def _finish(self, facts: EpisodeFacts) -> None:
-        writer = self._open_writer()
-        for key, value in facts.custom_data().items():
-            writer.set_custom_data(key, value)
-        self._writer = self._db = None
-        try:
-            writer.close()
-            _finish_files(self.path)
-        except (WriterError, sqlite3.Error, OSError) as err:
-            raise RecorderError(f"{self.path}: cannot close the episode bag: {err}") from err
-
-
-def _string_cdr(text: str) -> bytes:
-    """A ``std_msgs/msg/String`` holding ``text``, as CDR."""
-    ts = typestore()
-    return bytes(ts.serialize_cdr(ts.types[STRING](data=text), STRING))
 
 
 class RunRecorder:
