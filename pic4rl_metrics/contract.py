@@ -6,17 +6,17 @@ ones JSON-encoded) *and* to the ``episode/facts`` topic at the episode's start, 
 recorder was killed before writing ``metadata.yaml`` still carries them. The outcome is
 published on ``episode/outcome`` when the episode ends, so its time is known.
 
-Both writers (``pic4rl_bridge.recorder`` and ``synthetic``) encode through ``EpisodeFacts``
-and ``encode_custom_data`` here, and the reader decodes through ``parse_facts``, so a new fact
-is one field and one ``FACT_KEYS`` entry.
+The one writer (``bagwriter``, for ``pic4rl_bridge.recorder`` and ``synthetic``) encodes
+through ``EpisodeFacts`` and ``encode_custom_data`` here, and the reader decodes through
+``parse_facts``. ``FACT_KEYS`` and the decoder derive from ``EpisodeFacts``' fields, each
+naming its decoder (``fact_values``), so a new fact is one field.
 """
 
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from enum import Enum
 from functools import cache
 from typing import Any
@@ -26,6 +26,7 @@ from rosbags.rosbag2 import StoragePlugin
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from . import fact_values as decode
 from .errors import ConfigError
 from .facts import Footprint, Mount
 
@@ -49,41 +50,6 @@ TF_TOPIC = "/tf"
 #: ``tf2_msgs/msg/TFMessage``: a real bag's static transforms, where the LiDAR's mount is read
 #: when the facts carry no ``scan_mount``.
 TF_STATIC_TOPIC = "/tf_static"
-
-#: Keys of ``custom_data`` and of the facts JSON. Scalars are strings of numbers; ``start``
-#: is ``[x, y, yaw]``, ``goal`` is ``[x, y]``, ``footprint`` is ``{"radius_m": r}`` or
-#: ``{"length_m": l, "width_m": w}``, ``row_centerline`` is ``[[x, y], ...]`` (JSON).
-#: ``shortest_path_m`` is the shortest collision-free start-goal path of a simulated episode and
-#: ``straight_line_m`` the straight start-goal distance (m); ``scan_mount`` is the LiDAR's pose
-#: in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``; ``time_budget_s`` is the
-#: episode's time limit (s). ``person_distance_m`` is the distance a person-monitoring robot
-#: should keep to the person (m) and ``camera_fov_rad`` the horizontal field of view of the
-#: camera that should see it (rad).
-FACT_KEYS = (
-    "agent",
-    "task",
-    "world",
-    "robot",
-    "run",
-    "episode",
-    "seed",
-    "footprint",
-    "start",
-    "goal",
-    "goal_tolerance_m",
-    "collision_tolerance_m",
-    "safety_margin_m",
-    "max_speed_mps",
-    "row_centerline",
-    "shortest_path_m",
-    "straight_line_m",
-    "scan_mount",
-    "time_budget_s",
-    "person_distance_m",
-    "camera_fov_rad",
-    "outcome",
-)
-
 
 #: Storage plugins a bag may be written with (``.db3`` by default, ``.mcap`` as an option).
 STORAGES = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
@@ -132,43 +98,61 @@ TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": 0.3, "collision_tolerance_m": 0.05,
                         "safety_margin_m": 0.3}
 
 
+def _outcome(raw: Any, key: str, source: str) -> Outcome:
+    return Outcome.parse(str(raw), source=f"{source}: {key}")
+
+
+def _fact(decoder: decode.Decoder) -> Any:
+    """An ``EpisodeFacts`` field that is a fact: unknown (``None``) by default, read by
+    ``decoder``; its key in ``custom_data`` and the facts JSON is the field's name."""
+    return field(default=None, metadata={"decode": decoder})
+
+
 @dataclass(frozen=True)
 class EpisodeFacts:
     """What is known of an episode besides its messages; ``None`` means not known.
 
-    One field per ``FACT_KEYS`` entry, plus ``outcome_stamp_ns`` (read from the outcome topic,
-    not a fact) and ``extra`` (facts of keys the contract does not know, kept as strings).
+    Every field made with ``_fact`` is a fact (``FACT_KEYS``, in field order), plus
+    ``outcome_stamp_ns`` (read from the outcome topic, not a fact) and ``extra`` (facts of
+    keys the contract does not know, kept as strings). Scalars are written as strings of
+    numbers, the rest as JSON.
     """
 
-    agent: str | None = None
-    task: str | None = None
-    world: str | None = None
-    robot: str | None = None
-    run: str | None = None
-    episode: str | None = None
-    seed: int | None = None
-    footprint: Footprint | None = None
-    start: tuple[float, float, float] | None = None
-    goal: tuple[float, float] | None = None
-    goal_tolerance_m: float | None = None
-    collision_tolerance_m: float | None = None
+    agent: str | None = _fact(decode.text)
+    task: str | None = _fact(decode.text)
+    world: str | None = _fact(decode.text)
+    robot: str | None = _fact(decode.text)
+    run: str | None = _fact(decode.text)
+    episode: str | None = _fact(decode.text)
+    seed: int | None = _fact(decode.integer)
+    #: ``{"radius_m": r}`` or ``{"length_m": l, "width_m": w}``.
+    footprint: Footprint | None = _fact(decode.footprint)
+    #: ``[x, y, yaw]`` (m, rad).
+    start: tuple[float, float, float] | None = _fact(decode.pose)
+    #: ``[x, y]`` (m).
+    goal: tuple[float, float] | None = _fact(decode.point)
+    goal_tolerance_m: float | None = _fact(decode.non_negative)
+    collision_tolerance_m: float | None = _fact(decode.non_negative)
     #: Closer than this (m, beyond the footprint) is unsafe; the env's ``warning_tolerance_m``.
-    safety_margin_m: float | None = None
-    max_speed_mps: float | None = None
-    row_centerline: tuple[tuple[float, float], ...] | None = None
-    #: Shortest collision-free start-goal path (m), known for simulated episodes.
-    shortest_path_m: float | None = None
+    safety_margin_m: float | None = _fact(decode.non_negative)
+    max_speed_mps: float | None = _fact(decode.positive)
+    #: ``[[x, y], ...]`` (m): the centre line of a vineyard episode's row.
+    row_centerline: tuple[tuple[float, float], ...] | None = _fact(decode.polyline)
+    #: Shortest collision-free start-goal path (m), known for simulated episodes (``inf``:
+    #: none).
+    shortest_path_m: float | None = _fact(decode.path_length)
     #: Straight start-goal distance (m) as the recorder measured it.
-    straight_line_m: float | None = None
-    #: The LiDAR's pose in the base frame; ``None``: not recorded (see ``reader`` for tf).
-    scan_mount: Mount | None = None
+    straight_line_m: float | None = _fact(decode.positive)
+    #: The LiDAR's pose in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``;
+    #: ``None``: not recorded (see ``reader`` for tf).
+    scan_mount: Mount | None = _fact(decode.mount)
     #: The episode's time budget (s): an unrecorded end before it is ``ABORTED``, not a timeout.
-    time_budget_s: float | None = None
+    time_budget_s: float | None = _fact(decode.positive)
     #: Person monitoring: the desired distance to the person (m).
-    person_distance_m: float | None = None
+    person_distance_m: float | None = _fact(decode.non_negative)
     #: Person monitoring: the camera's horizontal field of view (rad), centred on the heading.
-    camera_fov_rad: float | None = None
-    outcome: Outcome | None = None
+    camera_fov_rad: float | None = _fact(decode.positive)
+    outcome: Outcome | None = _fact(_outcome)
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
     extra: Mapping[str, str] = field(default_factory=dict)
@@ -194,6 +178,12 @@ class EpisodeFacts:
     def facts_json(self) -> str:
         """The ``episode/facts`` message's ``data``."""
         return encode_facts_json(self.values())
+
+
+#: Keys of ``custom_data`` and of the facts JSON: the facts of ``EpisodeFacts``, in field order.
+FACT_KEYS: tuple[str, ...] = tuple(f.name for f in fields(EpisodeFacts) if "decode" in f.metadata)
+_DECODERS: dict[str, decode.Decoder] = {
+    f.name: f.metadata["decode"] for f in fields(EpisodeFacts) if "decode" in f.metadata}
 
 
 def plain(value: Any) -> Any:
@@ -260,89 +250,6 @@ def parse_outcome_event(payload: str) -> tuple[Outcome, int | None]:
     return Outcome.parse(text, source=source), None
 
 
-def _floats(value: Any, counts: tuple[int, ...], key: str, source: str) -> tuple[float, ...]:
-    """Parse a JSON list (or a list) of finite numbers, as many as one of ``counts``."""
-    try:
-        items = json.loads(value) if isinstance(value, str) else value
-        numbers = tuple(float(x) for x in items)
-    except (ValueError, TypeError) as err:
-        msg = f"{source}: {key}={value!r} is not a list of numbers"
-        raise ConfigError(msg) from err
-    if len(numbers) not in counts:
-        msg = f"{source}: {key}={value!r} needs {' or '.join(map(str, counts))} numbers"
-        raise ConfigError(msg)
-    if not all(math.isfinite(x) for x in numbers):
-        msg = f"{source}: {key}={value!r} holds a non-finite number"
-        raise ConfigError(msg)
-    return numbers
-
-
-def _number(value: Any, key: str, source: str, *, positive: bool = False) -> float:
-    try:
-        number = float(value)
-    except (ValueError, TypeError) as err:
-        msg = f"{source}: {key}={value!r} is not a number"
-        raise ConfigError(msg) from err
-    if not math.isfinite(number) or number < 0 or (positive and number == 0):
-        msg = f"{source}: {key}={value!r} must be a finite {'positive' if positive else 'non-negative'} number"
-        raise ConfigError(msg)
-    return number
-
-
-def _mount(raw: Any, source: str) -> Mount:
-    """``{"x_m": x, "y_m": y, "yaw_rad": yaw}`` (or its JSON, or ``[x, y, yaw]``)."""
-    try:
-        value = json.loads(raw) if isinstance(raw, str) else raw
-        if isinstance(value, Mapping):
-            unknown = set(value) - set(Mount._fields)
-            if unknown:
-                raise KeyError(sorted(unknown))
-            value = [value.get(name, 0.0) for name in Mount._fields]
-    except (ValueError, TypeError, KeyError) as err:
-        msg = f"{source}: scan_mount={raw!r} is not {{'x_m': X, 'y_m': Y, 'yaw_rad': YAW}}"
-        raise ConfigError(msg) from err
-    return Mount(*_floats(value, (3,), "scan_mount", source))
-
-
-def _parse_value(key: str, raw: Any, source: str) -> Any:
-    """The validated value of the known fact ``key``."""
-    if key in ("agent", "task", "world", "robot", "run", "episode"):
-        return str(raw)
-    if key == "seed":
-        try:
-            return int(raw)
-        except (ValueError, TypeError) as err:
-            msg = f"{source}: seed={raw!r} is not an integer"
-            raise ConfigError(msg) from err
-    if key == "footprint":
-        return Footprint.parse(raw, source=source)
-    if key == "start":
-        return _floats(raw, (3,), key, source)
-    if key == "goal":
-        # [x, y], or [x, y, yaw] from a pose: the yaw is not used.
-        return _floats(raw, (2, 3), key, source)[:2]
-    if key == "row_centerline":
-        try:
-            points = json.loads(raw) if isinstance(raw, str) else raw
-            line = tuple((float(p[0]), float(p[1])) for p in points)
-        except (ValueError, TypeError, IndexError, KeyError) as err:
-            msg = f"{source}: row_centerline={raw!r} is not a list of [x, y] points"
-            raise ConfigError(msg) from err
-        if len(line) < 2:
-            msg = f"{source}: row_centerline needs at least two points, got {len(line)}"
-            raise ConfigError(msg)
-        return line
-    if key == "scan_mount":
-        return _mount(raw, source)
-    if key == "outcome":
-        return Outcome.parse(str(raw), source=f"{source}: outcome")
-    if key == "shortest_path_m" and str(raw).strip().lower() in ("inf", "infinity"):
-        return math.inf  # no collision-free path: the straight line stands in
-    positive = key in ("max_speed_mps", "shortest_path_m", "straight_line_m", "time_budget_s",
-                       "camera_fov_rad")
-    return _number(raw, key, source, positive=positive)
-
-
 def parse_facts(
     data: Mapping[str, Any], *, source: str, problems: list[str] | None = None
 ) -> tuple[EpisodeFacts, frozenset[str]]:
@@ -362,7 +269,7 @@ def parse_facts(
             extra[key] = str(raw)
             continue
         try:
-            values[key] = _parse_value(key, raw, source)
+            values[key] = _DECODERS[key](raw, key, source)
         except ConfigError as err:
             if problems is None:
                 raise

@@ -3,8 +3,10 @@ writers (the bridge's recorder and the synthetic bags) write the same facts the 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -89,6 +91,17 @@ def test_custom_data_keeps_the_contract_order_and_format() -> None:
     assert custom["scan_mount"] == '{"x_m": 0.12, "y_m": 0.0, "yaw_rad": 0.0}'
     assert custom["shortest_path_m"] == "inf" and custom["safety_margin_m"] == "0.1"
     assert "outcome" not in custom and "row_centerline" not in custom
+
+
+def test_the_fact_keys_are_the_facts_fields_and_each_has_a_doc_row() -> None:
+    """A new fact is one field: FACT_KEYS follow it, and docs/interfaces.md's table names it."""
+    names = [f.name for f in dataclasses.fields(EpisodeFacts)]
+    assert list(FACT_KEYS) == [n for n in names if n not in ("outcome_stamp_ns", "extra")]
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "interfaces.md").read_text()
+    table = doc.split("| fact key | value |", 1)[1].split("\n\n", 1)[0]
+    documented = {key for line in table.splitlines()[2:]
+                  for key in re.findall(r"`(\w+)`", line.split("|")[1])}
+    assert documented == set(FACT_KEYS)
 
 
 def test_unknown_tolerances_are_not_written_and_read_as_the_defaults() -> None:
