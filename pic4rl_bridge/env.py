@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.facts import Footprint, Mount
+from pic4rl_metrics.geometry import Footprint, Mount
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 

@@ -8,16 +8,11 @@ actions give bit-identical observations and rewards through both.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+from pic4rl_metrics.geometry import yaw_from_quaternion
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D, yaw_to_quaternion
-
-
-def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
-    """Yaw (rad, in [-pi, pi]) of a quaternion: the rotation about +z of a planar robot."""
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def as_published(pose: Pose2D) -> Pose2D:

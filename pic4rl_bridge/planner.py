@@ -25,7 +25,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_sim.engine.geometry import point_along, project
+from pic4rl_metrics.geometry import project
+from pic4rl_sim.engine.geometry import point_along
 from pic4rl_sim.engine.paths import plan_path, planner_for
 from pic4rl_sim.engine.world_spec import WorldSpec
 

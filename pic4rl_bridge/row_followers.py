@@ -24,8 +24,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+from pic4rl_metrics.geometry import project
 from pic4rl_metrics.rows import LaneFit, LaneWindow, fit_lane
-from pic4rl_sim.engine.geometry import point_along, project
+from pic4rl_sim.engine.geometry import point_along
 
 from .config import EnvConfig
 from .errors import ConfigError

@@ -12,7 +12,7 @@ from __future__ import annotations
 from .batch import BagResult, MetricsResult, compute, judge_bag
 from .contract import EpisodeFacts, Outcome
 from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
-from .facts import Footprint
+from .geometry import Footprint
 from .metrics import Derived, compute_metrics
 from .reader import read_episode
 from .registry import METRICS, REGISTRY, Metric, metric

@@ -28,7 +28,7 @@ from rosbags.typesys.store import Typestore
 
 from . import fact_values as decode
 from .errors import ConfigError
-from .facts import Footprint, Mount
+from .geometry import Footprint, Mount
 
 #: Default topics, as recorded by pic4rl's recorder (the sim node's names).
 GROUND_TRUTH_TOPIC = "/ground_truth"

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from .errors import ConfigError
-from .facts import Footprint, Mount
+from .geometry import Footprint, Mount
 
 #: ``decode(raw, key, source) -> value``.
 Decoder = Callable[[Any, str, str], Any]

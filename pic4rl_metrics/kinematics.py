@@ -179,23 +179,3 @@ def bearing_in_body(
 ) -> np.ndarray:
     """Bearing (rad, in [-pi, pi), left positive) of targets (tx, ty) seen from each pose."""
     return wrap_angle(np.arctan2(np.asarray(ty) - y, np.asarray(tx) - x) - yaw)
-
-
-def distance_to_polyline(
-    x: np.ndarray, y: np.ndarray, line: np.ndarray
-) -> np.ndarray:
-    """Signed distance (m) of points to a polyline (k, 2); positive on the line's left."""
-    px = np.asarray(x, float)[:, None]
-    py = np.asarray(y, float)[:, None]
-    ax, ay = line[:-1, 0][None, :], line[:-1, 1][None, :]
-    bx, by = line[1:, 0][None, :], line[1:, 1][None, :]
-    ux, uy = bx - ax, by - ay
-    seg_len2 = np.maximum(ux**2 + uy**2, 1e-18)
-    u = np.clip(((px - ax) * ux + (py - ay) * uy) / seg_len2, 0.0, 1.0)
-    cx, cy = ax + u * ux, ay + u * uy
-    dist = np.hypot(px - cx, py - cy)
-    nearest = np.argmin(dist, axis=1)
-    rows = np.arange(len(dist))
-    cross = ux * (py - ay) - uy * (px - ax)
-    sign = np.where(cross[rows, nearest] >= 0, 1.0, -1.0)
-    return sign * dist[rows, nearest]

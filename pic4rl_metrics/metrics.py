@@ -15,14 +15,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .contract import UNJUDGED, EpisodeFacts, Outcome
-from .facts import Mount
+from .geometry import Mount, distance_to_polyline
 from .kinematics import (
     Derivative,
     PathTurning,
     VelocitySeries,
     bearing_in_body,
     differentiate,
-    distance_to_polyline,
     interval_mean,
     path_length,
     path_turning,

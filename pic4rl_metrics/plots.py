@@ -20,7 +20,7 @@ from matplotlib.patches import Circle
 
 from . import atomic
 from .contract import EpisodeFacts, Outcome
-from .facts import Mount
+from .geometry import Mount
 from .errors import ConfigError
 from .kinematics import differentiate, seconds, velocity_series
 from .metrics import scan_points

@@ -23,7 +23,7 @@ from . import tf
 from .bagfile import OpenBag, bag_errors
 from .contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from .errors import ConfigError, EpisodeError
-from .facts import Mount
+from .geometry import Mount, yaw_from_quaternion
 from .series import Episode
 from .timebase import Samples, cmd_series, point_series, pose_series, scan_series
 from .topics import (
@@ -42,18 +42,15 @@ def _stamp_ns(header: Any) -> int:
     return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
-def _yaw(q: Any) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 def _pose_row(msg: Any, msgtype: str) -> tuple[float, ...]:
     """(x, y, yaw, vx, vy, wz) of a pose message; NaN twist when the type has none."""
     pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
     p, q = pose.position, pose.orientation
+    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
     if msgtype == ODOMETRY:
         t = msg.twist.twist
-        return (p.x, p.y, _yaw(q), t.linear.x, t.linear.y, t.angular.z)
-    return (p.x, p.y, _yaw(q), math.nan, math.nan, math.nan)
+        return (p.x, p.y, yaw, t.linear.x, t.linear.y, t.angular.z)
+    return (p.x, p.y, yaw, math.nan, math.nan, math.nan)
 
 
 def _cmd_row(msg: Any, msgtype: str) -> tuple[float, float, float]:

@@ -19,7 +19,8 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Twist2D, point_along, project
+from pic4rl_metrics.geometry import project
+from pic4rl_sim.engine.geometry import Twist2D, point_along
 
 from ..config import EnvConfig, GoalInput
 from ..frame import SensorFrame

@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Twist2D, polyline_length, project
+from pic4rl_metrics.geometry import project
+from pic4rl_sim.engine.geometry import Twist2D, polyline_length
 
 from ..config import EnvConfig
 from ..errors import ConfigError

@@ -18,7 +18,7 @@ from rosbags.rosbag2 import Reader
 from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.facts import Footprint, Mount
+from pic4rl_metrics.geometry import Footprint, Mount
 from pic4rl_metrics.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.facts import Footprint
+from pic4rl_metrics.geometry import Footprint
 from pic4rl_metrics.plots import (
     comparison_figure,
     episode_figure,

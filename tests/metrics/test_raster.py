@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pic4rl_metrics import raster
-from pic4rl_metrics.facts import Footprint
+from pic4rl_metrics.geometry import Footprint
 from pic4rl_metrics.raster import COLORS, View
 
 RED = (255, 0, 0)

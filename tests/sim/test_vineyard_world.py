@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_sim.engine.geometry import project
+from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.vineyard_world import POST_OFFSET_M, vineyard
 from pic4rl_sim.engine.world_generators import make_world
 from pic4rl_sim.engine.world_spec import WorldSpec, clearance

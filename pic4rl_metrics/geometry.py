@@ -1,15 +1,18 @@
-"""The robot's geometry as episode facts carry it: its footprint and its LiDAR's mount.
+"""Planar geometry the metrics and the bridge share: a robot's footprint, a sensor's mount, a
+quaternion's yaw and the projection of points onto a polyline.
 
-The facts themselves (``EpisodeFacts``), their encoding and their decoding are the bag
-contract's (``contract``); these are the value types of two of its fields, with the geometry
-the metrics need of them.
+``Footprint`` and ``Mount`` are the value types of two ``EpisodeFacts`` fields (the facts
+themselves, their encoding and decoding are the bag contract's, ``contract``). The bridge
+imports the rest from here (pic4rl_metrics may import no other pic4rl package), so each is
+written once: ``yaw_from_quaternion`` for every decoded pose, ``project`` for the row
+follower, the planner and the tasks' progress, the same projection as the row metrics'.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Any, NamedTuple
 
@@ -103,3 +106,47 @@ class Mount(NamedTuple):
     x_m: float = 0.0
     y_m: float = 0.0
     yaw_rad: float = 0.0
+
+
+def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
+    """Yaw (rad, in [-pi, pi]) of a quaternion: the rotation about +z of a planar robot."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+# -- polylines (a row's centre line, a global plan) ------------------------------------------
+
+def _nearest_on_polyline(
+    line: np.ndarray, xy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For points ``xy`` (n × 2, m) and a polyline (k × 2): the index of the nearest segment,
+    the fraction along it, the segments' lengths (m) and the signed distance (m, positive left
+    of the line's direction)."""
+    a, seg = line[:-1], np.diff(line, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    rel = xy[:, None, :] - a[None]
+    along = rel[..., 0] * seg[:, 0] + rel[..., 1] * seg[:, 1]
+    t = np.clip(along / np.maximum(lengths**2, 1e-18), 0.0, 1.0)
+    gap = rel - t[..., None] * seg
+    dist = np.hypot(gap[..., 0], gap[..., 1])
+    i = np.argmin(dist, axis=1)
+    rows = np.arange(len(xy))
+    near, step = rel[rows, i], seg[i]
+    left = step[:, 0] * near[:, 1] - step[:, 1] * near[:, 0] >= 0.0
+    nearest = dist[rows, i]
+    return i, t[rows, i], lengths, np.where(left, nearest, -nearest)
+
+
+def project(polyline: np.ndarray, xy: Sequence[float]) -> tuple[float, float]:
+    """The point of ``polyline`` (n × 2, m) closest to ``xy``: its arc length from the first
+    point (m) and the signed distance to it (m, positive left of the line's direction)."""
+    line = np.asarray(polyline, dtype=np.float64)
+    i, t, lengths, offset = _nearest_on_polyline(
+        line, np.asarray(xy, dtype=np.float64).reshape(1, 2))
+    k = int(i[0])
+    return float(lengths[:k].sum() + t[0] * lengths[k]), float(offset[0])
+
+
+def distance_to_polyline(x: np.ndarray, y: np.ndarray, line: np.ndarray) -> np.ndarray:
+    """Signed distance (m) of points to a polyline (k, 2); positive on the line's left."""
+    xy = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    return _nearest_on_polyline(np.asarray(line, dtype=np.float64), xy)[3]
