@@ -13,7 +13,8 @@ from .batch import BagResult, MetricsResult, compute, judge_bag
 from .contract import EpisodeFacts, Outcome
 from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
 from .geometry import Footprint
-from .metrics import Derived, compute_metrics
+from .derived import Derived
+from .metrics import compute_metrics
 from .reader import read_episode
 from .registry import METRICS, REGISTRY, Metric, metric
 from .results import TABLE1_COLUMNS, EpisodeMetrics

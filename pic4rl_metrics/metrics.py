@@ -1,45 +1,26 @@
-"""pic4rl's navigation metrics, registered as pure functions of an episode (``registry.py``).
+"""pic4rl's navigation metrics, registered as pure functions of an episode (``registry.py``)
+seen through ``Derived`` (``derived.py``, what several metrics share, computed once).
 
 Each definition (formula, time base, frame, sign, differencing) is written in
-``docs/metrics.md``; keep the two in step. ``Derived`` computes once what several metrics
-share (velocities, accelerations, the scan's clearance, the outcome, the optimal path).
+``docs/metrics.md``; keep the two in step.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from functools import cached_property
-from typing import NamedTuple
 
 import numpy as np
 
-from .contract import UNJUDGED, EpisodeFacts, Outcome
-from .geometry import Mount, distance_to_polyline
-from .kinematics import (
-    Derivative,
-    PathTurning,
-    VelocitySeries,
-    bearing_in_body,
-    differentiate,
-    interval_mean,
-    path_length,
-    path_turning,
-    seconds,
-    time_mean,
-    time_std,
-    velocity_series,
-)
+from .contract import Outcome
+from .derived import NAN, ROW_TASK, Derived
+from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
-from .rows import lane_deviations
-from .series import Episode, ScanSeries
+from .series import Episode
 
-NAN = float("nan")
 #: Below these the robot counts as standing still (m/s, rad/s).
 STILL_SPEED_MPS = 0.05
 STILL_YAW_RATE_RADPS = 0.05
-#: Positions closer than this are merged before the path's turning is measured (m).
-TURNING_STEP_M = 0.01
 #: A shorter path is no path: its distance/path ratio is undefined, not odometry jitter over a
 #: start-goal distance (m).
 MIN_PATH_M = 0.01
@@ -49,11 +30,6 @@ BARN_CLIP = (4.0, 8.0)
 PLAUSIBLE_SPEED_MPS = 20.0
 PLAUSIBLE_YAW_RATE_RADPS = 50.0
 PLAUSIBLE_ACC_MPS2 = 100.0
-#: An unrecorded end this far (fraction) or more before the time budget is ``ABORTED``: a
-#: timed-out episode's bag may lack its last step or two, a killed one lacks much more.
-ABORT_SLACK = 0.05
-#: The task whose bags without a centre line get row metrics fitted to the scan.
-ROW_TASK = "vineyard"
 
 
 def _finite(values: np.ndarray) -> np.ndarray:
@@ -71,53 +47,6 @@ def _min(values: np.ndarray) -> float:
     return float(values.min()) if values.size else NAN
 
 
-def _row_min(values: np.ndarray) -> np.ndarray:
-    """Per row, the smallest finite value; NaN for a row without one (also for 0 columns)."""
-    low = np.min(np.where(np.isfinite(values), values, np.inf), axis=1, initial=np.inf)
-    return np.where(np.isinf(low), NAN, low)
-
-
-class ScanClearance(NamedTuple):
-    """Per-scan obstacle figures (m); NaN for a scan with no valid beam."""
-
-    nearest_m: np.ndarray  # nearest valid return (from the sensor)
-    range_mean_m: np.ndarray  # mean of valid returns
-    margin_m: np.ndarray  # signed distance of the nearest return to the footprint
-
-
-def scan_points(
-    scan: ScanSeries, mount: Mount, ranges: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Valid returns (``ranges``: ``scan.valid_ranges()``) as points in the base frame: x and
-    y (n_scans, n_beams), NaN elsewhere; the env's geometry
-    (``pic4rl_bridge.tasks.collision.scan_points``)."""
-    ranges = scan.valid_ranges() if ranges is None else ranges
-    angles = scan.angles
-    if len(angles) and (angles == angles[0]).all():
-        angles = angles[0]  # one scanner: the trigonometry once, not once per scan
-    fx, fy = ranges * np.cos(angles), ranges * np.sin(angles)
-    c, s = math.cos(mount.yaw_rad), math.sin(mount.yaw_rad)
-    return mount.x_m + c * fx - s * fy, mount.y_m + s * fx + c * fy
-
-
-def scan_clearance(
-    scan: ScanSeries, facts: EpisodeFacts, ranges: np.ndarray | None = None
-) -> ScanClearance:
-    """Nearest obstacle per scan, and its signed distance to the footprint when one is known
-    (scan points placed by ``facts.scan_mount``, the base origin when unknown)."""
-    ranges = scan.valid_ranges() if ranges is None else ranges
-    valid = np.isfinite(ranges)
-    count = valid.sum(axis=1)
-    with np.errstate(all="ignore"):
-        mean = np.where(count > 0, np.where(valid, ranges, 0).sum(axis=1) / count, NAN)
-    nearest = _row_min(ranges)
-    if facts.footprint is None:
-        return ScanClearance(nearest, mean, np.full(len(scan), NAN))
-    x, y = scan_points(scan, facts.scan_mount or Mount(), ranges)
-    margin = _row_min(facts.footprint.signed_distance_xy(x, y))
-    return ScanClearance(nearest, mean, margin)
-
-
 def _hold_time(t_ns: np.ndarray, flag: np.ndarray) -> float:
     """Total time (s) a per-sample flag holds, each sample holding until the next one."""
     if len(t_ns) < 2:
@@ -132,220 +61,6 @@ def _rising_edges(flag: np.ndarray) -> int:
     if flag.size == 0:
         return 0
     return int(flag[0]) + int(np.sum(flag[1:] & ~flag[:-1]))
-
-
-class Derived:
-    """One episode and what its metrics share, each computed on first use."""
-
-    def __init__(self, episode: Episode) -> None:
-        self.episode = episode
-        self.facts = episode.facts.with_defaults()
-        self.pose = episode.pose
-        self.scan = episode.scan if episode.scan is not None and len(episode.scan) else None
-
-    def missing(self, needs: Iterable[str]) -> set[str]:
-        """The inputs of ``needs`` this episode lacks."""
-        have = {
-            "pose": True,
-            "scan": self.scan is not None,
-            "cmd_vel": self.episode.cmd is not None and len(self.episode.cmd) > 0,
-            "person": self.episode.person is not None and len(self.episode.person) > 0,
-            "goal": self.facts.goal is not None,
-            "footprint": self.facts.footprint is not None,
-            "max_speed": self.facts.max_speed_mps is not None,
-            "row_centerline": self.facts.row_centerline is not None,
-            "person_distance": self.facts.person_distance_m is not None,
-            "camera_fov": self.facts.camera_fov_rad is not None,
-        }
-        return {name for name in needs if not have[name]}
-
-    # -- time and outcome ---------------------------------------------------------------------
-
-    @cached_property
-    def t_s(self) -> np.ndarray:
-        return seconds(self.pose.t_ns)
-
-    @cached_property
-    def valid_ranges(self) -> np.ndarray:
-        """The scans' valid returns (REP 117), NaN elsewhere."""
-        return self.scan.valid_ranges()  # type: ignore[union-attr]
-
-    @cached_property
-    def clearance(self) -> ScanClearance | None:
-        if self.scan is None:
-            return None
-        return scan_clearance(self.scan, self.facts, self.valid_ranges)
-
-    @cached_property
-    def collision(self) -> np.ndarray | None:
-        """Per scan with a valid beam: the footprint within the collision tolerance (the
-        env's test, ``distance < collision_tolerance_m``); None without scan or footprint."""
-        if self.clearance is None or self.facts.footprint is None:
-            return None
-        margin = self.clearance.margin_m
-        return margin[np.isfinite(margin)] < self.facts.collision_tolerance_m
-
-    @cached_property
-    def outcome(self) -> Outcome:
-        """Recorded outcome if any; else goal (final distance within tolerance, reached before
-        any collision), collision (some scan in collision), timeout (goal known, neither
-        happened) or unknown (no goal known and no collision seen)."""
-        facts, pose = self.facts, self.pose
-        if facts.outcome is not None:
-            return facts.outcome
-        first_collision: int | None = None
-        if self.collision is not None and self.collision.any():
-            seen = np.isfinite(self.clearance.margin_m)  # type: ignore[union-attr]
-            first_collision = int(self.scan.t_ns[seen][np.argmax(self.collision)])  # type: ignore[union-attr]
-        if facts.goal is not None:
-            dist = np.hypot(pose.x - facts.goal[0], pose.y - facts.goal[1])
-            if dist[-1] <= facts.goal_tolerance_m:
-                reached = int(pose.t_ns[np.flatnonzero(dist <= facts.goal_tolerance_m)[0]])
-                if first_collision is None or reached <= first_collision:
-                    return Outcome.GOAL
-        if first_collision is not None:
-            return Outcome.COLLISION
-        if self.cut_short:
-            return Outcome.ABORTED
-        return Outcome.TIMEOUT if facts.goal is not None else Outcome.UNKNOWN
-
-    @cached_property
-    def cut_short(self) -> bool:
-        """No outcome recorded and the poses end well before the episode's time budget (the
-        sim or the tester died): the end says nothing of the agent."""
-        budget = self.facts.time_budget_s
-        if self.facts.outcome is not None or budget is None:
-            return False
-        return self.duration_s < budget * (1.0 - ABORT_SLACK)
-
-    @cached_property
-    def duration_s(self) -> float:
-        """From the first pose to the last (s)."""
-        return (int(self.pose.t_ns[-1]) - int(self.pose.t_ns[0])) * 1e-9
-
-    @cached_property
-    def success(self) -> float:
-        """1 or 0; NaN when the end says nothing of the agent (``UNJUDGED``)."""
-        return NAN if self.outcome in UNJUDGED else float(self.outcome is Outcome.GOAL)
-
-    @cached_property
-    def time_s(self) -> float:
-        """To the recorded outcome event when there is one (clamped), else the last pose."""
-        t = self.pose.t_ns
-        end_ns = int(t[-1])
-        if self.facts.outcome_stamp_ns is not None:
-            end_ns = min(max(self.facts.outcome_stamp_ns, int(t[0])), end_ns)
-        return (end_ns - int(t[0])) * 1e-9
-
-    # -- path and the optimal path ------------------------------------------------------------
-
-    @cached_property
-    def path_m(self) -> float:
-        return path_length(self.pose.x, self.pose.y)
-
-    @cached_property
-    def net_m(self) -> float:
-        p = self.pose
-        return float(np.hypot(p.x[-1] - p.x[0], p.y[-1] - p.y[0]))
-
-    @cached_property
-    def start_goal_m(self) -> float:
-        """Straight start-goal distance (m): start = recorded start or first pose."""
-        if self.facts.goal is None:
-            return NAN
-        start = self.facts.start[:2] if self.facts.start else (self.pose.x[0], self.pose.y[0])
-        return float(np.hypot(self.facts.goal[0] - start[0], self.facts.goal[1] - start[1]))
-
-    @cached_property
-    def straight_m(self) -> float:
-        """The recorder's straight-line distance, else the start-goal distance."""
-        recorded = self.facts.straight_line_m
-        return recorded if recorded is not None else self.start_goal_m
-
-    @cached_property
-    def optimal(self) -> tuple[float, str | None]:
-        """(length m, source): the shortest collision-free path when the bag records a finite
-        one, else the straight line; (NaN, None) when neither is known."""
-        shortest = self.facts.shortest_path_m
-        if shortest is not None and math.isfinite(shortest) and shortest > 0:
-            return shortest, "shortest"
-        if math.isfinite(self.straight_m):
-            return self.straight_m, "straight"
-        return NAN, None
-
-    # -- motion -------------------------------------------------------------------------------
-
-    @cached_property
-    def velocity(self) -> VelocitySeries:
-        return velocity_series(self.pose)
-
-    @cached_property
-    def vel_t_s(self) -> np.ndarray:
-        return seconds(self.velocity.t_ns, self.pose.t_ns[0])
-
-    @cached_property
-    def acc(self) -> Derivative:
-        v = self.velocity
-        return differentiate(v.t_ns, np.column_stack([v.vx, v.vy, v.wz]))
-
-    @cached_property
-    def jerk(self) -> Derivative:
-        return differentiate(self.acc.t_ns, self.acc.value)
-
-    @staticmethod
-    def _linear(d: Derivative) -> np.ndarray:
-        return np.hypot(d.value[:, 0], d.value[:, 1]) if len(d.dt_s) else np.zeros(0)
-
-    @staticmethod
-    def _yaw(d: Derivative) -> np.ndarray:
-        return np.abs(d.value[:, 2]) if len(d.dt_s) else np.zeros(0)
-
-    @cached_property
-    def lin_acc(self) -> np.ndarray:
-        return self._linear(self.acc)
-
-    @cached_property
-    def yaw_acc(self) -> np.ndarray:
-        return self._yaw(self.acc)
-
-    @cached_property
-    def turning(self) -> PathTurning:
-        return path_turning(self.pose.x, self.pose.y, TURNING_STEP_M)
-
-    @cached_property
-    def goal_dist(self) -> np.ndarray:
-        gx, gy = self.facts.goal  # type: ignore[misc]
-        return np.hypot(self.pose.x - gx, self.pose.y - gy)
-
-    @cached_property
-    def goal_bearing(self) -> np.ndarray:
-        gx, gy = self.facts.goal  # type: ignore[misc]
-        return bearing_in_body(self.pose.x, self.pose.y, self.pose.yaw, gx, gy)
-
-    @cached_property
-    def row_deviation(self) -> tuple[np.ndarray, np.ndarray, str] | None:
-        """(times s, signed offsets m, source) of the robot from the row's centre line: the
-        ``row_centerline`` fact at every pose (``"centerline"``), else, for a ``vineyard``
-        episode, the middle of the rows each scan sees (``"scan"``, ``rows.lane_deviations``,
-        scans where no lane is seen left out); ``None`` when neither is known."""
-        if self.facts.row_centerline is not None:
-            line = np.asarray(self.facts.row_centerline)
-            return self.t_s, distance_to_polyline(self.pose.x, self.pose.y, line), "centerline"
-        if self.facts.task != ROW_TASK or self.scan is None:
-            return None
-        x, y = scan_points(self.scan, self.facts.scan_mount or Mount(), self.valid_ranges)
-        offsets = lane_deviations(x, y)
-        seen = np.isfinite(offsets)
-        if not seen.any():
-            return None
-        return seconds(self.scan.t_ns[seen], self.pose.t_ns[0]), offsets[seen], "scan"
-
-    @cached_property
-    def spl_weight(self) -> float:
-        """``l / max(p, l)`` with ``l`` the optimal path, ``p`` the path travelled."""
-        optimal = self.optimal[0]
-        longest = max(self.path_m, optimal)
-        return optimal / longest if longest > 0 else NAN
 
 
 # --- registration: one line per column, in table order ---------------------------------------

@@ -19,7 +19,7 @@ from .kinematics import bearing_in_body, interval_mean, seconds, time_mean
 from .registry import metric
 
 if TYPE_CHECKING:
-    from .metrics import Derived
+    from .derived import Derived
 
 NAN = float("nan")
 

@@ -23,7 +23,7 @@ from .contract import EpisodeFacts, Outcome
 from .geometry import Mount
 from .errors import ConfigError
 from .kinematics import differentiate, seconds, velocity_series
-from .metrics import scan_points
+from .derived import scan_points
 from .registry import METRICS
 from .results import EpisodeMetrics
 from .series import Episode, ScanSeries

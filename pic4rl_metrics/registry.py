@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import ConfigError
 
 if TYPE_CHECKING:
-    from .metrics import Derived
+    from .derived import Derived
 
 log = logging.getLogger(__name__)
 

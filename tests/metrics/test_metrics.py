@@ -365,7 +365,7 @@ def test_rectangular_footprint_margins(
         facts={"footprint": footprint},
     )
     ep = read_episode(bag)
-    from pic4rl_metrics.metrics import scan_clearance
+    from pic4rl_metrics.derived import scan_clearance
 
     margin = scan_clearance(ep.scan, ep.facts).margin_m
     np.testing.assert_allclose(margin, min_margin, atol=F32)
