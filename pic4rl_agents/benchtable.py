@@ -20,7 +20,8 @@ from pic4rl_metrics.aggregate import aggregate, wilson_interval
 from pic4rl_metrics.batch import compute
 from pic4rl_metrics.plots import save_figure
 from pic4rl_metrics.registry import METRICS
-from pic4rl_metrics.report import plain_text, render_rows
+from pic4rl_metrics.layouts import render_rows
+from pic4rl_metrics.report import plain_text
 from pic4rl_metrics.results import TABLE1_COLUMNS
 
 from .suite import Cell, Suite

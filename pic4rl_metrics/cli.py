@@ -20,7 +20,8 @@ from .batch import MetricsResult, compute
 from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError, MetricsError, OutputError
 from .registry import METRICS, REGISTRY
-from .report import EPISODE_VIEW, FORMATS, render_comparison, render_episodes
+from .layouts import FORMATS
+from .report import EPISODE_VIEW, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, table_columns
 from .topics import TopicMap, load_topic_map, parse_frames
 from .video_cli import add_video_options, run_video_command

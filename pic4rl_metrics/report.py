@@ -7,9 +7,7 @@ Missing values read "–" in table, markdown and LaTeX, are empty in CSV and ``n
 
 from __future__ import annotations
 
-import csv
 import difflib
-import io
 import json
 import math
 import re
@@ -20,11 +18,10 @@ import numpy as np
 import pandas as pd
 
 from .aggregate import DASH
+from .layouts import check_format, csv_text, fixed_width, latex_escape, markdown, tabular
 from .errors import ConfigError
 from .registry import METRICS
 from .results import ERROR_COLUMN, TABLE1_COLUMNS
-
-FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")
 
 #: Metric columns of the per-episode view and their short labels (units come from METRICS).
 EPISODE_VIEW: dict[str, str] = {
@@ -41,18 +38,7 @@ EPISODE_VIEW: dict[str, str] = {
     "obstacle_dist_mean_m": "mean obst",
 }
 _TEXT_COLUMNS = frozenset({"bag", "outcome", "optimal_path_source", "success", ERROR_COLUMN})
-_LATEX_SPECIAL = {c: "\\" + c for c in "&%$#_{}"}
-_LATEX_SPECIAL.update({"\\": r"\textbackslash{}", "~": r"\textasciitilde{}", "^": r"\^{}"})
 _SUPERSCRIPT = {"2": "²", "3": "³"}
-
-
-def _check_format(fmt: str) -> str:
-    if fmt not in FORMATS:
-        close = difflib.get_close_matches(str(fmt), FORMATS, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
-        msg = f"format {fmt!r} is not supported; expected one of {', '.join(FORMATS)}{hint}"
-        raise ConfigError(msg)
-    return fmt
 
 
 def _is_missing(value: object) -> bool:
@@ -84,77 +70,12 @@ def plain_text(tex: str) -> str:
     return re.sub(r"_\{([^}]*)\}", r" \1", text)
 
 
-def latex_escape(text: str) -> str:
-    """``text`` with LaTeX's special characters (``_``, ``%``, ``&``, ...) escaped."""
-    return "".join(_LATEX_SPECIAL.get(c, c) for c in str(text))
-
-
 def short_bag(bag: object) -> str:
     """The last two components of a bag path ("run1/episode_03"), "–" when missing."""
     if _is_missing(bag) or bag == "":
         return DASH
     parts = [p for p in PurePath(str(bag)).parts if p not in ("/", "\\")]
     return "/".join(parts[-2:]) or str(bag)
-
-
-# --- layouts: header rows + text cells (None = missing) -> one string ----------------------
-
-
-def _fill(rows: list[list[str | None]], missing: str) -> list[list[str]]:
-    return [[missing if c is None else c for c in row] for row in rows]
-
-
-def _fixed_width(headers: list[list[str]], rows: list[list[str | None]], right: list[bool]) -> str:
-    body = _fill(rows, DASH)
-    widths = [max(len(r[i]) for r in headers + body) for i in range(len(right))]
-
-    def line(cells: list[str]) -> str:
-        parts = [c.rjust(w) if r else c.ljust(w) for c, w, r in zip(cells, widths, right)]
-        return "  ".join(parts).rstrip()
-
-    rule = "  ".join("-" * w for w in widths)
-    return "\n".join([*(line(h) for h in headers), rule, *(line(r) for r in body)]) + "\n"
-
-
-def _markdown(header: list[str], rows: list[list[str | None]], right: list[bool]) -> str:
-    def line(cells: list[str]) -> str:
-        return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
-
-    rule = "|" + "|".join("---:" if r else ":---" for r in right) + "|"
-    return "\n".join([line(header), rule, *(line(r) for r in _fill(rows, DASH))]) + "\n"
-
-
-def _tabular(headers: list[list[str]], rows: list[list[str | None]]) -> list[str]:
-    """Booktabs tabular lines; cells must already be LaTeX."""
-    lines = [rf"\begin{{tabular}}{{@{{}}{'c' * len(headers[0])}@{{}}}}", r"\toprule"]
-    lines += [" & ".join(h) + r" \\" for h in headers]
-    lines.append(r"\midrule")
-    lines += [" & ".join(r) + r" \\" for r in _fill(rows, "--")]
-    return [*lines, r"\bottomrule", r"\end{tabular}"]
-
-
-def _csv(header: list[str], rows: list[list[str | None]]) -> str:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerows([header, *_fill(rows, "")])
-    return buf.getvalue()
-
-
-def render_rows(header: Sequence[str], rows: Sequence[Sequence[str | None]], fmt: str) -> str:
-    """A plain table of text cells (None = missing) in table, markdown, csv or latex (a
-    booktabs tabular, cells escaped): for tables whose columns are not metrics alone."""
-    if _check_format(fmt) == "json":
-        return json.dumps([dict(zip(header, r)) for r in rows], indent=2, ensure_ascii=False) + "\n"
-    head, body = list(header), [list(r) for r in rows]
-    right = [False] * len(head)
-    if fmt == "csv":
-        return _csv(head, body)
-    if fmt == "markdown":
-        return _markdown(head, body, right)
-    if fmt == "table":
-        return _fixed_width([head], body, right)
-    tex = [[None if c is None else latex_escape(c) for c in r] for r in body]
-    return "\n".join(_tabular([[latex_escape(h) for h in head]], tex)) + "\n"
 
 
 # --- per-episode rows -----------------------------------------------------------------------
@@ -176,7 +97,7 @@ def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None
     """One line per episode. csv and json hold every column; table, markdown and latex show
     the bag (last two path components), the metrics ``columns`` (default: the EPISODE_VIEW
     metrics) present, and the error."""
-    _check_format(fmt)
+    check_format(fmt)
     if fmt == "csv":
         return df.to_csv(index=False)
     if fmt == "json":
@@ -189,13 +110,13 @@ def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None
     units = [plain_text(METRICS[c].unit) if c in METRICS and c != "success" else "" for c in cols]
     labels = [EPISODE_VIEW.get(c, c) for c in cols]
     if fmt == "table":
-        return _fixed_width([labels, [f"[{u}]" if u else "" for u in units]], rows, right)
+        return fixed_width([labels, [f"[{u}]" if u else "" for u in units]], rows, right)
     if fmt == "markdown":
-        return _markdown([f"{lb} [{u}]" if u else lb for lb, u in zip(labels, units)], rows, right)
+        return markdown([f"{lb} [{u}]" if u else lb for lb, u in zip(labels, units)], rows, right)
     tex_labels = [METRICS[c].label if c in METRICS else latex_escape(c) for c in cols]
     tex_units = [f"[{METRICS[c].unit}]" if c in METRICS and METRICS[c].unit else "" for c in cols]
     tex_rows = [[c if c is None else latex_escape(c) for c in r] for r in rows]
-    return "\n".join(_tabular([tex_labels, tex_units], tex_rows)) + "\n"
+    return "\n".join(tabular([tex_labels, tex_units], tex_rows)) + "\n"
 
 
 # --- per-agent comparison (the paper's Table 1) --------------------------------------------
@@ -282,7 +203,7 @@ def render_comparison(
     said below the table (table, markdown, latex) or in the columns ``over`` and
     ``n_averaged`` (csv, json).
     """
-    _check_format(fmt)
+    check_format(fmt)
     columns = list(columns)
     _check_columns(agg, columns)
     names = [_row_name(n) for n in agg.index]
@@ -302,15 +223,15 @@ def render_comparison(
     right = [False] + [True] * len(columns)
     below = f"\n{note}\n" if note is not None else ""
     if fmt == "table":
-        return _fixed_width([[first, *labels], ["", *units]], rows, right) + below
+        return fixed_width([[first, *labels], ["", *units]], rows, right) + below
     if fmt == "markdown":
-        return _markdown([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows, right) + below
+        return markdown([first, *(f"{a} {u}" for a, u in zip(labels, units))], rows, right) + below
     if fmt == "csv":
         header = [first, *(f"{a} {u}" for a, u in zip(labels, units))]
         if note is not None:
             header += ["over", "n_averaged"]
             rows = [[*r, str(o), str(int(n))] for r, o, n in zip(rows, agg["over"], agg["n_averaged"])]
-        return _csv(header, rows)
+        return csv_text(header, rows)
 
     return _comparison_latex(rows, columns, caption=caption, label=label, note=note)
 
@@ -345,7 +266,7 @@ def _comparison_latex(rows: list[list[str]], columns: list[str], *, caption: str
     lines = [r"\begin{table*}[ht]", r"\centering"]
     lines += [rf"\caption{{{caption}}}"] if caption is not None else []
     lines += [rf"\label{{{label}}}"] if label is not None else []
-    lines += [r"\resizebox{\textwidth}{!}{%", *_tabular(headers, tex_rows)]
+    lines += [r"\resizebox{\textwidth}{!}{%", *tabular(headers, tex_rows)]
     lines[-1] += "%"
     lines.append("}")
     if note is not None:

@@ -11,7 +11,8 @@ import pytest
 
 from pic4rl_metrics.aggregate import aggregate
 from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.report import FORMATS, render_comparison, render_episodes
+from pic4rl_metrics.layouts import FORMATS
+from pic4rl_metrics.report import render_comparison, render_episodes
 from pic4rl_metrics.results import TABLE1_COLUMNS
 
 NAN = math.nan
