@@ -7,7 +7,7 @@ each definition is written in ``docs/metrics.md``.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from functools import cached_property
 from typing import NamedTuple
 
@@ -96,20 +96,8 @@ class Derived:
         self.scan = episode.scan if episode.scan is not None and len(episode.scan) else None
 
     def missing(self, needs: Iterable[str]) -> set[str]:
-        """The inputs of ``needs`` this episode lacks."""
-        have = {
-            "pose": True,
-            "scan": self.scan is not None,
-            "cmd_vel": self.episode.cmd is not None and len(self.episode.cmd) > 0,
-            "person": self.episode.person is not None and len(self.episode.person) > 0,
-            "goal": self.facts.goal is not None,
-            "footprint": self.facts.footprint is not None,
-            "max_speed": self.facts.max_speed_mps is not None,
-            "row_centerline": self.facts.row_centerline is not None,
-            "person_distance": self.facts.person_distance_m is not None,
-            "camera_fov": self.facts.camera_fov_rad is not None,
-        }
-        return {name for name in needs if not have[name]}
+        """The inputs of ``needs`` this episode lacks (``INPUT_TESTS``)."""
+        return {name for name in needs if not INPUT_TESTS[name](self)}
 
     # -- time and outcome ---------------------------------------------------------------------
 
@@ -298,3 +286,19 @@ class Derived:
         optimal = self.optimal[0]
         longest = max(self.path_m, optimal)
         return optimal / longest if longest > 0 else NAN
+
+
+#: The inputs a metric may need (``@metric(needs=...)``), each with its test of whether an
+#: episode has it; a metric whose input is missing gives NaN.
+INPUT_TESTS: dict[str, Callable[[Derived], bool]] = {
+    "pose": lambda d: True,
+    "scan": lambda d: d.scan is not None,
+    "cmd_vel": lambda d: d.episode.cmd is not None and len(d.episode.cmd) > 0,
+    "person": lambda d: d.episode.person is not None and len(d.episode.person) > 0,
+    "goal": lambda d: d.facts.goal is not None,
+    "footprint": lambda d: d.facts.footprint is not None,
+    "max_speed": lambda d: d.facts.max_speed_mps is not None,
+    "row_centerline": lambda d: d.facts.row_centerline is not None,
+    "person_distance": lambda d: d.facts.person_distance_m is not None,
+    "camera_fov": lambda d: d.facts.camera_fov_rad is not None,
+}

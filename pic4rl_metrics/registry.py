@@ -29,23 +29,18 @@ import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from importlib.metadata import entry_points
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from .derived import INPUT_TESTS, Derived
 from .errors import ConfigError
-
-if TYPE_CHECKING:
-    from .derived import Derived
 
 log = logging.getLogger(__name__)
 
 #: Entry-point group through which installed packages add metrics.
 ENTRY_POINT_GROUP = "pic4rl.metrics"
 
-#: Inputs a metric may need; ``Derived.missing`` says which of them a bag lacks.
-INPUTS: frozenset[str] = frozenset({
-    "pose", "scan", "cmd_vel", "person", "goal", "footprint", "max_speed", "row_centerline",
-    "person_distance", "camera_fov",
-})  # fmt: skip
+#: Inputs a metric may need; ``derived.INPUT_TESTS`` says how an episode has each.
+INPUTS: frozenset[str] = frozenset(INPUT_TESTS)
 
 
 @dataclass(frozen=True)
