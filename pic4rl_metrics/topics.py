@@ -36,6 +36,32 @@ def normalize_topic(name: str) -> str:
     return name if name.startswith("/") else f"/{name}"
 
 
+ODOMETRY = "nav_msgs/msg/Odometry"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+LASER_SCAN = "sensor_msgs/msg/LaserScan"
+STRING = "std_msgs/msg/String"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+
+SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
+SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
+#: The one-topic roles of a topic map (each a ``TopicMap`` field) and the message types each
+#: accepts, in the order they are chosen; a topic-map YAML names them by role, the facts and
+#: outcome topics as ``facts_topic`` and ``outcome_topic``.
+ROLE_TYPES: dict[str, frozenset[str]] = {
+    "scan": frozenset({LASER_SCAN}),
+    "cmd_vel": SUPPORTED_CMD_MSGS,
+    "goal": SUPPORTED_POSE_MSGS,
+    "person": SUPPORTED_POSE_MSGS,
+    "facts": frozenset({STRING}),
+    "outcome": frozenset({STRING}),
+}
+_YAML_KEY = {role: f"{role}_topic" if role in ("facts", "outcome") else role
+             for role in ROLE_TYPES}
+
+
 @dataclass(frozen=True)
 class TopicMap:
     """Where each input of the metrics lives in a bag; ``None`` switches an input off."""
@@ -62,7 +88,7 @@ class TopicMap:
         object.__setattr__(self, "pose", tuple(normalize_topic(t) for t in self.pose))
         if isinstance(self.pose_frames, str):
             object.__setattr__(self, "pose_frames", parse_frames(self.pose_frames, "pose_frames"))
-        for name in ("scan", "cmd_vel", "goal", "person", "facts", "outcome"):
+        for name in ROLE_TYPES:
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, normalize_topic(value))
@@ -84,10 +110,7 @@ def parse_frames(text: str, source: str) -> tuple[str, str]:
     return parts[0], parts[1]
 
 
-_KEYS = (
-    "pose", "pose_frames", "scan", "cmd_vel", "goal", "person", "facts_topic", "outcome_topic",
-    "facts", "metrics",
-)
+_KEYS = ("pose", "pose_frames", *_YAML_KEY.values(), "facts", "metrics")
 
 
 def load_topic_map(path: Path | str) -> tuple[TopicMap, EpisodeFacts, frozenset[str]]:
@@ -118,12 +141,9 @@ def topic_map_from_dict(
             msg = f"{source}: unknown key {key!r}{suggestion} (known: {', '.join(_KEYS)})"
             raise ConfigError(msg)
     kwargs: dict[str, Any] = {}
-    for key, field_name in (("facts_topic", "facts"), ("outcome_topic", "outcome")):
+    for role, key in _YAML_KEY.items():
         if key in data:
-            kwargs[field_name] = data[key]
-    for key in ("scan", "cmd_vel", "goal", "person"):
-        if key in data:
-            kwargs[key] = data[key]
+            kwargs[role] = data[key]
     if "pose" in data:
         pose = data["pose"]
         kwargs["pose"] = (pose,) if isinstance(pose, str) else tuple(pose)
@@ -147,17 +167,6 @@ def topic_map_from_dict(
     return TopicMap(**kwargs, pose_frames=frames, explicit=explicit), facts, given
 
 
-ODOMETRY = "nav_msgs/msg/Odometry"
-POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
-POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
-TWIST = "geometry_msgs/msg/Twist"
-TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
-LASER_SCAN = "sensor_msgs/msg/LaserScan"
-STRING = "std_msgs/msg/String"
-TF_MESSAGE = "tf2_msgs/msg/TFMessage"
-
-SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
-SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
 #: Roles that, when their default topic is absent, take the bag's only topic of their type
 #: (a namespaced ``/robot1/scan``), as the pose takes the only ``Odometry`` topic.
 _ONLY_OF_TYPE = {"scan": LASER_SCAN}
@@ -236,16 +245,9 @@ def choose_topics(topic_map: TopicMap, available: Mapping[str, str], bag: str) -
     pose = _pose_topic(topic_map, available, bag, notes)
     static_tf = f"{pose}_static" if topic_map.pose_frames is not None else None
     needs_static = topic_map.scan is not None or static_tf is not None
-    roles = {
-        "scan": (topic_map.scan, {LASER_SCAN}),
-        "cmd_vel": (topic_map.cmd_vel, SUPPORTED_CMD_MSGS),
-        "goal": (topic_map.goal, SUPPORTED_POSE_MSGS),
-        "person": (topic_map.person, SUPPORTED_POSE_MSGS),
-        "facts": (topic_map.facts, {STRING}),
-        "outcome": (topic_map.outcome, {STRING}),
-        "tf_static": ((static_tf or contract.TF_STATIC_TOPIC) if needs_static else None,
-                      {TF_MESSAGE}),
-    }
+    roles = {role: (getattr(topic_map, role), types) for role, types in ROLE_TYPES.items()}
+    roles["tf_static"] = ((static_tf or contract.TF_STATIC_TOPIC) if needs_static else None,
+                          frozenset({TF_MESSAGE}))
     wanted = {pose: "pose"}
     for role, (mapped, types) in roles.items():
         topic = _role_topic(role, mapped, topic_map, available, notes)
