@@ -4,7 +4,9 @@ Test support, not a recorder: tests need bags with analytic answers (the tracks 
 ``synthetic_tracks``; a bag with odd facts as real robots write them) and the benchmark needs
 bags of a chosen size. The bags are written through the metrics' one bag writer
 (``bagwriter``), the one ``pic4rl_bridge``'s recorder writes through, so the reader meets no
-special case.
+special case. It ships in the package, not under ``tests/``: the benchmark scripts
+(``benchmarks/``) import it, as may the tests of a user's metric plugin, and it needs nothing
+beyond the metrics' own dependencies.
 """
 
 from __future__ import annotations
