@@ -211,7 +211,7 @@ def resolve_pair_kind(name: str, *, min_distance_m: float = 0.0, max_distance_m:
         return None
     try:
         return dataclasses.replace(kind, **given)
-    except SimError as err:  # a range the other way round
+    except (SimError, ConfigError) as err:  # a range the other way round
         raise ConfigError(f"pair_kind {name!r}: {err}") from err
 
 
@@ -254,7 +254,7 @@ class PairSampler:
             return sample_start_goal(self.world, rng, clearance_m=self.clearance_m,
                                      min_distance_m=low, max_distance_m=kind.max_distance_m,
                                      max_detour=kind.max_detour, planner=self.planner)
-        except SimError as err:  # no pair of the kind in this world
+        except (SimError, ConfigError) as err:  # no pair of the kind in this world
             raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
 
     def request(self, seed: int, kind: PairKind) -> EpisodeRequest:
@@ -285,7 +285,7 @@ class PairSampler:
             pairs = sample_pairs(self.world, count, np.random.default_rng(seed),
                                  clearance_m=self.clearance_m, kind=kind, planner=self.planner,
                                  min_goal_distance_m=self.min_goal_distance_m)
-        except SimError as err:
+        except (SimError, ConfigError) as err:
             raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
         return GoalsAndPoses(initial_pose, tuple(g for _, g in pairs),
                              tuple(Pose2D(*s) for s, _ in pairs))
