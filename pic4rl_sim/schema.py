@@ -111,6 +111,12 @@ def param(default: Any = MISSING, *, doc: str, unit: str = "", range: Range | No
     return field(default=default, metadata=meta)
 
 
+def redefault(cls: type, name: str, default: Any) -> Any:
+    """``cls``'s parameter ``name`` (doc, unit, range) with another default, for a dataclass
+    that shares a parameter with ``cls`` (the person world's obstacle field)."""
+    return field(default=default, metadata=cls.__dataclass_fields__[name].metadata)
+
+
 def section(cls: type, doc: str = "") -> Any:
     """A nested group of parameters (``reward.*``), defaulting to ``cls()``."""
     return field(default_factory=cls, metadata={"doc": doc or (cls.__doc__ or "").strip()})

@@ -47,10 +47,12 @@ def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> N
             assert not ros, f"{path.name} imports {ros}"
 
 
-def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None:
+def _loaded(modules: str) -> tuple[list[str], bool]:
+    """The ROS, RL and sibling modules, and whether MuJoCo, that importing ``modules`` (in a
+    fresh interpreter) loads."""
     code = (
         "import json, sys\n"
-        "import pic4rl_sim.engine.core, pic4rl_sim.params, pic4rl_sim.engine.world_generators\n"
+        f"import {modules}\n"
         f"heavy = {ROS_ROOTS + NEVER!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
         "print(json.dumps('mujoco' in sys.modules))\n"
@@ -59,5 +61,15 @@ def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None
                           text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr
     loaded, has_mujoco = (json.loads(line) for line in done.stdout.splitlines()[-2:])
-    assert has_mujoco is True
-    assert loaded == []
+    return loaded, has_mujoco
+
+
+def test_importing_the_engine_loads_no_ros_or_rl_module() -> None:
+    assert _loaded("pic4rl_sim.engine.core") == ([], True)
+
+
+def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
+    """A params file is read, checked and its worlds generated without MuJoCo (only a user's
+    MJCF world loads it)."""
+    assert _loaded("pic4rl_sim.params, pic4rl_sim.params_file, pic4rl_sim.schema, "
+                   "pic4rl_sim.engine.world_generators") == ([], False)
