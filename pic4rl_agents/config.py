@@ -17,7 +17,7 @@ from typing import Any
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError, require
 from pic4rl_sim import params_file
-from pic4rl_sim.engine.sampling import PAIR_KINDS
+from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
 from pic4rl_sim.schema import (
     NON_NEGATIVE,
@@ -246,10 +246,7 @@ class TrainConfig:
                 f"as many stages as curriculum.min_distance_m ({stages}), and so many "
                 "curriculum.max_detour")
         for low, high, detour in zip(cur.min_distance_m, cur.max_distance_m, cur.max_detour):
-            require(0 <= low < high, "curriculum.max_distance_m", list(cur.max_distance_m),
-                    "distances (m) above each stage's min_distance_m")
-            require(detour >= 1, "curriculum.max_detour", list(cur.max_detour),
-                    "ratios >= 1 (shortest path / straight line)")
+            check_pair_filter(low, high, detour, prefix="curriculum.")
         require(not self.imitation.enabled or self.off_policy, "imitation.enabled", True,
                 f"false for {self.algorithm} (imitation initialises an off-policy actor: ddpg, "
                 "td3, sac, tqc)")

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_sim import params_file
-from pic4rl_sim.engine.sampling import PAIR_KINDS
+from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.interfaces import (
     CMD_VEL,
     DEPTH_IMAGE,
@@ -246,8 +246,8 @@ class EpisodesConfig:
 
     def __post_init__(self) -> None:
         check(self, "episodes.")
-        require(self.max_detour == 0 or self.max_detour >= 1, "episodes.max_detour",
-                self.max_detour, "0 (the kind's) or a ratio >= 1")
+        check_pair_filter(self.min_distance_m, self.max_distance_m or math.inf,
+                          self.max_detour or math.inf, prefix="episodes.")  # 0: the kind's
 
 
 @dataclass(frozen=True)

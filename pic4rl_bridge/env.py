@@ -270,7 +270,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             e.min_distance_m, e.max_distance_m, e.max_detour)
         values = [float(options.get(key, b)) for key, b in zip(_PAIR_OPTIONS[1:], base)]
         kind = resolve_pair_kind(str(name), min_distance_m=values[0], max_distance_m=values[1],
-                                 max_detour=values[2])
+                                 max_detour=values[2], prefix="reset options: ")
         if kind is not None and self._sampler is None:
             raise ConfigError("reset options: pair filters need a simulated world")
         return kind

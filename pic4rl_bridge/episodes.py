@@ -27,7 +27,13 @@ import numpy as np
 
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D
-from pic4rl_sim.engine.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
+from pic4rl_sim.engine.sampling import (
+    PAIR_KINDS,
+    PairKind,
+    check_pair_filter,
+    sample_pairs,
+    sample_start_goal,
+)
 
 from .config import EpisodesConfig
 from .errors import ConfigError
@@ -197,9 +203,10 @@ def save_goals_and_poses(pairs: GoalsAndPoses, path: str | Path, *, comment: str
 
 
 def resolve_pair_kind(name: str, *, min_distance_m: float = 0.0, max_distance_m: float = 0.0,
-                      max_detour: float = 0.0) -> PairKind | None:
+                      max_detour: float = 0.0, prefix: str = "episodes.") -> PairKind | None:
     """The kind ``name`` with the non-zero values given instead of its own; ``None`` for plain
-    ``any`` (the simulator samples the pair)."""
+    ``any`` (the simulator samples the pair). A filter the values make invalid is a
+    ``ConfigError`` naming the caller's key (``<prefix>max_distance_m``) and the kind."""
     if name not in PAIR_KINDS:
         raise ConfigError(f"pair_kind: {name!r} is invalid; expected one of "
                           f"{', '.join(PAIR_KINDS)}")
@@ -209,10 +216,13 @@ def resolve_pair_kind(name: str, *, min_distance_m: float = 0.0, max_distance_m:
                                            ("max_detour", max_detour)) if value}
     if name == "any" and not given:
         return None
+    values = {"min_distance_m": kind.min_distance_m or 0.0,
+              "max_distance_m": kind.max_distance_m, "max_detour": kind.max_detour} | given
     try:
-        return dataclasses.replace(kind, **given)
-    except SimError as err:  # a range the other way round
+        check_pair_filter(**values, prefix=prefix)
+    except ConfigError as err:  # a range the other way round
         raise ConfigError(f"pair_kind {name!r}: {err}") from err
+    return dataclasses.replace(kind, **given)
 
 
 class PairSampler:
@@ -254,7 +264,7 @@ class PairSampler:
             return sample_start_goal(self.world, rng, clearance_m=self.clearance_m,
                                      min_distance_m=low, max_distance_m=kind.max_distance_m,
                                      max_detour=kind.max_detour, planner=self.planner)
-        except SimError as err:  # no pair of the kind in this world
+        except (SimError, ConfigError) as err:  # no pair of the kind in this world
             raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
 
     def request(self, seed: int, kind: PairKind) -> EpisodeRequest:
@@ -285,7 +295,7 @@ class PairSampler:
             pairs = sample_pairs(self.world, count, np.random.default_rng(seed),
                                  clearance_m=self.clearance_m, kind=kind, planner=self.planner,
                                  min_goal_distance_m=self.min_goal_distance_m)
-        except SimError as err:
+        except (SimError, ConfigError) as err:
             raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
         return GoalsAndPoses(initial_pose, tuple(g for _, g in pairs),
                              tuple(Pose2D(*s) for s, _ in pairs))

@@ -70,7 +70,7 @@ class InProcessTransport(Transport):
     def reset(self, request: EpisodeRequest) -> SensorFrame:
         try:
             self.engine.reset(seed=request.seed, start=request.start, goal=request.goal)
-        except SimError as err:
+        except (SimError, ConfigError) as err:
             raise EpisodeRejected(str(err)) from err
         self._stamp_ns += self._control_dt_ns
         self.fault = None

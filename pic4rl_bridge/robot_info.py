@@ -66,7 +66,7 @@ class Scenario:
                 if config.robot:
                     values["robot"] = config.robot
                 self.sim = build_config(values)
-            except SimError as err:
+            except (SimError, ConfigError) as err:
                 raise ConfigError(f"sim parameters: {err}") from err
             self.spec: RobotSpec = self.sim.robot
         else:
@@ -75,7 +75,7 @@ class Scenario:
                                   "when the config has no sim section")
             try:
                 self.spec = load_robot(config.robot)
-            except SimError as err:
+            except (SimError, ConfigError) as err:
                 raise ConfigError(f"robot: {err}") from err
         self.robot = self._robot_info()
 

@@ -24,7 +24,10 @@ class EpisodeError(MetricsError):
 
 
 class ConfigError(MetricsError):
-    """A topic map, an episode fact or a command-line value is invalid."""
+    """A parameter (of any node or package: sim, env, trainer, metrics), a topic map, an episode
+    fact, a robot, a world or a file they name is unknown or invalid. The one class for every
+    pic4rl package: ``pic4rl_sim.errors`` and ``pic4rl_bridge.errors`` re-export it, and this
+    package, the lowest room, imports no other."""
 
 
 class OutputError(MetricsError):

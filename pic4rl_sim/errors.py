@@ -1,4 +1,5 @@
-"""Errors of pic4rl_sim, one class per boundary.
+"""Errors of pic4rl_sim, one class per boundary; ``ConfigError`` is every package's one,
+re-exported from ``pic4rl_metrics.errors``.
 
 Messages name the key (or file) first, then the offending value (``{x!r}``) and what was
 expected, so that a bad parameter file stops the node with one readable line.
@@ -10,14 +11,15 @@ import difflib
 from collections.abc import Iterable
 from typing import Any
 
+from pic4rl_metrics.errors import ConfigError
+
+__all__ = ["ConfigError", "SimError", "WorldError", "require", "unknown_key"]
+
 
 class SimError(Exception):
-    """Base class of every error this package raises on purpose."""
-
-
-class ConfigError(SimError):
-    """A parameter (of any node: sim, env, trainer), a robot, a world, a sensor or a file they
-    name is unknown or invalid."""
+    """Base class of the errors this package raises on purpose, but ``ConfigError``: a bad
+    parameter is every package's one ``pic4rl_metrics.errors.ConfigError`` (the lowest room),
+    so catch ``(SimError, ConfigError)`` for both."""
 
 
 class WorldError(SimError):

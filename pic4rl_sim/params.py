@@ -17,7 +17,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .engine.core import EngineConfig
+from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
 from .engine.robot_specs import (
     DepthCameraSpec,
@@ -27,7 +27,7 @@ from .engine.robot_specs import (
     RobotSpec,
     load_robot,
 )
-from .engine.world_generators import GENERATORS, generator_params, make_world
+from .engine.world_generators import GENERATORS, make_world
 from .engine.world_spec import WorldSpec
 from .errors import ConfigError, require, unknown_key
 from .schema import (
@@ -38,7 +38,7 @@ from .schema import (
     check,
     from_params,
     param,
-    param_type,
+    param_names,
     specs,
 )
 
@@ -102,12 +102,9 @@ ROBOT = _CORE[0]
 
 def _world_params() -> tuple[ParamSpec, ...]:
     """``world.<kind>.<param>`` for every parameter of every generator."""
-    out = []
-    for kind in GENERATORS:
-        for name, (kind_type, default, doc) in generator_params(kind).items():
-            out.append(ParamSpec(f"world.{kind}.{name}", param_type(kind_type)[0], default,
-                                 f"{kind} world: {doc}"))
-    return tuple(out)
+    return tuple(dataclasses.replace(spec, description=f"{kind} world: {spec.description}")
+                 for kind, generator in GENERATORS.items()
+                 for spec in specs(generator.params, prefix=f"world.{kind}."))
 
 
 def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
@@ -247,7 +244,8 @@ def build_world_choice(values: Mapping[str, Any]) -> WorldChoice:
         hint = f"; did you mean {close[0]!r}?" if close else ""
         raise ConfigError(f"world: {kind!r} is invalid; expected a generator "
                           f"({', '.join(GENERATORS)}) or a path ending in .xml{hint}")
-    params = tuple((name, values[f"world.{kind}.{name}"]) for name in generator_params(kind))
+    params = tuple((name, values[f"world.{kind}.{name}"])
+                   for name in param_names(GENERATORS[kind].params))
     return WorldChoice(kind, values["world_variant"], params)
 
 

@@ -1,8 +1,6 @@
-"""What every world generator shares: the seed and range checks, and the walls around it."""
+"""What every world generator shares: the seed's check, and the walls around the arena."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
@@ -19,15 +17,6 @@ def rng_for(seed: int) -> np.random.Generator:
     return np.random.default_rng(seed)
 
 
-def check_count(key: str, value: int, lo: int, hi: int) -> None:
-    ok = isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi
-    require(ok, key, value, f"an integer in [{lo}, {hi}]")
-
-
-def check_within(key: str, value: float, lo: float, hi: float) -> None:
-    require(math.isfinite(value) and lo <= value <= hi, key, value, f"a value in [{lo}, {hi}]")
-
-
 def walls(bounds: tuple[float, float, float, float]) -> list[Box]:
     """Four wall boxes just outside the free rectangle ``bounds``."""
     xmin, ymin, xmax, ymax = bounds
@@ -37,5 +26,3 @@ def walls(bounds: tuple[float, float, float, float]) -> list[Box]:
             Box(cx, ymax + t / 2, long_x, t, WALL_HEIGHT_M),
             Box(xmin - t / 2, cy, t, long_y, WALL_HEIGHT_M),
             Box(xmax + t / 2, cy, t, long_y, WALL_HEIGHT_M)]
-
-

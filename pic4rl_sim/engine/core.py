@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import mujoco
 import numpy as np
 
 from ..errors import WorldError, require
+from .engine_config import EngineConfig
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
 from .paths import plan_path
@@ -32,32 +32,6 @@ _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarn
 # Independent random streams per purpose: reading one sensor never shifts another's noise.
 _STREAMS = ("sampling", "lidar", "depth", "imu", "odometry")
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
-
-
-@dataclass(frozen=True)
-class EngineConfig:
-    """Timing and episode set-up rules (s, m)."""
-
-    physics_dt_s: float = 0.005
-    control_dt_s: float = 0.1
-    clearance_m: float = 0.2  # free space around the footprint for sampled starts and goals
-    min_goal_distance_m: float = 1.0
-
-    def __post_init__(self) -> None:
-        require(0 < self.physics_dt_s <= 0.05, "physics_dt_s", self.physics_dt_s,
-                "a time step in (0, 0.05] s")
-        require(self.control_dt_s >= self.physics_dt_s, "control_dt_s", self.control_dt_s,
-                f"at least physics_dt_s={self.physics_dt_s}")
-        ratio = self.control_dt_s / self.physics_dt_s
-        require(abs(ratio - round(ratio)) < 1e-6, "control_dt_s", self.control_dt_s,
-                f"a whole multiple of physics_dt_s={self.physics_dt_s}")
-        require(self.clearance_m >= 0, "clearance_m", self.clearance_m, "a distance >= 0")
-        require(self.min_goal_distance_m >= 0, "min_goal_distance_m", self.min_goal_distance_m,
-                "a distance >= 0")
-
-    @property
-    def substeps(self) -> int:
-        return round(self.control_dt_s / self.physics_dt_s)
 
 
 class StepResult(NamedTuple):

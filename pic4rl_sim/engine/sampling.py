@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import WorldError, require
+from .engine_config import EngineConfig
 from .geometry import Pose2D
 from .world_spec import WorldSpec
 
@@ -24,6 +25,7 @@ if TYPE_CHECKING:
 
 BATCH = 256
 MAX_PATH_CHECKS = 400  # path searches per sampled pair before giving up
+_MIN_GOAL_DISTANCE_M = EngineConfig.min_goal_distance_m  # the sim's own least distance
 
 
 @dataclass(frozen=True)
@@ -38,12 +40,22 @@ class PairKind:
 
     def __post_init__(self) -> None:
         low = 0.0 if self.min_distance_m is None else self.min_distance_m
-        require(math.isfinite(low) and low >= 0, "pairs.min_distance_m", self.min_distance_m,
-                "a finite distance >= 0 m")
-        require(self.max_distance_m >= low, "pairs.max_distance_m", self.max_distance_m,
-                f"a distance >= min_distance_m={low} m")
-        require(self.max_detour >= 1.0, "pairs.max_detour", self.max_detour,
-                "a ratio >= 1 (shortest path / straight line)")
+        check_pair_filter(low, self.max_distance_m, self.max_detour, prefix="pairs.")
+
+
+def check_pair_filter(min_distance_m: float, max_distance_m: float, max_detour: float, *,
+                      prefix: str) -> None:
+    """``ConfigError`` naming ``<prefix>min_distance_m`` (``max_distance_m``, ``max_detour``)
+    unless the least distance is finite and >= 0 m, the greatest at least that, and the detour
+    (shortest path / straight line) >= 1. The one check of every pair filter: a kind, the
+    sampler's arguments, the env's ``episodes`` section and ``reset`` options, each curriculum
+    stage (``prefix``: the caller's keys, ``"episodes."``)."""
+    require(math.isfinite(min_distance_m) and min_distance_m >= 0, f"{prefix}min_distance_m",
+            min_distance_m, "a finite distance >= 0 m")
+    require(max_distance_m >= min_distance_m, f"{prefix}max_distance_m", max_distance_m,
+            f"a distance >= min_distance_m={min_distance_m} m")
+    require(max_detour >= 1.0, f"{prefix}max_detour", max_detour,
+            "a ratio >= 1 (shortest path / straight line)")
 
 
 #: Named kinds: ``any`` is every free pair the simulator samples (at least its
@@ -67,7 +79,8 @@ def _valid(world: WorldSpec, xy: np.ndarray, clearance_m: float) -> np.ndarray:
 
 
 def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m: float,
-                      min_distance_m: float = 1.0, max_distance_m: float = math.inf,
+                      min_distance_m: float = _MIN_GOAL_DISTANCE_M,
+                      max_distance_m: float = math.inf,
                       max_detour: float = math.inf, planner: PathPlanner | None = None,
                       max_tries: int = 10_000) -> tuple[Pose2D, tuple[float, float]]:
     """A start pose and a goal point, both ``clearance_m`` (m) from obstacles and the bounds'
@@ -81,12 +94,9 @@ def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m
     """
     require(math.isfinite(clearance_m) and clearance_m >= 0, "sampling.clearance_m",
             clearance_m, "a finite distance >= 0 m")
-    require(math.isfinite(min_distance_m) and min_distance_m >= 0, "sampling.min_distance_m",
-            min_distance_m, "a finite distance >= 0 m")
-    require(max_distance_m >= min_distance_m, "sampling.max_distance_m", max_distance_m,
-            f"a distance >= min_distance_m={min_distance_m} m")
-    require(max_detour >= 1.0 and (planner is not None or max_detour == math.inf),
-            "sampling.max_detour", max_detour, "a ratio >= 1, with a planner when finite")
+    check_pair_filter(min_distance_m, max_distance_m, max_detour, prefix="sampling.")
+    require(planner is not None or max_detour == math.inf, "sampling.max_detour", max_detour,
+            "inf without a planner (a finite detour needs one to measure it)")
     require(isinstance(max_tries, int) and max_tries >= 1, "sampling.max_tries", max_tries,
             "an integer >= 1")
     search = _PairSearch(world, clearance_m, min_distance_m, max_distance_m, max_detour, planner)
@@ -190,7 +200,8 @@ class _PairSearch:
 
 def sample_pairs(world: WorldSpec, count: int, rng: np.random.Generator, *, clearance_m: float,
                  kind: PairKind, planner: PathPlanner | None = None,
-                 min_goal_distance_m: float = 1.0) -> list[tuple[Pose2D, tuple[float, float]]]:
+                 min_goal_distance_m: float = _MIN_GOAL_DISTANCE_M,
+                 ) -> list[tuple[Pose2D, tuple[float, float]]]:
     """``count`` pairs of ``kind`` drawn in turn from ``rng`` (deterministic for one rng
     state); ``min_goal_distance_m`` stands in for a kind without a minimum. With a
     ``planner`` every pair has a collision-free path."""

@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from ..errors import require
-from .arena import check_count, check_within, rng_for, walls
+from ..schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
+from .arena import rng_for, walls
 from .geometry import Pose2D
 from .world_spec import Box, Cylinder, WorldSpec
 
@@ -32,17 +34,43 @@ HEADLAND_M = 3.0  # free ground between the outermost posts and the vineyard's w
 LANE_STEP_M = 0.5
 MIN_SPACING_M = CANOPY_WIDTH_M + 0.6  # a lane narrower than this leaves no room for a robot
 
-VINEYARD_PARAM_DOCS: dict[str, str] = {
-    "rows": "number of vine rows",
-    "row_spacing_m": "distance between neighbouring rows: the mean over the lanes (m)",
-    "spacing_jitter_m": "each lane's width is drawn uniformly in row_spacing_m +- this (m)",
-    "row_length_m": "length of the middle row (m)",
-    "trunk_spacing_m": "distance between plants along a row (m)",
-    "gap_prob": "probability that a plant (trunk and its canopy) is missing",
-    "row_radius_m": "radius of the innermost row's arc; 0 for straight rows (m)",
-    "bend_m": "amplitude of the rows' shared lateral wave, of seeded wavelength (one to two "
-              "row lengths) and phase; 0: no wave (m)",
-}
+
+
+@dataclass(frozen=True)
+class VineyardParams:
+    """The ``vineyard`` world: vine rows, straight or curved, and the lanes between them."""
+
+    KIND: ClassVar[str] = "vineyard"
+    rows: int = param(5, doc="number of vine rows", range=Range(2, 30))
+    row_spacing_m: float = param(2.5, doc="distance between neighbouring rows: the mean over "
+                                 "the lanes", unit="m", range=Range(MIN_SPACING_M, 20.0))
+    spacing_jitter_m: float = param(0.0, doc="each lane's width is drawn uniformly in "
+                                    "row_spacing_m +- this", unit="m",
+                                    range=Range(0.0, 20.0 - MIN_SPACING_M))
+    row_length_m: float = param(10.0, doc="length of the middle row", unit="m",
+                                range=Range(1.0, 200.0))
+    trunk_spacing_m: float = param(1.0, doc="distance between plants along a row", unit="m",
+                                   range=Range(0.2, 200.0))
+    gap_prob: float = param(0.1, doc="probability that a plant (trunk and its canopy) is "
+                            "missing", range=FRACTION)
+    row_radius_m: float = param(0.0, doc="radius of the innermost row's arc; 0 for straight "
+                                "rows", unit="m", range=NON_NEGATIVE)
+    bend_m: float = param(0.0, doc="amplitude of the rows' shared lateral wave, of seeded "
+                          "wavelength (one to two row lengths) and phase; 0: no wave",
+                          unit="m", range=Range(0.0, 50.0))
+
+    def __post_init__(self) -> None:
+        check(self, "world.vineyard.")
+        jitter = self.row_spacing_m - MIN_SPACING_M
+        require(self.spacing_jitter_m <= jitter, "world.vineyard.spacing_jitter_m",
+                self.spacing_jitter_m, f"a value in [0.0, {jitter}]")
+        require(self.trunk_spacing_m <= self.row_length_m, "world.vineyard.trunk_spacing_m",
+                self.trunk_spacing_m, f"a value in [0.2, {self.row_length_m}]")
+        require(self.bend_m <= 0.25 * self.row_length_m, "world.vineyard.bend_m", self.bend_m,
+                f"a value in [0.0, {0.25 * self.row_length_m}]")
+        require(self.row_radius_m == 0 or self.bend_m < self.row_radius_m,
+                "world.vineyard.bend_m", self.bend_m,
+                f"less than row_radius_m={self.row_radius_m} (the innermost row would fold)")
 
 
 @dataclass(frozen=True)
@@ -76,10 +104,7 @@ class RowShape:
         return float(np.hypot(*np.diff(pts, axis=0).T).sum())
 
 
-def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
-             spacing_jitter_m: float = 0.0, row_length_m: float = 10.0,
-             trunk_spacing_m: float = 1.0, gap_prob: float = 0.1, row_radius_m: float = 0.0,
-             bend_m: float = 0.0) -> WorldSpec:
+def vineyard(seed: int, p: VineyardParams) -> WorldSpec:
     """Vine rows (trunks under canopy, plants missing at random, a post at each end) inside a
     far wall, and the lanes between them.
 
@@ -87,9 +112,9 @@ def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
     keeps the drawn geometry: ``lane_width_<k>_m``, ``bend_wavelength_m``,
     ``bend_phase_rad`` and, for curved rows, ``arc_center_x_m``, ``arc_center_y_m``.
     """
-    params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    _check(rows, row_spacing_m, spacing_jitter_m, row_length_m, trunk_spacing_m, gap_prob,
-           bend_m)
+    params: dict[str, float] = to_params(p)
+    rows, row_spacing_m, spacing_jitter_m = p.rows, p.row_spacing_m, p.spacing_jitter_m
+    row_length_m, row_radius_m, bend_m = p.row_length_m, p.row_radius_m, p.bend_m
     rng = rng_for(seed)
     widths = row_spacing_m + rng.uniform(-spacing_jitter_m, spacing_jitter_m, rows - 1)
     edges = np.concatenate([[0.0], np.cumsum(widths)])
@@ -98,13 +123,11 @@ def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
     require(row_radius_m == 0 or (row_radius_m > 0 and row_length_m <= math.pi * middle_m),
             "world.vineyard.row_radius_m", row_radius_m,
             "0 (straight rows), or a radius that bends the middle row by at most 180 degrees")
-    require(middle_m == 0 or bend_m < row_radius_m, "world.vineyard.bend_m", bend_m,
-            f"less than row_radius_m={row_radius_m} (the innermost row would fold)")
     shape = RowShape(row_length_m, middle_m, bend_m, row_length_m * float(rng.uniform(1, 2)),
                      float(rng.uniform(0, 2 * math.pi)))
-    rows_xy = [shape.points(o, max(1, round(shape.length(o) / trunk_spacing_m)))
+    rows_xy = [shape.points(o, max(1, round(shape.length(o) / p.trunk_spacing_m)))
                for o in offsets]
-    boxes, cylinders = _vine_rows(rng, rows_xy, gap_prob)
+    boxes, cylinders = _vine_rows(rng, rows_xy, p.gap_prob)
     lanes = [shape.points(o, max(2, math.ceil(shape.length(o) / LANE_STEP_M)))
              for o in 0.5 * (offsets[:-1] + offsets[1:])]
     spawns = tuple(Pose2D(float(p[0, 0]), float(p[0, 1]),
@@ -120,19 +143,6 @@ def vineyard(seed: int = 0, *, rows: int = 5, row_spacing_m: float = 2.5,
     return WorldSpec("vineyard", bounds, tuple(walls(bounds) + boxes), tuple(cylinders),
                      spawn_poses=spawns, goal_points=tuple(p[-1] for p in lane_xy),
                      lanes=lane_xy, seed=seed, params=params)
-
-
-def _check(rows: int, row_spacing_m: float, spacing_jitter_m: float, row_length_m: float,
-           trunk_spacing_m: float, gap_prob: float, bend_m: float) -> None:
-    """``ConfigError`` naming the first parameter out of its range."""
-    check_count("world.vineyard.rows", rows, 2, 30)
-    check_within("world.vineyard.row_spacing_m", row_spacing_m, MIN_SPACING_M, 20.0)
-    check_within("world.vineyard.spacing_jitter_m", spacing_jitter_m, 0.0,
-                 row_spacing_m - MIN_SPACING_M)
-    check_within("world.vineyard.row_length_m", row_length_m, 1.0, 200.0)
-    check_within("world.vineyard.trunk_spacing_m", trunk_spacing_m, 0.2, row_length_m)
-    require(0.0 <= gap_prob < 1.0, "world.vineyard.gap_prob", gap_prob, "a probability in [0, 1)")
-    check_within("world.vineyard.bend_m", bend_m, 0.0, 0.25 * row_length_m)
 
 
 def _vine_rows(rng: np.random.Generator, rows_xy: list[np.ndarray],

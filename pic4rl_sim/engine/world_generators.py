@@ -1,26 +1,37 @@
 """World generators: a seed and a few typed parameters make a ``WorldSpec``.
 
-Generators are pure functions ``name(seed, **params)``, so an evaluation names its worlds by
-(kind, seed, params) and gets the same geometry back. ``make_world`` is the one entry point for
-configuration (a generator name, or a user's ``.xml`` file); ``generator_params`` and
-``PARAM_DOCS`` describe the parameters so that a ROS node can declare one parameter each.
+Generators are pure functions ``build(seed, params)``, so an evaluation names its worlds by
+(kind, seed, params) and gets the same geometry back. Each generator's parameters are a frozen
+dataclass of ``param(...)`` fields (``pic4rl_sim.schema``): the only place of their defaults,
+units, ranges and descriptions, which the sim node declares as ``world.<kind>.<name>`` and the
+docs list; a value out of range is a ``ConfigError`` naming that key. ``make_world`` is the one
+entry point for configuration (a generator name, or a user's ``.xml`` file, read with MuJoCo
+only then, so that reading parameters needs no MuJoCo).
 """
 
 from __future__ import annotations
 
-import inspect
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from ..errors import ConfigError, require, unknown_key
-from ..schema import coerce, param_type
-from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, check_count, check_within, rng_for, walls
-from .mjcf_world import world_from_mjcf
+from ..schema import (
+    POSITIVE,
+    PROBABILITY,
+    Range,
+    check,
+    param,
+    param_names,
+    redefault,
+    to_params,
+)
+from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
 from .person_walk import corner_occluders, leg_speeds
-from .vineyard_world import VINEYARD_PARAM_DOCS, vineyard
+from .vineyard_world import VineyardParams, vineyard
 from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 
 OBSTACLE_HEIGHT_M = 1.0
@@ -28,28 +39,92 @@ JUNCTION_MARGIN_M = 0.4  # a door's edge to the nearest crossing wall
 FURNITURE_GAP_M = 0.7  # furniture to walls, doors' wall lines and other furniture: a robot fits
 PERSON_RADIUS_M = 0.25
 PERSON_MARGIN_M = 0.2  # a walking person's clearance from obstacles beyond its radius
+_COUNT = Range(0, 10)
 
-PARAM_DOCS: dict[str, str] = {
-    "size_x_m": "arena length along x inside the walls (m)",
-    "size_y_m": "arena width along y inside the walls (m)",
-    "rooms_x": "number of rooms along x",
-    "rooms_y": "number of rows of rooms along y, above the corridor",
-    "corridor_width_m": "width of the corridor along the south wall (m)",
-    "door_width_m": "width of every door opening (m)",
-    "narrow_width_m": "width of the one narrow passage, narrower than a door (m)",
-    "furniture_per_room": "furniture boxes (0.4-1.2 m sides) tried per room",
-    "size_m": "side of the square arena inside the walls (m)",
-    "count": "number of static obstacles",
-    "min_size_m": "smallest obstacle diameter or box side (m)",
-    "max_size_m": "largest obstacle diameter or box side (m)",
-    "min_gap_m": "least free gap between two obstacles, and to the walls (m)",
-    "cylinder_fraction": "fraction of obstacles that are cylinders, the rest boxes",
-    "waypoints": "number of waypoints on the person's closed loop",
-    "speed_m_s": "walking speed of the person (m/s)",
-    "speed_spread_fraction": "each leg walked at speed_m_s x [1 - f, 1 + f], drawn per leg",
-    "occluders": "obstacles inside the loop's corners that hide the person from a follower",
-    **VINEYARD_PARAM_DOCS,
-}
+
+@dataclass(frozen=True)
+class IndoorParams:
+    """The ``indoor`` world: rooms in a grid above a corridor."""
+
+    KIND: ClassVar[str] = "indoor"
+    size_x_m: float = param(12.0, doc="arena length along x inside the walls", unit="m",
+                            range=POSITIVE)
+    size_y_m: float = param(10.0, doc="arena width along y inside the walls", unit="m",
+                            range=POSITIVE)
+    rooms_x: int = param(3, doc="number of rooms along x", range=Range(1, 10))
+    rooms_y: int = param(2, doc="number of rows of rooms along y, above the corridor",
+                         range=Range(1, 10))
+    corridor_width_m: float = param(2.0, doc="width of the corridor along the south wall",
+                                    unit="m", range=Range(1.0, 10.0))
+    door_width_m: float = param(1.0, doc="width of every door opening", unit="m",
+                                range=Range(0.6, 3.0))
+    narrow_width_m: float = param(0.7, doc="width of the one narrow passage, narrower than a "
+                                  "door", unit="m", range=Range(0.5, 3.0, hi_open=True))
+    furniture_per_room: int = param(2, doc="furniture boxes (0.4-1.2 m sides) tried per room",
+                                    range=_COUNT)
+
+    def __post_init__(self) -> None:
+        check(self, "world.indoor.")
+        require(self.narrow_width_m < self.door_width_m, "world.indoor.narrow_width_m",
+                self.narrow_width_m, f"a width in [0.5, door_width_m={self.door_width_m}) m")
+        room_min = self.door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
+        require(self.size_x_m / self.rooms_x >= room_min, "world.indoor.size_x_m",
+                self.size_x_m, f"at least rooms_x * {room_min:.2f} m so that doors fit")
+        require((self.size_y_m - self.corridor_width_m) / self.rooms_y >= room_min,
+                "world.indoor.size_y_m", self.size_y_m,
+                f"at least corridor_width_m + rooms_y * {room_min:.2f} m so that doors fit")
+
+
+@dataclass(frozen=True)
+class ObstaclesParams:
+    """The ``obstacles`` world: a walled square with a random field of cylinders and boxes."""
+
+    KIND: ClassVar[str] = "obstacles"
+    size_m: float = param(10.0, doc="side of the square arena inside the walls", unit="m",
+                          range=Range(2.0, 100.0))
+    count: int = param(20, doc="number of static obstacles", range=Range(0, 300))
+    min_size_m: float = param(0.2, doc="smallest obstacle diameter or box side", unit="m",
+                              range=Range(0.05, 25.0))
+    max_size_m: float = param(1.0, doc="largest obstacle diameter or box side", unit="m",
+                              range=Range(0.05, 25.0))
+    min_gap_m: float = param(0.6, doc="least free gap between two obstacles, and to the walls",
+                             unit="m", range=Range(0.0, 50.0))
+    cylinder_fraction: float = param(0.5, doc="fraction of obstacles that are cylinders, the "
+                                     "rest boxes", range=PROBABILITY)
+
+    def __post_init__(self) -> None:
+        key, quarter = f"world.{self.KIND}", self.size_m / 4
+        check(self, f"{key}.")
+        require(self.min_size_m <= quarter, f"{key}.min_size_m", self.min_size_m,
+                f"a value in [0.05, {quarter}]")
+        require(self.min_size_m <= self.max_size_m <= quarter, f"{key}.max_size_m",
+                self.max_size_m, f"a value in [{self.min_size_m}, {quarter}]")
+        require(self.min_gap_m <= self.size_m / 2, f"{key}.min_gap_m", self.min_gap_m,
+                f"a value in [0.0, {self.size_m / 2}]")
+
+
+@dataclass(frozen=True)
+class PersonParams(ObstaclesParams):
+    """The ``person`` world: a person walking a loop in a smaller ``obstacles`` arena."""
+
+    KIND: ClassVar[str] = "person"
+    size_m: float = redefault(ObstaclesParams, "size_m", 8.0)
+    count: int = redefault(ObstaclesParams, "count", 6)
+    min_size_m: float = redefault(ObstaclesParams, "min_size_m", 0.3)
+    min_gap_m: float = redefault(ObstaclesParams, "min_gap_m", 0.8)
+    waypoints: int = param(4, doc="number of waypoints on the person's closed loop",
+                           range=Range(2, 20))
+    speed_m_s: float = param(0.6, doc="walking speed of the person", unit="m/s",
+                             range=Range(0.0, 3.0))
+    speed_spread_fraction: float = param(0.3, doc="each leg walked at speed_m_s x [1 - f, "
+                                         "1 + f], drawn per leg", range=Range(0.0, 0.9))
+    occluders: int = param(2, doc="obstacles inside the loop's corners that hide the person "
+                           "from a follower", range=Range(0, 20))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require(self.occluders <= self.waypoints, "world.person.occluders", self.occluders,
+                f"an integer in [0, {self.waypoints}] (a corner of the loop each)")
 
 
 def _wall_line(fixed: float, lo: float, hi: float, openings: list[tuple[float, float]],
@@ -68,29 +143,18 @@ def _wall_line(fixed: float, lo: float, hi: float, openings: list[tuple[float, f
     return boxes
 
 
-def indoor(seed: int = 0, *, size_x_m: float = 12.0, size_y_m: float = 10.0, rooms_x: int = 3,
-           rooms_y: int = 2, corridor_width_m: float = 2.0, door_width_m: float = 1.0,
-           narrow_width_m: float = 0.7, furniture_per_room: int = 2) -> WorldSpec:
+def indoor(seed: int, p: IndoorParams) -> WorldSpec:
     """Rooms in a grid above a corridor along the south wall (the paper's Figure 3).
 
     Every wall between two neighbouring spaces has one opening at a random place, so every
     room is reachable; one opening, chosen at random, is the narrow passage. Its centre is
     kept in ``params`` (``narrow_x_m``, ``narrow_y_m``, ``narrow_along_x``) for checks.
     """
-    params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    check_count("world.indoor.rooms_x", rooms_x, 1, 10)
-    check_count("world.indoor.rooms_y", rooms_y, 1, 10)
-    check_count("world.indoor.furniture_per_room", furniture_per_room, 0, 10)
-    check_within("world.indoor.door_width_m", door_width_m, 0.6, 3.0)
-    require(0.5 <= narrow_width_m < door_width_m, "world.indoor.narrow_width_m", narrow_width_m,
-            f"a width in [0.5, door_width_m={door_width_m}) m")
-    check_within("world.indoor.corridor_width_m", corridor_width_m, 1.0, 10.0)
-    room_min = door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
-    require(math.isfinite(size_x_m) and size_x_m / rooms_x >= room_min, "world.indoor.size_x_m",
-            size_x_m, f"at least rooms_x * {room_min:.2f} m so that doors fit")
+    params: dict[str, float] = _plain(p)
+    size_x_m, size_y_m, rooms_x, rooms_y = p.size_x_m, p.size_y_m, p.rooms_x, p.rooms_y
+    corridor_width_m, door_width_m, narrow_width_m = (p.corridor_width_m, p.door_width_m,
+                                                      p.narrow_width_m)
     room_y = (size_y_m - corridor_width_m) / rooms_y
-    require(math.isfinite(size_y_m) and room_y >= room_min, "world.indoor.size_y_m", size_y_m,
-            f"at least corridor_width_m + rooms_y * {room_min:.2f} m so that doors fit")
     rng = rng_for(seed)
     x0, y0 = -size_x_m / 2, -size_y_m / 2
     room_x, y_rooms = size_x_m / rooms_x, y0 + corridor_width_m
@@ -123,7 +187,7 @@ def indoor(seed: int = 0, *, size_x_m: float = 12.0, size_y_m: float = 10.0, roo
     for j in range(rooms_y):
         for i in range(rooms_x):
             room = (x0 + i * room_x, y_rooms + j * room_y, room_x, room_y)
-            boxes += _furniture(rng, room, furniture_per_room, door_xy, door_width_m)
+            boxes += _furniture(rng, room, p.furniture_per_room, door_xy, door_width_m)
     return WorldSpec("indoor", (x0, y0, -x0, -y0), tuple(boxes), seed=seed, params=params)
 
 
@@ -151,20 +215,13 @@ def _furniture(rng: np.random.Generator, room: tuple[float, float, float, float]
     return placed
 
 
-def _field(rng: np.random.Generator, kind: str, size_m: float, count: int, min_size_m: float,
-           max_size_m: float, min_gap_m: float, cylinder_fraction: float,
-           keep_off_xy: np.ndarray | None = None, keep_off_m: float = 0.0,
-           ) -> tuple[list[Box], list[Cylinder]]:
-    """``count`` cylinders and boxes in a square of side ``size_m`` around the origin, every
-    one at least ``min_gap_m`` from the others and from the walls, and ``keep_off_m`` from
+def _field(rng: np.random.Generator, p: ObstaclesParams, keep_off_xy: np.ndarray | None = None,
+           keep_off_m: float = 0.0) -> tuple[list[Box], list[Cylinder]]:
+    """``p.count`` cylinders and boxes in a square of side ``p.size_m`` around the origin, every
+    one at least ``p.min_gap_m`` from the others and from the walls, and ``keep_off_m`` from
     the points ``keep_off_xy``."""
-    key = f"world.{kind}"
-    check_within(f"{key}.size_m", size_m, 2.0, 100.0)
-    check_count(f"{key}.count", count, 0, 300)
-    check_within(f"{key}.min_size_m", min_size_m, 0.05, size_m / 4)
-    check_within(f"{key}.max_size_m", max_size_m, min_size_m, size_m / 4)
-    check_within(f"{key}.min_gap_m", min_gap_m, 0.0, size_m / 2)
-    check_within(f"{key}.cylinder_fraction", cylinder_fraction, 0.0, 1.0)
+    size_m, count, min_gap_m = p.size_m, p.count, p.min_gap_m
+    min_size_m, max_size_m, cylinder_fraction = p.min_size_m, p.max_size_m, p.cylinder_fraction
     boxes: list[Box] = []
     cylinders: list[Cylinder] = []
     misses = 0  # draws rejected since the last obstacle placed: many mean the arena is full
@@ -189,28 +246,20 @@ def _field(rng: np.random.Generator, kind: str, size_m: float, count: int, min_s
         else:
             boxes.append(Box(x, y, size, size_y, OBSTACLE_HEIGHT_M, yaw, kind="obstacle"))
     placed = len(boxes) + len(cylinders)
-    require(placed == count, f"{key}.count", count,
+    require(placed == count, f"world.{p.KIND}.count", count,
             f"a count that fits the arena with min_gap_m={min_gap_m} (placed {placed})")
     return boxes, cylinders
 
 
-def obstacles(seed: int = 0, *, size_m: float = 10.0, count: int = 20, min_size_m: float = 0.2,
-              max_size_m: float = 1.0, min_gap_m: float = 0.6,
-              cylinder_fraction: float = 0.5) -> WorldSpec:
+def obstacles(seed: int, p: ObstaclesParams) -> WorldSpec:
     """A walled square arena with a random field of cylinders and boxes, ``min_gap_m`` apart."""
-    params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    rng = rng_for(seed)
-    boxes, cylinders = _field(rng, "obstacles", size_m, count, min_size_m, max_size_m,
-                              min_gap_m, cylinder_fraction)
-    bounds = (-size_m / 2, -size_m / 2, size_m / 2, size_m / 2)
+    boxes, cylinders = _field(rng_for(seed), p)
+    bounds = (-p.size_m / 2, -p.size_m / 2, p.size_m / 2, p.size_m / 2)
     return WorldSpec("obstacles", bounds, tuple(walls(bounds) + boxes), tuple(cylinders),
-                     seed=seed, params=params)
+                     seed=seed, params=_plain(p))
 
 
-def person(seed: int = 0, *, size_m: float = 8.0, count: int = 6, min_size_m: float = 0.3,
-           max_size_m: float = 1.0, min_gap_m: float = 0.8, cylinder_fraction: float = 0.5,
-           waypoints: int = 4, speed_m_s: float = 0.6, speed_spread_fraction: float = 0.3,
-           occluders: int = 2) -> WorldSpec:
+def person(seed: int, p: PersonParams) -> WorldSpec:
     """A person walking a closed loop around the arena's centre, among a few obstacles.
 
     The loop is drawn first and the obstacles kept off it, so it never needs repair: waypoint
@@ -218,44 +267,55 @@ def person(seed: int = 0, *, size_m: float = 8.0, count: int = 6, min_size_m: fl
     distance from the centre. Then each leg gets its speed and up to ``occluders`` corners a
     cylinder on their inside (``person_walk``; how many stand is ``occluders_placed`` in
     ``params``)."""
-    params: dict[str, float] = {k: v for k, v in locals().items() if k != "seed"}
-    check_count("world.person.waypoints", waypoints, 2, 20)
-    check_within("world.person.speed_m_s", speed_m_s, 0.0, 3.0)
-    check_within("world.person.size_m", size_m, 2.0, 100.0)
-    check_within("world.person.speed_spread_fraction", speed_spread_fraction, 0.0, 0.9)
-    check_count("world.person.occluders", occluders, 0, waypoints)
-    rng = rng_for(seed)
+    rng, size_m, waypoints = rng_for(seed), p.size_m, p.waypoints
     need = PERSON_RADIUS_M + PERSON_MARGIN_M
     angles = rng.uniform(0, 2 * math.pi) + 2 * math.pi * np.arange(waypoints) / waypoints
     reach = rng.uniform(0.4, 1.0, waypoints) * (size_m / 2 - need)
     loop = np.column_stack([reach * np.cos(angles), reach * np.sin(angles)])
     path = np.concatenate([a + np.linspace(0, 1, int(np.hypot(*(b - a)) / 0.05) + 2)[:, None]
                            * (b - a) for a, b in zip(loop, np.roll(loop, -1, axis=0))])
-    boxes, cylinders = _field(rng, "person", size_m, count, min_size_m, max_size_m, min_gap_m,
-                              cylinder_fraction, path, need + 0.025)  # path: 5 cm samples
-    hiding = corner_occluders(rng, loop, path, occluders, keep_off_m=need + 0.025,
-                              sizes_m=(min_size_m, max_size_m),
+    boxes, cylinders = _field(rng, p, path, need + 0.025)  # path: 5 cm samples
+    hiding = corner_occluders(rng, loop, path, p.occluders, keep_off_m=need + 0.025,
+                              sizes_m=(p.min_size_m, p.max_size_m),
                               half_size_m=size_m / 2, obstacles=(tuple(boxes), tuple(cylinders)))
-    params["occluders_placed"] = len(hiding)
-    walk = PersonSpec(tuple((float(x), float(y)) for x, y in loop), speed_m_s, PERSON_RADIUS_M,
-                      leg_speeds_m_s=leg_speeds(rng, waypoints, speed_m_s, speed_spread_fraction))
+    walk = PersonSpec(tuple((float(x), float(y)) for x, y in loop), p.speed_m_s, PERSON_RADIUS_M,
+                      leg_speeds_m_s=leg_speeds(rng, waypoints, p.speed_m_s,
+                                                p.speed_spread_fraction))
     bounds = (-size_m / 2, -size_m / 2, size_m / 2, size_m / 2)
     return WorldSpec("person", bounds, tuple(walls(bounds) + boxes), (*cylinders, *hiding),
-                     person=walk, seed=seed, params=params)
+                     person=walk, seed=seed, params=_plain(p, occluders_placed=len(hiding)))
 
 
-GENERATORS: dict[str, Callable[..., WorldSpec]] = {
-    "indoor": indoor, "obstacles": obstacles, "vineyard": vineyard, "person": person,
-}
+def _plain(p: Any, **drawn: float) -> dict[str, float]:
+    """A world's ``params``: its generator's parameters, then what it drew."""
+    return {**to_params(p), **drawn}
 
 
-def generator_params(kind: str) -> dict[str, tuple[type, Any, str]]:
-    """Each keyword parameter of generator ``kind``: (type, default, description)."""
+class Generator(NamedTuple):
+    """A world generator: its parameters (a schema dataclass with a ``KIND``) and the pure
+    function that builds its world from a seed and them."""
+
+    params: type[Any]
+    build: Callable[[int, Any], WorldSpec]
+
+
+#: Every generator, by the ``KIND`` of its parameters.
+GENERATORS: dict[str, Generator] = {g.params.KIND: g for g in (
+    Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
+    Generator(VineyardParams, vineyard), Generator(PersonParams, person))}
+
+
+def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:
+    """Generator ``kind``'s parameters: ``params`` over the defaults, typed and checked; an
+    unknown kind or name is a ``ConfigError`` with a "did you mean"."""
     if kind not in GENERATORS:
         raise unknown_key(kind, GENERATORS, where="world")
-    signature = inspect.signature(GENERATORS[kind])
-    return {p.name: (type(p.default), p.default, PARAM_DOCS[p.name])
-            for p in signature.parameters.values() if p.kind is p.KEYWORD_ONLY}
+    cls = GENERATORS[kind].params
+    names = param_names(cls)
+    for name in params or {}:
+        if name not in names:
+            raise unknown_key(name, names, where=f"world.{kind}")
+    return cls(**(params or {}))
 
 
 def make_world(kind: str, *, seed: int = 0, **params: Any) -> WorldSpec:
@@ -264,12 +324,8 @@ def make_world(kind: str, *, seed: int = 0, **params: Any) -> WorldSpec:
         if params:
             raise ConfigError(f"world: {kind!r} is an MJCF file and takes no parameters; "
                               f"got {sorted(params)}")
+        from .mjcf_world import world_from_mjcf  # MuJoCo, loaded only for a user's file
+
         return world_from_mjcf(kind)
-    known = generator_params(kind)
-    typed: dict[str, Any] = {}
-    for name, value in params.items():
-        if name not in known:
-            raise unknown_key(name, known, where=f"world.{kind}")
-        value = coerce(f"world.{kind}.{name}", param_type(known[name][0])[0], value)
-        typed[name] = value
-    return GENERATORS[kind](seed, **typed)
+    typed = world_params(kind, params)
+    return GENERATORS[kind].build(seed, typed)

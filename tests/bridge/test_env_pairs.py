@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -89,6 +90,27 @@ def test_bad_pair_options_are_refused(options: dict, message: str) -> None:
     try:
         with pytest.raises(ConfigError, match=message.replace("(", r"\(").replace(")", r"\)")):
             env.reset(seed=0, options=options)
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ({"episodes.min_distance_m": 5.0, "episodes.max_distance_m": 3.0},
+     "episodes.max_distance_m: 3.0 is invalid; expected a distance >= min_distance_m=5.0 m"),
+    ({"episodes.max_detour": 0.5}, "episodes.max_detour: 0.5 is invalid; expected a ratio >= 1"),
+])
+def test_a_bad_pair_filter_in_the_config_names_its_key(override: dict, message: str) -> None:
+    with pytest.raises(ConfigError, match="^" + re.escape(message)):
+        EnvConfig().replace(**override)
+
+
+def test_reset_options_that_unmake_the_kind_name_the_option() -> None:
+    env = NavEnv(LIDAR_CONFIG)
+    try:
+        with pytest.raises(ConfigError, match=re.escape(
+                "pair_kind 'paper': reset options: max_distance_m: 2.0 is invalid; expected a "
+                "distance >= min_distance_m=4.0 m")):
+            env.reset(seed=0, options={"pair_kind": "paper", "max_distance_m": 2.0})
     finally:
         env.close()
 

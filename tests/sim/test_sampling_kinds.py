@@ -4,6 +4,7 @@ when a path check is asked for, determinism, the plain sampler unchanged, clear 
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -11,7 +12,13 @@ import pytest
 from pic4rl_sim.errors import ConfigError, WorldError
 from pic4rl_sim.engine.paths import PathPlanner
 from pic4rl_sim.engine.robot_specs import JACKAL
-from pic4rl_sim.engine.sampling import PAIR_KINDS, PairKind, sample_pairs, sample_start_goal
+from pic4rl_sim.engine.sampling import (
+    PAIR_KINDS,
+    PairKind,
+    check_pair_filter,
+    sample_pairs,
+    sample_start_goal,
+)
 from pic4rl_sim.engine.world_spec import Box, WorldSpec
 from pic4rl_sim.engine.world_generators import make_world
 
@@ -83,3 +90,21 @@ def test_bad_filters_are_refused(kwargs: dict, key: str) -> None:
         PairKind(max_detour=0.5)
     with pytest.raises(ConfigError, match="pairs.max_distance_m"):
         PairKind(min_distance_m=4.0, max_distance_m=1.0)
+
+
+@pytest.mark.parametrize(("values", "message"), [
+    ((-1.0, 5.0, 1.2), "min_distance_m: -1.0 is invalid; expected a finite distance >= 0 m"),
+    ((math.inf, math.inf, 1.2), "min_distance_m: inf is invalid"),
+    ((4.0, 2.0, 1.2), "max_distance_m: 2.0 is invalid; expected a distance >= "
+                      "min_distance_m=4.0 m"),
+    ((1.0, math.nan, 1.2), "max_distance_m: nan is invalid"),
+    ((1.0, 5.0, 0.9), "max_detour: 0.9 is invalid; expected a ratio >= 1"),
+])
+def test_the_one_pair_filter_check_names_the_callers_key(values: tuple, message: str) -> None:
+    """Every pair filter (a kind, the sampler, the env's section and reset options, a
+    curriculum stage) goes through ``check_pair_filter``, with its own key names."""
+    for prefix in ("pairs.", "episodes.", "curriculum.", "reset options: "):
+        with pytest.raises(ConfigError, match="^" + re.escape(prefix + message)):
+            check_pair_filter(*values, prefix=prefix)
+    check_pair_filter(2.0, 2.0, 1.0, prefix="x.")  # the bounds themselves are valid
+

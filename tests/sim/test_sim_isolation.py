@@ -1,4 +1,5 @@
-"""The engine stands without ROS: rclpy only in the node's modules, never torch or SB3."""
+"""The engine stands without ROS: rclpy only in the node's modules, never torch or SB3; of the
+other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``)."""
 
 from __future__ import annotations
 
@@ -13,18 +14,23 @@ PACKAGE = REPO / "pic4rl_sim"
 ROS_PACKAGE = "node"  # pic4rl_sim/node/: the only place that may import rclpy and messages
 ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "rosgraph_msgs",
              "visualization_msgs", "rcl_interfaces", "builtin_interfaces")
-NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_metrics", "pic4rl_bridge",
-         "pic4rl_agents")
+NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_bridge", "pic4rl_agents")
+#: The one door to another pic4rl package: the lowest room's shared ``ConfigError``.
+METRICS_DOOR = "pic4rl_metrics.errors"
+
+
+def imported_modules(path: Path) -> set[str]:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module)
+    return names
 
 
 def imported_roots(path: Path) -> set[str]:
-    roots = set()
-    for node in ast.walk(ast.parse(path.read_text())):
-        if isinstance(node, ast.Import):
-            roots |= {alias.name.split(".")[0] for alias in node.names}
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            roots.add(node.module.split(".")[0])
-    return roots
+    return {name.split(".")[0] for name in imported_modules(path)}
 
 
 def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> None:
@@ -34,15 +40,19 @@ def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> N
     for path in modules:
         roots = imported_roots(path)
         assert not roots & set(NEVER), f"{path.name} imports {sorted(roots & set(NEVER))}"
+        metrics = {m for m in imported_modules(path) if m.split(".")[0] == "pic4rl_metrics"}
+        assert metrics <= {METRICS_DOOR}, f"{path.name} imports {sorted(metrics)}"
         if path.relative_to(PACKAGE).parts[0] != ROS_PACKAGE:
             ros = sorted(roots & set(ROS_ROOTS))
             assert not ros, f"{path.name} imports {ros}"
 
 
-def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None:
+def _loaded(modules: str) -> tuple[list[str], bool]:
+    """The ROS, RL and sibling modules, and whether MuJoCo, that importing ``modules`` (in a
+    fresh interpreter) loads."""
     code = (
         "import json, sys\n"
-        "import pic4rl_sim.engine.core, pic4rl_sim.params, pic4rl_sim.engine.world_generators\n"
+        f"import {modules}\n"
         f"heavy = {ROS_ROOTS + NEVER!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
         "print(json.dumps('mujoco' in sys.modules))\n"
@@ -51,5 +61,15 @@ def test_importing_the_engine_and_parameters_loads_no_ros_or_rl_module() -> None
                           text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stderr
     loaded, has_mujoco = (json.loads(line) for line in done.stdout.splitlines()[-2:])
-    assert has_mujoco is True
-    assert loaded == []
+    return loaded, has_mujoco
+
+
+def test_importing_the_engine_loads_no_ros_or_rl_module() -> None:
+    assert _loaded("pic4rl_sim.engine.core") == ([], True)
+
+
+def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
+    """A params file is read, checked and its worlds generated without MuJoCo (only a user's
+    MJCF world loads it)."""
+    assert _loaded("pic4rl_sim.params, pic4rl_sim.params_file, pic4rl_sim.schema, "
+                   "pic4rl_sim.engine.world_generators") == ([], False)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.vineyard_world import POST_OFFSET_M, vineyard
+from pic4rl_sim.engine.vineyard_world import POST_OFFSET_M
 from pic4rl_sim.engine.world_generators import make_world
 from pic4rl_sim.engine.world_spec import WorldSpec, clearance
 from pic4rl_sim.errors import ConfigError
@@ -28,7 +28,7 @@ def canopy_centres(world: WorldSpec) -> np.ndarray:
 
 
 def test_straight_rows_an_analytic_layout() -> None:
-    world = vineyard(0, rows=4, row_spacing_m=2.5, gap_prob=0.2)
+    world = make_world("vineyard", seed=0, rows=4, row_spacing_m=2.5, gap_prob=0.2)
     xy = trunks(world)
     rows = np.unique(xy[:, 1].round(9))
     assert rows == pytest.approx([-3.75, -1.25, 1.25, 3.75])
@@ -56,7 +56,7 @@ def test_straight_rows_an_analytic_layout() -> None:
 
 @pytest.mark.parametrize("radius_m", [6.0, 15.0])
 def test_curved_rows_are_concentric_arcs(radius_m: float) -> None:
-    world = vineyard(1, rows=5, row_spacing_m=2.5, row_radius_m=radius_m)
+    world = make_world("vineyard", seed=1, rows=5, row_spacing_m=2.5, row_radius_m=radius_m)
     centre = np.array([world.params["arc_center_x_m"], world.params["arc_center_y_m"]])
     r = np.hypot(*(trunks(world) - centre).T)
     k = (r - radius_m) / 2.5
@@ -76,8 +76,8 @@ def test_curved_rows_are_concentric_arcs(radius_m: float) -> None:
 
 def test_waved_rows_follow_their_sine_and_lanes_stay_centred() -> None:
     length, bend = 12.0, 0.8
-    world = vineyard(3, rows=4, row_spacing_m=2.4, row_length_m=length, bend_m=bend,
-                     gap_prob=0.0, trunk_spacing_m=0.25)
+    world = make_world("vineyard", seed=3, rows=4, row_spacing_m=2.4, row_length_m=length,
+                       bend_m=bend, gap_prob=0.0, trunk_spacing_m=0.25)
     wavelength, phase = world.params["bend_wavelength_m"], world.params["bend_phase_rad"]
     assert length <= wavelength <= 2 * length
     xy = trunks(world)
@@ -100,18 +100,20 @@ def test_waved_rows_follow_their_sine_and_lanes_stay_centred() -> None:
 
 
 def test_lane_widths_are_drawn_within_the_jitter_and_variants_differ() -> None:
-    layouts = [vineyard(v, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6, bend_m=0.5)
+    layouts = [make_world("vineyard", seed=v, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6,
+                          bend_m=0.5)
                for v in range(4)]
     widths = [[w.params[f"lane_width_{k}_m"] for k in range(5)] for w in layouts]
     assert all(1.8 <= x <= 3.0 for row in widths for x in row)
     assert np.ptp(np.array(widths)) > 0.3  # lanes of several widths
     assert len({round(w.params["bend_phase_rad"], 6) for w in layouts}) == 4
     assert len(set(layouts)) == 4  # training and test variants differ
-    straight = vineyard(2, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6)
+    straight = make_world("vineyard", seed=2, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6)
     rows = np.unique(trunks(straight)[:, 1].round(9))
     assert np.diff(rows) == pytest.approx([straight.params[f"lane_width_{k}_m"]
                                            for k in range(5)])
-    assert vineyard(2, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6) == straight
+    again = make_world("vineyard", seed=2, rows=6, row_spacing_m=2.4, spacing_jitter_m=0.6)
+    assert again == straight
 
 
 @pytest.mark.parametrize(("params", "key"), [

@@ -12,13 +12,12 @@ from pic4rl_sim.errors import ConfigError, WorldError
 from pic4rl_sim.engine.world_spec import Box, Cylinder, WorldSpec, clearance
 from pic4rl_sim.engine.world_generators import (
     GENERATORS,
-    PARAM_DOCS,
-    generator_params,
-    indoor,
+    ObstaclesParams,
     make_world,
     obstacles,
-    person,
+    world_params,
 )
+from pic4rl_sim.schema import param_names, specs, to_params
 from pic4rl_sim.engine.mjcf_world import world_from_mjcf
 
 ROBOT_RADIUS_M = 0.25
@@ -72,8 +71,8 @@ def test_same_seed_gives_the_same_world_and_other_seeds_other_worlds(kind: str) 
     assert a == b and a.params == b.params and a.seed == 3
     others = {make_world(kind, seed=s) for s in range(4, 9)}
     assert a not in others and len(others) == 5
-    assert {k: a.params[k] for k in generator_params(kind)} == {
-        k: default for k, (_, default, _) in generator_params(kind).items()}
+    assert {k: a.params[k] for k in param_names(GENERATORS[kind].params)} == to_params(
+        GENERATORS[kind].params())
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -103,7 +102,7 @@ def test_four_walls_enclose_every_obstacle(kind: str, seed: int) -> None:
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_indoor_every_room_is_reachable(seed: int) -> None:
-    world = indoor(seed)
+    world = make_world("indoor", seed=seed)
     xy, clear = grid(world)
     free = clear > ROBOT_RADIUS_M
     corridor = np.argwhere(free & (xy[..., 1] < world.bounds[1] + 1.0))[0]
@@ -136,7 +135,7 @@ def opening_width(world: WorldSpec, x: float, y: float, along_x: bool) -> float:
 @pytest.mark.parametrize(("seed", "width_m"), [(0, 0.7), (1, 0.7), (2, 0.6), (3, 0.8)])
 def test_indoor_narrow_passage_has_the_width_asked_and_a_robot_fits(seed: int,
                                                                     width_m: float) -> None:
-    world = indoor(seed, narrow_width_m=width_m)
+    world = make_world("indoor", seed=seed, narrow_width_m=width_m)
     p = world.params
     measured = opening_width(world, p["narrow_x_m"], p["narrow_y_m"], p["narrow_along_x"] == 1)
     assert 0.6 - 0.01 <= measured <= 0.8 + 0.01
@@ -147,7 +146,7 @@ def test_indoor_narrow_passage_has_the_width_asked_and_a_robot_fits(seed: int,
 
 
 def test_indoor_has_corridor_doors_and_furniture_off_the_doors() -> None:
-    world = indoor(0)
+    world = make_world("indoor", seed=0)
     furniture = [b for b in world.boxes if b.kind == "furniture"]
     assert len(furniture) >= 6
     assert all(0.4 <= b.size_x_m <= 1.2 and 0.4 <= b.size_y_m <= 1.2 for b in furniture)
@@ -163,16 +162,16 @@ def test_indoor_has_corridor_doors_and_furniture_off_the_doors() -> None:
 
 def test_indoor_rejects_bad_params() -> None:
     with pytest.raises(ConfigError, match=r"world\.indoor\.narrow_width_m: 1\.2"):
-        indoor(narrow_width_m=1.2)
+        make_world("indoor", narrow_width_m=1.2)
     with pytest.raises(ConfigError, match=r"world\.indoor\.size_x_m"):
-        indoor(rooms_x=8)
+        make_world("indoor", rooms_x=8)
     with pytest.raises(ConfigError, match=r"world\.seed"):
-        indoor(-1)
+        make_world("indoor", seed=-1)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_obstacles_keep_the_minimum_gap(seed: int) -> None:
-    world = obstacles(seed, count=25, min_gap_m=0.7)
+    world = make_world("obstacles", seed=seed, count=25, min_gap_m=0.7)
     field = [s for s in world.boxes + world.cylinders if s.kind != "wall"]
     assert len(field) == 25
     assert {type(s) for s in field} == {Box, Cylinder}
@@ -186,12 +185,12 @@ def test_obstacles_keep_the_minimum_gap(seed: int) -> None:
 
 def test_obstacles_too_many_for_the_arena_is_a_config_error() -> None:
     with pytest.raises(ConfigError, match=r"world\.obstacles\.count: 300"):
-        obstacles(count=300, min_gap_m=1.0)
+        make_world("obstacles", count=300, min_gap_m=1.0)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_person_walks_clear_of_every_obstacle(seed: int) -> None:
-    world = person(seed, waypoints=5)
+    world = make_world("person", seed=seed, waypoints=5)
     walk = world.person
     assert walk is not None and len(walk.waypoints) == 5 and walk.speed_m_s == 0.6
     need = walk.radius_m + 0.2
@@ -224,19 +223,20 @@ def _corner_sight_blocked(world, back_m: float = 2.0, ahead_m: float = 1.0) -> i
 
 @pytest.mark.parametrize("seed", range(6))
 def test_the_person_is_hidden_at_a_corner_only_with_occluders(seed: int) -> None:
-    assert _corner_sight_blocked(person(seed)) >= 1
-    assert _corner_sight_blocked(person(seed, occluders=0)) == 0
+    assert _corner_sight_blocked(make_world("person", seed=seed)) >= 1
+    assert _corner_sight_blocked(make_world("person", seed=seed, occluders=0)) == 0
 
 
 def test_person_paths_and_speeds_vary_with_the_seed() -> None:
-    worlds = [person(seed, speed_m_s=0.8, speed_spread_fraction=0.25) for seed in range(5)]
+    walk = {"speed_m_s": 0.8, "speed_spread_fraction": 0.25}
+    worlds = [make_world("person", seed=seed, **walk) for seed in range(5)]
     loops = {tuple(np.round(np.ravel(w.person.waypoints), 6)) for w in worlds}
     speeds = {w.person.leg_speeds_m_s for w in worlds}
     assert len(loops) == 5 and len(speeds) == 5
     every = np.concatenate([w.person.leg_speeds_m_s for w in worlds])
     assert every.min() >= 0.8 * 0.75 and every.max() <= 0.8 * 1.25 and every.std() > 0.05
-    assert person(3, speed_m_s=0.8, speed_spread_fraction=0.25) == worlds[3]  # the seed says it all
-    assert person(0, speed_spread_fraction=0.0).person.leg_speeds_m_s == ()
+    assert make_world("person", seed=3, **walk) == worlds[3]  # the seed says it all
+    assert make_world("person", seed=0, speed_spread_fraction=0.0).person.leg_speeds_m_s == ()
 
 
 @pytest.mark.parametrize("key, value, match", [
@@ -245,7 +245,7 @@ def test_person_paths_and_speeds_vary_with_the_seed() -> None:
 ])
 def test_bad_person_walk_parameters_are_config_errors(key, value, match) -> None:
     with pytest.raises(ConfigError, match=match):
-        person(0, **{key: value})
+        make_world("person", seed=0, **{key: value})
 
 
 MJCF = """<mujoco>
@@ -304,16 +304,26 @@ def test_make_world_suggests_close_names_and_checks_types() -> None:
         make_world("indoor", rooms_x=2.5)
     with pytest.raises(ConfigError, match=r"world\.vineyard\.rows: True"):
         make_world("vineyard", rows=True)
-    assert make_world("obstacles", seed=2, size_m=8) == obstacles(2, size_m=8.0)
+    assert make_world("obstacles", seed=2, size_m=8) == obstacles(2, ObstaclesParams(size_m=8.0))
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_generator_params_describe_every_keyword(kind: str) -> None:
-    described = generator_params(kind)
+def test_generator_params_describe_every_parameter(kind: str) -> None:
+    described = specs(GENERATORS[kind].params)
     assert described
-    for name, (kind_type, default, doc) in described.items():
-        assert kind_type in (int, float, bool) and type(default) is kind_type
-        assert doc == PARAM_DOCS[name] and doc
-        assert name.endswith(("_m", "_m_s", "_prob", "_fraction")) or kind_type is int
+    for spec in described:
+        assert type(spec.default) in (int, float) and spec.description and spec.bounds
+        assert (spec.unit != "") == spec.name.endswith(("_m", "_m_s"))
+        assert spec.check(spec.default) == spec.default
     with pytest.raises(ConfigError, match="did you mean"):
-        generator_params(kind + "x")
+        world_params(kind + "x")
+
+
+def test_world_params_are_the_only_defaults_and_check_on_construction() -> None:
+    assert world_params("obstacles") == ObstaclesParams()
+    assert world_params("person").size_m == 8.0 and ObstaclesParams().size_m == 10.0
+    with pytest.raises(ConfigError, match=r"^world\.person\.max_size_m: 0\.2 is invalid; "
+                       r"expected a value in \[0\.3, 2\.0\]$"):
+        world_params("person", {"max_size_m": 0.2})
+    with pytest.raises(ConfigError, match=r"^world\.obstacles: unknown key 'sise_m'"):
+        world_params("obstacles", {"sise_m": 3.0})
