@@ -9,17 +9,38 @@ needs no ROS, MuJoCo or torch. Typical use::
 
 from __future__ import annotations
 
-from .batch import BagResult, MetricsResult, compute, judge_bag
-from .contract import EpisodeFacts, Outcome
-from .errors import BagError, ConfigError, EpisodeError, MetricsError, TopicError
-from .geometry import Footprint
-from .derived import Derived
-from .metrics import compute_metrics
-from .reader import read_episode
-from .registry import METRICS, REGISTRY, Metric, metric
-from .results import TABLE1_COLUMNS, EpisodeMetrics
-from .series import Episode
-from .topics import TopicMap, load_topic_map
+from importlib import import_module
+from typing import Any
+
+#: Public name → the module that defines it, imported on first use (PEP 562): the sim imports
+#: ``pic4rl_metrics.errors`` alone and must not pay for pandas and rosbags.
+_HOMES = {
+    "BagResult": "batch", "MetricsResult": "batch", "compute": "batch", "judge_bag": "batch",
+    "EpisodeFacts": "contract", "Outcome": "contract",
+    "BagError": "errors", "ConfigError": "errors", "EpisodeError": "errors",
+    "MetricsError": "errors", "TopicError": "errors",
+    "Footprint": "geometry", "Derived": "derived", "compute_metrics": "metrics",
+    "read_episode": "reader",
+    "METRICS": "registry", "REGISTRY": "registry", "Metric": "registry", "metric": "registry",
+    "TABLE1_COLUMNS": "results", "EpisodeMetrics": "results", "Episode": "series",
+    "TopicMap": "topics", "load_topic_map": "topics",
+}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    if home == "registry":
+        import_module(".metrics", __name__)  # the built-in metrics register on import
+    value = getattr(import_module(f".{home}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_HOMES})
+
 
 __all__ = [
     "METRICS",
