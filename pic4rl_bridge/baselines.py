@@ -24,11 +24,12 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .config import DwaConfig, EnvConfig, TaskName
+from .config import DwaConfig, EnvConfig
 from .errors import ConfigError
 from .frame import SensorFrame
 from .robot_info import RobotInfo
 from .tasks.collision import footprint_clearance, sensed_points
+from .task_registry import TASKS
 from .tasks.goto import normalized_action
 
 if TYPE_CHECKING:
@@ -263,15 +264,12 @@ class DwaController:
         return total
 
 
-#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives.
-BASELINE_TASKS: dict[str, tuple[str, ...]] = {
-    "proportional": (TaskName.GO_TO_POSE.value,),
-    "dwa": (TaskName.GO_TO_POSE.value,),
-    "planner": (TaskName.GO_TO_POSE.value,),
-    "dwa_heading": (TaskName.PERSON_MONITORING.value,),
-    "centerline": (TaskName.VINEYARD.value,),
-    "row_follower": (TaskName.VINEYARD.value,),
-}
+#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives (each task's
+#: ``baselines`` in ``pic4rl_bridge.task_registry.TASKS``).
+BASELINE_TASKS: dict[str, tuple[str, ...]] = {}
+for _spec in TASKS.values():
+    for _name in _spec.baselines:
+        BASELINE_TASKS[_name] = (*BASELINE_TASKS.get(_name, ()), _spec.name)
 BASELINES = tuple(BASELINE_TASKS)
 
 

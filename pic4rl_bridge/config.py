@@ -49,31 +49,19 @@ from pic4rl_sim.schema import (
 )
 
 from .errors import ConfigError, require
-
-
-class TaskName(ParamEnum):
-    GO_TO_POSE = "goToPose"
-    VINEYARD = "vineyard"
-    PERSON_MONITORING = "personMonitoring"
-
-
-class PersonControl(ParamEnum):
-    """personMonitoring: ``end_to_end``: the agent gives (vx, vy, ω); ``hybrid``: DWA gives
-    (vx, vy), following the person and avoiding obstacles, and the agent only ω (Eirale et
-    al. 2022)."""
-
-    END_TO_END = "end_to_end"
-    HYBRID = "hybrid"
+from .task_registry import (
+    TASKS,
+    GoalInput,
+    PersonConfig,
+    RewardConfig,
+    TaskName,
+    VineyardConfig,
+)
 
 
 class SensorName(ParamEnum):
     LIDAR = "lidar"
     DEPTH = "depth"
-
-
-class GoalInput(ParamEnum):
-    GOAL = "goal"
-    PLAN = "plan"
 
 
 class TransportName(ParamEnum):
@@ -111,31 +99,6 @@ class DepthEncoding(ParamEnum):
 
 
 @dataclass(frozen=True)
-class RewardConfig:
-    """Reward scales; each term is reported in ``info["reward_terms"]``."""
-
-    goal: float = param(1000.0, doc="goToPose: reaching the goal (the paper's r_g)")
-    collision: float = param(-150.0, doc="every task: the collision that ends the episode (r_c)")
-    distance: float = param(1.0, doc="goToPose: times d_{t-1} - d_t (m), the paper's dense r_d")
-    heading: float = param(0.0, doc="goToPose: times (1 - 2 sqrt(|goal angle| / pi)) (the "
-                           "original code)")
-    step: float = param(0.0, doc="every task: added each step (a time penalty when < 0)")
-    proximity: float = param(0.0, doc="goToPose: times max(0, 1 - clearance / "
-                             "proximity_range_m)")
-    proximity_range_m: float = param(0.5, doc="goToPose: clearance from which proximity starts",
-                                     unit="m", range=POSITIVE)
-    progress: float = param(10.0, doc="vineyard: times the advance along the row (m)")
-    centering: float = param(1.0, doc="vineyard: times -|offset from the row's centre line| (m)")
-    row_end: float = param(100.0, doc="vineyard: reaching the row's end")
-    facing: float = param(1.0, doc="personMonitoring: times cos(angle between heading and "
-                          "person)")
-    person_distance: float = param(0.5, doc="personMonitoring: times -|distance - desired "
-                                   "distance| (m)")
-    bearing: float = param(0.0, doc="personMonitoring: times -|bearing of the person| (rad): "
-                           "sharper near 0 than facing's cos")
-
-
-@dataclass(frozen=True)
 class LidarObsConfig:
     """The LiDAR observation: ``beams`` sectors, each the minimum range in it, clipped."""
 
@@ -154,26 +117,6 @@ class DepthObsConfig:
     max_depth_m: float = param(5.0, doc="depths clipped here", unit="m", range=POSITIVE)
     encoding: DepthEncoding = param(DepthEncoding.UINT8, doc="uint8 (an image for SB3's CNN) or "
                                     "float32 (metres)")
-
-
-@dataclass(frozen=True)
-class VineyardConfig:
-    end_tolerance_m: float = param(0.5, doc="the row ends when this close to its last point "
-                                   "(along it)", unit="m", range=NON_NEGATIVE)
-    max_offset_m: float = param(0.9, doc="the row's end counts only this close to its centre "
-                                "line: farther, the robot drove down another lane (half the "
-                                "narrowest lane)", unit="m", range=POSITIVE)
-    centerline: tuple[float, ...] = param((), doc="x0, y0, x1, y1, ... (m); empty: the world's "
-                                          "lanes")
-
-
-@dataclass(frozen=True)
-class PersonConfig:
-    distance_m: float = param(2.0, doc="desired distance to the person", unit="m",
-                              range=NON_NEGATIVE)
-    control: PersonControl = param(PersonControl.END_TO_END, doc="end_to_end (the agent gives "
-                                   "vx, vy, yaw rate) | hybrid (DWA gives vx, vy following the "
-                                   "person, the agent the yaw rate)")
 
 
 @dataclass(frozen=True)
@@ -304,7 +247,7 @@ class RecordConfig:
 class EnvConfig:
     """Everything ``NavEnv`` needs besides the simulator's own parameters (``sim_params``)."""
 
-    task: TaskName = param(TaskName.GO_TO_POSE, doc="goToPose | vineyard | personMonitoring")
+    task: TaskName = param(TaskName(next(iter(TASKS))), doc=" | ".join(TASKS))
     sensor: SensorName = param(SensorName.LIDAR, doc="lidar | depth")
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
                                      "this process) | ros (topics and services)")
@@ -359,9 +302,6 @@ class EnvConfig:
             self.max_linear_m_s == 0 or self.min_linear_m_s <= self.max_linear_m_s),
             "min_linear_m_s", self.min_linear_m_s,
             f"a finite speed <= max_linear_m_s={self.max_linear_m_s}")
-        line = self.vineyard.centerline
-        require(len(line) == 0 or (len(line) >= 4 and len(line) % 2 == 0),
-                "vineyard.centerline", line, "[] or x0, y0, x1, y1, ... (two or more points)")
 
     def to_params(self) -> dict[str, Any]:
         """The flat dotted parameters of this config (``sim_params`` left out)."""

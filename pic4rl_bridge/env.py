@@ -37,6 +37,7 @@ from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .robot_info import Scenario
+from .task_registry import task_spec
 from .tasks import make_task
 from .tasks.base import EpisodeContext, Judgement
 from .transport import EpisodeRequest, RawMessage, Transport
@@ -141,7 +142,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.config = _as_config(config, {**given, **(overrides or {})}, sim or {},
                                  sim_defaults or {})
         self.scenario = Scenario(self.config)
-        world = self.scenario.world if self.config.task == "vineyard" else None
+        self._task_spec = task_spec(self.config.task)
+        world = self.scenario.world if self._task_spec.uses_world else None
         self.task = make_task(self.config, self.scenario.robot, world)
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
@@ -370,7 +372,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             shortest, straight = self._sampler.path_lengths(context.start, context.goal)
         mount = frame.scan.mount if frame.scan is not None else None  # the collision test's
         facts = EpisodeFacts(
-            agent=c.agent, task=c.task if c.task != "goToPose" else f"goToPose/{c.sensor}",
+            agent=c.agent, task=self._task_spec.fact_name(c.sensor),
             world=self.transport.world_name, robot=robot.name,
             run=self.recorder.run_dir.name if self.recorder is not None else "",
             episode=self._bag.path.name if self._bag is not None else str(self._episode),

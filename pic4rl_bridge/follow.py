@@ -16,9 +16,10 @@ import math
 import numpy as np
 
 from .baselines import DwaController
-from .config import DwaConfig, EnvConfig, PersonControl
+from .config import DwaConfig, EnvConfig
 from .frame import SensorFrame
 from .robot_info import RobotInfo
+from .task_registry import PersonControl
 from .tasks.collision import sensed_points
 from .tasks.observations import target_polar
 
