@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pic4rl_metrics.contract import STORAGES
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.interfaces import (
@@ -86,11 +87,6 @@ class CmdVelType(ParamEnum):
 class SensorQos(ParamEnum):
     BEST_EFFORT = "best_effort"
     RELIABLE = "reliable"
-
-
-class Storage(ParamEnum):
-    SQLITE3 = "sqlite3"
-    MCAP = "mcap"
 
 
 class DepthEncoding(ParamEnum):
@@ -236,7 +232,8 @@ class RecordConfig:
     enabled: bool = param(False, doc="record each episode to a bag")
     bags_dir: str = param("bags", doc="where runs of bags go")
     run: str = param("", doc="empty: <task>_<date>_<time>")
-    storage: Storage = param(Storage.SQLITE3, doc="sqlite3 | mcap")
+    storage: str = param(next(iter(STORAGES)), doc=" | ".join(STORAGES),
+                         choices=tuple(STORAGES))
     topics: tuple[str, ...] = param(RECORDED, doc="topics recorded (absent ones are "
                                     "skipped)")
     flush_interval_s: float = param(1.0, doc="sqlite3: commit this often, so a killed recorder "
