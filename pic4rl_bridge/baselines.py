@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .config import DwaConfig, EnvConfig
+from .baseline_config import BaselinesConfig, DwaConfig
+from .config import EnvConfig
 from .errors import ConfigError
 from .frame import SensorFrame
 from .robot_info import RobotInfo
@@ -274,10 +275,12 @@ BASELINES = tuple(BASELINE_TASKS)
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
-                  world: WorldSpec | None = None) -> Baseline:
+                  world: WorldSpec | None = None,
+                  settings: BaselinesConfig | None = None) -> Baseline:
     """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
-    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``);
-    ``ConfigError`` when it does not fit (before anything runs)."""
+    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``), with the
+    ``baselines:`` section's ``settings`` (defaults when ``None``); ``ConfigError`` when it
+    does not fit (before anything runs)."""
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
@@ -286,7 +289,7 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
 
         return make_row_follower(name, config, robot, world)
     if name == "dwa":
-        return DwaController(robot, config.baselines.dwa,
+        return DwaController(robot, (settings or BaselinesConfig()).dwa,
                              collision_tolerance_m=config.collision_tolerance_m)
     if name == "planner":
         if world is None:

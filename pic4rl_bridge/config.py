@@ -41,14 +41,15 @@ from pic4rl_sim.schema import (
     NON_NEGATIVE,
     POSITIVE,
     ParamEnum,
-    Range,
     check,
+    flatten,
     from_params,
     param,
     section,
     to_params,
 )
 
+from .baseline_config import PREFIX as BASELINES_PREFIX
 from .errors import ConfigError, require
 from .task_registry import (
     TASKS,
@@ -113,48 +114,6 @@ class DepthObsConfig:
     max_depth_m: float = param(5.0, doc="depths clipped here", unit="m", range=POSITIVE)
     encoding: DepthEncoding = param(DepthEncoding.UINT8, doc="uint8 (an image for SB3's CNN) or "
                                     "float32 (metres)")
-
-
-@dataclass(frozen=True)
-class DwaConfig:
-    """The Dynamic Window Approach baseline (``pic4rl_bridge.baselines.DwaController``). The
-    velocity ranges, acceleration limits, window period and footprint are the robot's."""
-
-    horizon_s: float = param(1.5, doc="each velocity sample is simulated this long", unit="s",
-                             range=POSITIVE)
-    rollout_dt_s: float = param(0.1, doc="time between the simulated poses checked against the "
-                                "scan", unit="s", range=POSITIVE)
-    linear_samples: int = param(7, doc="forward speeds sampled across the window (ends "
-                                "included)", range=Range(2, 101))
-    angular_samples: int = param(15, doc="yaw rates sampled across the window (ends included)",
-                                 range=Range(2, 101))
-    heading_weight: float = param(1.0, doc="times 1 - |target bearing| / pi, from the nearest "
-                                  "rollout pose", range=NON_NEGATIVE)
-    clearance_weight: float = param(0.4, doc="times the distance driven before a collision "
-                                    "(capped)", range=NON_NEGATIVE)
-    speed_weight: float = param(0.3, doc="times v / max_linear_m_s", range=NON_NEGATIVE)
-    clearance_cap_m: float = param(0.6, doc="a rollout free of collisions scores this distance",
-                                   unit="m", range=POSITIVE)
-    lookahead_m: float = param(2.0, doc="the target is the goal if a lane is free this far, else "
-                               "along the free lane nearest the goal's bearing", unit="m",
-                               range=POSITIVE)
-    safety_margin_m: float = param(0.05, doc="beyond collision_tolerance_m: closer poses are "
-                                   "collisions", unit="m", range=NON_NEGATIVE)
-    point_resolution_m: float = param(0.05, doc="scan points merged on a grid this fine",
-                                      unit="m", range=POSITIVE)
-
-    def __post_init__(self) -> None:
-        check(self, "baselines.dwa.")
-        require(self.rollout_dt_s <= self.horizon_s, "baselines.dwa.rollout_dt_s",
-                self.rollout_dt_s, f"at most horizon_s={self.horizon_s}")
-
-
-@dataclass(frozen=True)
-class BaselinesConfig:
-    """The classical controllers ``pic4rl-test --baseline`` runs; ``dwa`` also plans the
-    translation of a hybrid personMonitoring (``person.control: hybrid``)."""
-
-    dwa: DwaConfig = section(DwaConfig)
 
 
 @dataclass(frozen=True)
@@ -289,7 +248,6 @@ class EnvConfig:
     topics: TopicsConfig = section(TopicsConfig)
     ros: RosConfig = section(RosConfig)
     record: RecordConfig = section(RecordConfig)
-    baselines: BaselinesConfig = section(BaselinesConfig)
     #: The sim node's parameters (the ``sim`` section), checked by pic4rl_sim when used.
     sim_params: Mapping[str, Any] = field(default_factory=dict, compare=False)
 
@@ -313,6 +271,12 @@ class EnvConfig:
 def env_config_from_params(params: Mapping[str, Any], *,
                            sim_params: Mapping[str, Any] | None = None) -> EnvConfig:
     """An ``EnvConfig`` from dotted (or nested) parameters; unknown keys are errors."""
+    moved = sorted(k for k in flatten(params) if k.startswith(BASELINES_PREFIX))
+    if moved:
+        raise ConfigError(f"{ENV_NODE} parameters: {moved[0]!r} is no env parameter: baseline "
+                          f"settings are the params file's '{BASELINES_PREFIX[:-1]}:' section "
+                          f"({moved[0][len(BASELINES_PREFIX):]}); the person follower's DWA is "
+                          "person.dwa.*")
     config = from_params(EnvConfig, params, where=f"{ENV_NODE} parameters")
     return dataclasses.replace(config, sim_params=dict(sim_params or {}))
 

@@ -18,8 +18,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param
+from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
+from .baseline_config import DwaConfig
 from .errors import ConfigError, require
 
 
@@ -106,6 +107,11 @@ class PersonConfig:
     control: PersonControl = param(PersonControl.END_TO_END, doc="end_to_end (the agent gives "
                                    "vx, vy, yaw rate) | hybrid (DWA gives vx, vy following the "
                                    "person, the agent the yaw rate)")
+    dwa: DwaConfig = section(DwaConfig, "The DWA that follows the person: the translation of "
+                             "a hybrid env, and the dwa_heading baseline's")
+
+    def __post_init__(self) -> None:
+        self.dwa.check_as("person.dwa.")
 
 
 # -- the registry ------------------------------------------------------------------------------

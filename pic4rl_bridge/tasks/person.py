@@ -44,7 +44,7 @@ class PersonMonitoringTask(Task):
         if config.person.control == PersonControl.HYBRID.value:
             from ..follow import PersonFollower
 
-            self.follower = PersonFollower(robot, config.baselines.dwa,
+            self.follower = PersonFollower(robot, config.person.dwa,
                                            distance_m=config.person.distance_m,
                                            collision_tolerance_m=config.collision_tolerance_m)
         size = 1 if self.follower is not None else 3
