@@ -146,6 +146,12 @@ class TaskSpec:
     uses_world: bool = False
     per_sensor: bool = False
 
+    def __post_init__(self) -> None:
+        for env in self.env_ids:
+            if env.sensor not in self.sensors:
+                raise ConfigError(f"task {self.name!r}: id {env.id!r} observes through "
+                                  f"{env.sensor!r}; expected one of {', '.join(self.sensors)}")
+
     def make(self, config: Any, robot: Any, world: Any) -> Any:
         """The task for ``config`` (its code imported now, not at registration)."""
         module, _, attr = self.build.partition(":")

@@ -66,6 +66,13 @@ def test_an_entry_alone_adds_an_id(monkeypatch):
     assert isinstance(task, GoToPoseDepth) and task.required == {"goal", "depth"}
 
 
+def test_an_entrys_ids_observe_through_its_sensors():
+    with pytest.raises(ConfigError, match=r"task 'toy': id 'pic4rl/Toy-v0' observes through "
+                                          r"'lidar'; expected one of depth"):
+        TaskSpec("toy", (EnvId("pic4rl/Toy-v0", "lidar"),), sensors=("depth",),
+                 reward=VineyardReward, build="pic4rl_bridge.tasks.vineyard:build")
+
+
 def test_the_task_choice_is_the_registry():
     assert [t.value for t in TaskName] == ["goToPose", "vineyard", "personMonitoring"]
     with pytest.raises(ConfigError, match=r"task: 'toy' is invalid; expected one of goToPose, "
