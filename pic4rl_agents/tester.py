@@ -40,6 +40,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pic4rl_bridge.baseline_config import PREFIX as BASELINES_PREFIX
+from pic4rl_bridge.baseline_config import baselines_config_from_params
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
@@ -91,7 +93,7 @@ class Policy:
             from pic4rl_bridge.baselines import make_baseline
 
             self.controller = make_baseline(spec.baseline, env.config, env.scenario.robot,
-                                            env.scenario.world)
+                                            env.scenario.world, spec.settings)
 
     def begin(self) -> None:
         if self.controller is not None:
@@ -187,7 +189,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pic4rl-test", description=__doc__.split("\n\n")[0],
         epilog="ROS arguments after --ros-args: --params-file FILE (applied over each agent's "
-               "config), -p key:=value (env keys).")
+               "config), -p key:=value (env keys; baselines.* keys: the baselines: section's).")
     parser.add_argument("--agent", action="append", default=[], metavar="[NAME=]PATH",
                         help="a run/checkpoint directory or model .zip (repeatable)")
     parser.add_argument("--baseline", action="append", default=[], choices=BASELINES,
@@ -218,18 +220,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
     """The plan of a ``pic4rl-test`` command line: its parsed arguments and ROS arguments."""
+    env_params = {k: v for k, v in ros.params.items() if not k.startswith(BASELINES_PREFIX)}
+    baseline_params = {k[len(BASELINES_PREFIX):]: v for k, v in ros.params.items()
+                       if k.startswith(BASELINES_PREFIX)}
+    try:
+        baselines_config_from_params(baseline_params)
+    except ConfigError as err:
+        raise ConfigError(f"-p parameters: {err}") from err
     return TestPlan(
         agents=tuple(args.agent), baselines=tuple(args.baseline), algorithm=args.algorithm or "",
         episodes=args.episodes, random=args.random, pairs=args.pairs, seed=args.seed,
         bags_dir=Path(args.bags_dir), run=args.run, params_files=tuple(ros.params_files),
         env_overrides={
-            **check_overrides(ENV_NODE, ros.params, where="-p parameters"),
+            **check_overrides(ENV_NODE, env_params, where="-p parameters"),
             **check_overrides(ENV_NODE, parse_overrides(args.env_kwargs, flag="--env-kwargs"),
                               where="--env-kwargs")},
         sim_overrides=check_overrides(SIM_NODE, parse_overrides(args.sim_kwargs,
                                                                 flag="--sim-kwargs"),
                                       where="--sim-kwargs"),
-        with_std=args.with_std, video=args.video, progress=not args.no_progress)
+        baseline_overrides=baseline_params, with_std=args.with_std, video=args.video,
+        progress=not args.no_progress)
 
 
 def _hint_env(plan: TestPlan | None) -> EnvConfig | None:

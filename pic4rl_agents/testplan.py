@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from pic4rl_bridge.baseline_config import BaselinesConfig, load_baselines_config
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
@@ -41,6 +42,7 @@ class TestPlan:
     params_files: tuple[str, ...] = ()  # applied over each agent's config
     env_overrides: Mapping[str, Any] = field(default_factory=dict)
     sim_overrides: Mapping[str, Any] = field(default_factory=dict)
+    baseline_overrides: Mapping[str, Any] = field(default_factory=dict)  # dwa.horizon_s, ...
     with_std: bool = False  # mean ± std cells in table.md
     video: bool = False  # an MP4 per episode beside its bag (episode_NNNN.mp4)
     progress: bool = True
@@ -65,6 +67,7 @@ class AgentSpec:
     baseline: str = ""
     episode_set: str = ""  # its test episodes, in words
     trained: str = ""  # a model's training config, in words (``RunConfig.origin``)
+    settings: BaselinesConfig | None = None  # a baseline's: the baselines: section
 
 
 def _agent_files(path: Path) -> tuple[Path, Path | None]:
@@ -132,7 +135,8 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec]) -> AgentSp
         raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
                           "or --ros-args --params-file FILE")
     check_fits(baseline, run.env)  # before any run directory or bag exists
-    return AgentSpec(baseline, run, baseline=baseline)
+    settings = load_baselines_config(plan.params_files, plan.baseline_overrides)
+    return AgentSpec(baseline, run, baseline=baseline, settings=settings)
 
 
 def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:

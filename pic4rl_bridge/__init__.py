@@ -9,17 +9,12 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
+from .task_registry import env_ids
+
 _ENTRY_POINT = "pic4rl_bridge.env:NavEnv"
-#: id → its task and sensor, and sim parameters for keys a config's sim section leaves unset.
-ENV_IDS = {
-    "pic4rl/GoToPoseLidar-v0": {"task": "goToPose", "sensor": "lidar"},
-    "pic4rl/GoToPoseDepth-v0": {"task": "goToPose", "sensor": "depth",
-                                "sim_defaults": {"depth.enabled": True}},
-    "pic4rl/Vineyard-v0": {"task": "vineyard", "sensor": "depth",
-                           "sim_defaults": {"world": "vineyard", "depth.enabled": True}},
-    "pic4rl/PersonMonitoring-v0": {"task": "personMonitoring", "sensor": "lidar",
-                                   "sim_defaults": {"robot": "omni", "world": "person"}},
-}
+#: id → its task and sensor, and sim parameters for keys a config's sim section leaves unset
+#: (each task's entry in ``pic4rl_bridge.task_registry.TASKS``).
+ENV_IDS = env_ids()
 
 for _id, _kwargs in ENV_IDS.items():
     if _id not in registry:

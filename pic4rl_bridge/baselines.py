@@ -24,11 +24,13 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .config import DwaConfig, EnvConfig, TaskName
+from .baseline_config import BaselinesConfig, DwaConfig
+from .config import EnvConfig
 from .errors import ConfigError
 from .frame import SensorFrame
 from .robot_info import RobotInfo
 from .tasks.collision import footprint_clearance, sensed_points
+from .task_registry import TASKS
 from .tasks.goto import normalized_action
 
 if TYPE_CHECKING:
@@ -263,23 +265,22 @@ class DwaController:
         return total
 
 
-#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives.
-BASELINE_TASKS: dict[str, tuple[str, ...]] = {
-    "proportional": (TaskName.GO_TO_POSE.value,),
-    "dwa": (TaskName.GO_TO_POSE.value,),
-    "planner": (TaskName.GO_TO_POSE.value,),
-    "dwa_heading": (TaskName.PERSON_MONITORING.value,),
-    "centerline": (TaskName.VINEYARD.value,),
-    "row_follower": (TaskName.VINEYARD.value,),
-}
+#: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives (each task's
+#: ``baselines`` in ``pic4rl_bridge.task_registry.TASKS``).
+BASELINE_TASKS: dict[str, tuple[str, ...]] = {}
+for _spec in TASKS.values():
+    for _name in _spec.baselines:
+        BASELINE_TASKS[_name] = (*BASELINE_TASKS.get(_name, ()), _spec.name)
 BASELINES = tuple(BASELINE_TASKS)
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
-                  world: WorldSpec | None = None) -> Baseline:
+                  world: WorldSpec | None = None,
+                  settings: BaselinesConfig | None = None) -> Baseline:
     """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
-    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``);
-    ``ConfigError`` when it does not fit (before anything runs)."""
+    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``), with the
+    ``baselines:`` section's ``settings`` (defaults when ``None``); ``ConfigError`` when it
+    does not fit (before anything runs)."""
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
@@ -288,7 +289,7 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
 
         return make_row_follower(name, config, robot, world)
     if name == "dwa":
-        return DwaController(robot, config.baselines.dwa,
+        return DwaController(robot, (settings or BaselinesConfig()).dwa,
                              collision_tolerance_m=config.collision_tolerance_m)
     if name == "planner":
         if world is None:

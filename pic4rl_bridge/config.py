@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pic4rl_metrics.contract import STORAGES
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.interfaces import (
@@ -40,40 +41,29 @@ from pic4rl_sim.schema import (
     NON_NEGATIVE,
     POSITIVE,
     ParamEnum,
-    Range,
     check,
+    flatten,
     from_params,
     param,
     section,
     to_params,
 )
 
+from .baseline_config import PREFIX as BASELINES_PREFIX
 from .errors import ConfigError, require
-
-
-class TaskName(ParamEnum):
-    GO_TO_POSE = "goToPose"
-    VINEYARD = "vineyard"
-    PERSON_MONITORING = "personMonitoring"
-
-
-class PersonControl(ParamEnum):
-    """personMonitoring: ``end_to_end``: the agent gives (vx, vy, ω); ``hybrid``: DWA gives
-    (vx, vy), following the person and avoiding obstacles, and the agent only ω (Eirale et
-    al. 2022)."""
-
-    END_TO_END = "end_to_end"
-    HYBRID = "hybrid"
+from .task_registry import (
+    TASKS,
+    GoalInput,
+    PersonConfig,
+    RewardConfig,
+    TaskName,
+    VineyardConfig,
+)
 
 
 class SensorName(ParamEnum):
     LIDAR = "lidar"
     DEPTH = "depth"
-
-
-class GoalInput(ParamEnum):
-    GOAL = "goal"
-    PLAN = "plan"
 
 
 class TransportName(ParamEnum):
@@ -100,39 +90,9 @@ class SensorQos(ParamEnum):
     RELIABLE = "reliable"
 
 
-class Storage(ParamEnum):
-    SQLITE3 = "sqlite3"
-    MCAP = "mcap"
-
-
 class DepthEncoding(ParamEnum):
     UINT8 = "uint8"
     FLOAT32 = "float32"
-
-
-@dataclass(frozen=True)
-class RewardConfig:
-    """Reward scales; each term is reported in ``info["reward_terms"]``."""
-
-    goal: float = param(1000.0, doc="goToPose: reaching the goal (the paper's r_g)")
-    collision: float = param(-150.0, doc="every task: the collision that ends the episode (r_c)")
-    distance: float = param(1.0, doc="goToPose: times d_{t-1} - d_t (m), the paper's dense r_d")
-    heading: float = param(0.0, doc="goToPose: times (1 - 2 sqrt(|goal angle| / pi)) (the "
-                           "original code)")
-    step: float = param(0.0, doc="every task: added each step (a time penalty when < 0)")
-    proximity: float = param(0.0, doc="goToPose: times max(0, 1 - clearance / "
-                             "proximity_range_m)")
-    proximity_range_m: float = param(0.5, doc="goToPose: clearance from which proximity starts",
-                                     unit="m", range=POSITIVE)
-    progress: float = param(10.0, doc="vineyard: times the advance along the row (m)")
-    centering: float = param(1.0, doc="vineyard: times -|offset from the row's centre line| (m)")
-    row_end: float = param(100.0, doc="vineyard: reaching the row's end")
-    facing: float = param(1.0, doc="personMonitoring: times cos(angle between heading and "
-                          "person)")
-    person_distance: float = param(0.5, doc="personMonitoring: times -|distance - desired "
-                                   "distance| (m)")
-    bearing: float = param(0.0, doc="personMonitoring: times -|bearing of the person| (rad): "
-                           "sharper near 0 than facing's cos")
 
 
 @dataclass(frozen=True)
@@ -154,68 +114,6 @@ class DepthObsConfig:
     max_depth_m: float = param(5.0, doc="depths clipped here", unit="m", range=POSITIVE)
     encoding: DepthEncoding = param(DepthEncoding.UINT8, doc="uint8 (an image for SB3's CNN) or "
                                     "float32 (metres)")
-
-
-@dataclass(frozen=True)
-class VineyardConfig:
-    end_tolerance_m: float = param(0.5, doc="the row ends when this close to its last point "
-                                   "(along it)", unit="m", range=NON_NEGATIVE)
-    max_offset_m: float = param(0.9, doc="the row's end counts only this close to its centre "
-                                "line: farther, the robot drove down another lane (half the "
-                                "narrowest lane)", unit="m", range=POSITIVE)
-    centerline: tuple[float, ...] = param((), doc="x0, y0, x1, y1, ... (m); empty: the world's "
-                                          "lanes")
-
-
-@dataclass(frozen=True)
-class PersonConfig:
-    distance_m: float = param(2.0, doc="desired distance to the person", unit="m",
-                              range=NON_NEGATIVE)
-    control: PersonControl = param(PersonControl.END_TO_END, doc="end_to_end (the agent gives "
-                                   "vx, vy, yaw rate) | hybrid (DWA gives vx, vy following the "
-                                   "person, the agent the yaw rate)")
-
-
-@dataclass(frozen=True)
-class DwaConfig:
-    """The Dynamic Window Approach baseline (``pic4rl_bridge.baselines.DwaController``). The
-    velocity ranges, acceleration limits, window period and footprint are the robot's."""
-
-    horizon_s: float = param(1.5, doc="each velocity sample is simulated this long", unit="s",
-                             range=POSITIVE)
-    rollout_dt_s: float = param(0.1, doc="time between the simulated poses checked against the "
-                                "scan", unit="s", range=POSITIVE)
-    linear_samples: int = param(7, doc="forward speeds sampled across the window (ends "
-                                "included)", range=Range(2, 101))
-    angular_samples: int = param(15, doc="yaw rates sampled across the window (ends included)",
-                                 range=Range(2, 101))
-    heading_weight: float = param(1.0, doc="times 1 - |target bearing| / pi, from the nearest "
-                                  "rollout pose", range=NON_NEGATIVE)
-    clearance_weight: float = param(0.4, doc="times the distance driven before a collision "
-                                    "(capped)", range=NON_NEGATIVE)
-    speed_weight: float = param(0.3, doc="times v / max_linear_m_s", range=NON_NEGATIVE)
-    clearance_cap_m: float = param(0.6, doc="a rollout free of collisions scores this distance",
-                                   unit="m", range=POSITIVE)
-    lookahead_m: float = param(2.0, doc="the target is the goal if a lane is free this far, else "
-                               "along the free lane nearest the goal's bearing", unit="m",
-                               range=POSITIVE)
-    safety_margin_m: float = param(0.05, doc="beyond collision_tolerance_m: closer poses are "
-                                   "collisions", unit="m", range=NON_NEGATIVE)
-    point_resolution_m: float = param(0.05, doc="scan points merged on a grid this fine",
-                                      unit="m", range=POSITIVE)
-
-    def __post_init__(self) -> None:
-        check(self, "baselines.dwa.")
-        require(self.rollout_dt_s <= self.horizon_s, "baselines.dwa.rollout_dt_s",
-                self.rollout_dt_s, f"at most horizon_s={self.horizon_s}")
-
-
-@dataclass(frozen=True)
-class BaselinesConfig:
-    """The classical controllers ``pic4rl-test --baseline`` runs; ``dwa`` also plans the
-    translation of a hybrid personMonitoring (``person.control: hybrid``)."""
-
-    dwa: DwaConfig = section(DwaConfig)
 
 
 @dataclass(frozen=True)
@@ -293,7 +191,8 @@ class RecordConfig:
     enabled: bool = param(False, doc="record each episode to a bag")
     bags_dir: str = param("bags", doc="where runs of bags go")
     run: str = param("", doc="empty: <task>_<date>_<time>")
-    storage: Storage = param(Storage.SQLITE3, doc="sqlite3 | mcap")
+    storage: str = param(next(iter(STORAGES)), doc=" | ".join(STORAGES),
+                         choices=tuple(STORAGES))
     topics: tuple[str, ...] = param(RECORDED, doc="topics recorded (absent ones are "
                                     "skipped)")
     flush_interval_s: float = param(1.0, doc="sqlite3: commit this often, so a killed recorder "
@@ -304,7 +203,7 @@ class RecordConfig:
 class EnvConfig:
     """Everything ``NavEnv`` needs besides the simulator's own parameters (``sim_params``)."""
 
-    task: TaskName = param(TaskName.GO_TO_POSE, doc="goToPose | vineyard | personMonitoring")
+    task: TaskName = param(TaskName(next(iter(TASKS))), doc=" | ".join(TASKS))
     sensor: SensorName = param(SensorName.LIDAR, doc="lidar | depth")
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
                                      "this process) | ros (topics and services)")
@@ -349,7 +248,6 @@ class EnvConfig:
     topics: TopicsConfig = section(TopicsConfig)
     ros: RosConfig = section(RosConfig)
     record: RecordConfig = section(RecordConfig)
-    baselines: BaselinesConfig = section(BaselinesConfig)
     #: The sim node's parameters (the ``sim`` section), checked by pic4rl_sim when used.
     sim_params: Mapping[str, Any] = field(default_factory=dict, compare=False)
 
@@ -359,9 +257,6 @@ class EnvConfig:
             self.max_linear_m_s == 0 or self.min_linear_m_s <= self.max_linear_m_s),
             "min_linear_m_s", self.min_linear_m_s,
             f"a finite speed <= max_linear_m_s={self.max_linear_m_s}")
-        line = self.vineyard.centerline
-        require(len(line) == 0 or (len(line) >= 4 and len(line) % 2 == 0),
-                "vineyard.centerline", line, "[] or x0, y0, x1, y1, ... (two or more points)")
 
     def to_params(self) -> dict[str, Any]:
         """The flat dotted parameters of this config (``sim_params`` left out)."""
@@ -376,6 +271,12 @@ class EnvConfig:
 def env_config_from_params(params: Mapping[str, Any], *,
                            sim_params: Mapping[str, Any] | None = None) -> EnvConfig:
     """An ``EnvConfig`` from dotted (or nested) parameters; unknown keys are errors."""
+    moved = sorted(k for k in flatten(params) if k.startswith(BASELINES_PREFIX))
+    if moved:
+        raise ConfigError(f"{ENV_NODE} parameters: {moved[0]!r} is no env parameter: baseline "
+                          f"settings are the params file's '{BASELINES_PREFIX[:-1]}:' section "
+                          f"({moved[0][len(BASELINES_PREFIX):]}); the person follower's DWA is "
+                          "person.dwa.*")
     config = from_params(EnvConfig, params, where=f"{ENV_NODE} parameters")
     return dataclasses.replace(config, sim_params=dict(sim_params or {}))
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -26,8 +25,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.geometry import Footprint, Mount
+from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
@@ -35,11 +33,12 @@ from .config import EnvConfig, TransportName, env_config_from_params, load_env_c
 from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
-from .recorder import EpisodeBag, RunRecorder
+from .env_recording import EnvRecording, episode_facts
 from .robot_info import Scenario
+from .task_registry import task_spec
 from .tasks import make_task
-from .tasks.base import EpisodeContext, Judgement
-from .transport import EpisodeRequest, RawMessage, Transport
+from .tasks.base import EpisodeContext
+from .transport import EpisodeRequest, Transport
 
 log = logging.getLogger(__name__)
 
@@ -141,7 +140,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.config = _as_config(config, {**given, **(overrides or {})}, sim or {},
                                  sim_defaults or {})
         self.scenario = Scenario(self.config)
-        world = self.scenario.world if self.config.task == "vineyard" else None
+        self._task_spec = task_spec(self.config.task)
+        world = self.scenario.world if self._task_spec.uses_world else None
         self.task = make_task(self.config, self.scenario.robot, world)
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
@@ -164,25 +164,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.transport = self._make_transport(frozenset(sensors), node)
         self.metadata = {**self.metadata,
                          "render_fps": round(1.0 / self.scenario.robot.control_dt_s, 6)}
-        self._view = None
-        if render_mode is not None:
-            from .render import make_view
-
-            try:
-                self._view = make_view(render_view, self.scenario, self.transport,
-                                       self.config.goal_tolerance_m, depth="depth" in sensors)
-            except BaseException:
-                self.transport.close()
-                raise
-        self.recorder: RunRecorder | None = None
-        if self.config.record.enabled:
-            rec = self.config.record
-            run = rec.run or f"{self.config.task}_{time.strftime('%Y%m%d-%H%M%S')}"
-            self.recorder = RunRecorder(Path(rec.bags_dir), run, storage=rec.storage,
-                                        flush_interval_s=rec.flush_interval_s,
-                                        config=self._run_config())
+        self._view = self._make_view(render_view, sensors) if render_mode is not None else None
+        self._recording = EnvRecording(self.config) if self.config.record.enabled else None
         self._episode = 0
-        self._bag: EpisodeBag | None = None
         self._facts = EpisodeFacts()
         self._frame: SensorFrame | None = None
         self._context: EpisodeContext | None = None
@@ -201,11 +185,15 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
         return InProcessTransport(self.config, self.scenario, sensors)
 
-    def _run_config(self) -> dict[str, Any]:
-        """The run's config as a params file: loads back with ``load_env_config``."""
-        sim = dict(self.config.sim_params)
-        return {"sim": {"ros__parameters": sim},
-                "nav_env": {"ros__parameters": self.config.to_params()}}
+    def _make_view(self, view: str, sensors: set[str]) -> Any:
+        from .render import make_view
+
+        try:
+            return make_view(view, self.scenario, self.transport, self.config.goal_tolerance_m,
+                             depth="depth" in sensors)
+        except BaseException:
+            self.transport.close()
+            raise
 
     @property
     def frame(self) -> SensorFrame | None:
@@ -234,19 +222,15 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         kind = self._kind if "pairs" not in given else self._pair_kind(given["pairs"])
         if "pairs" in given:  # the drawn pair replaces the schedule's
             request = EpisodeRequest(request.seed)
-        held: list[RawMessage] = []  # the reset's messages, for a bag opened once it succeeds
-        if self.recorder is not None:
-            self.transport.tap = held.append
+        recording = self._recording
+        held = recording.hold(self.transport) if recording is not None else []
         try:
             frame = self._start(request, kind,
                                 redraw="start" not in given and "goal" not in given)
         finally:
             self.transport.tap = None
-        if self.recorder is not None:
-            self._bag = self.recorder.begin(qos=self.transport.offered_qos)
-            for raw in held:
-                self._bag.write(raw)
-            self.transport.tap = self._bag.write
+        if recording is not None:
+            recording.open(self.transport, held)
         self._frame, self._context = frame, self.task.begin(frame)
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = self._steps = 0
@@ -254,8 +238,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._facts = self._episode_facts(frame, self._context, self._seed_used)
         if self._view is not None:
             self._view.begin(frame, self._context)
-        if self._bag is not None:
-            self._bag.facts(self._facts, frame.stamp_ns)
+        if recording is not None and recording.bag is not None:
+            recording.bag.facts(self._facts, frame.stamp_ns)
         self._episode += 1
         obs = self.task.observe(frame, self._context, self._last_action)
         info = {"episode": self._episode - 1, "seed": self._seed_used,
@@ -319,7 +303,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         outcome = judgement.outcome or (Outcome.DIVERGED if fault is not None
                                         else Outcome.TIMEOUT if truncated else None)
         obs = self.task.observe(frame, self._context, action)
-        info = self._info(judgement, frame, outcome)
+        info = judgement.info(self._steps, outcome)
         if fault is not None:
             info["reason"] = fault
             log.error("episode %d ended: %s", self._episode - 1, fault)
@@ -327,18 +311,6 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             self._done = True
             self._end_bag(outcome)
         return obs, judgement.reward, terminated, truncated, info
-
-    def _info(self, judgement: Judgement, frame: SensorFrame,
-              outcome: Outcome | None) -> dict[str, Any]:
-        info: dict[str, Any] = {
-            "reward_terms": dict(judgement.terms), "collision": judgement.collision,
-            "warning": judgement.warning, "min_obstacle_m": judgement.min_obstacle_m,
-            "step": self._steps,
-        }
-        if outcome is not None:
-            info["outcome"] = outcome.value
-            info["is_success"] = outcome is Outcome.GOAL  # SB3 logs the success rate from it
-        return info
 
     def render(self) -> np.ndarray | None:
         """The picture of the current step (``render_mode="rgb_array"``), else None."""
@@ -361,42 +333,13 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     def _episode_facts(self, frame: SensorFrame, context: EpisodeContext,
                        seed: int) -> EpisodeFacts:
-        """The episode's bag facts. The env's ``warning_tolerance_m`` (closer is unsafe) is the
-        contract's ``safety_margin_m``; the task's facts are decoded by the contract."""
-        robot, c = self.scenario.robot, self.config
-        fp = robot.footprint
-        shortest = straight = None
-        if context.goal is not None and self._sampler is not None and self._bag is not None:
-            shortest, straight = self._sampler.path_lengths(context.start, context.goal)
-        mount = frame.scan.mount if frame.scan is not None else None  # the collision test's
-        facts = EpisodeFacts(
-            agent=c.agent, task=c.task if c.task != "goToPose" else f"goToPose/{c.sensor}",
-            world=self.transport.world_name, robot=robot.name,
-            run=self.recorder.run_dir.name if self.recorder is not None else "",
-            episode=self._bag.path.name if self._bag is not None else str(self._episode),
-            seed=seed,
-            footprint=(Footprint(radius_m=fp.radius_m) if fp.radius_m is not None
-                       else Footprint(length_m=fp.length_m, width_m=fp.width_m)),
-            start=tuple(context.start),
-            goal=context.goal,
-            goal_tolerance_m=c.goal_tolerance_m, collision_tolerance_m=c.collision_tolerance_m,
-            safety_margin_m=c.warning_tolerance_m, max_speed_mps=robot.max_linear_m_s,
-            shortest_path_m=shortest, straight_line_m=straight,
-            scan_mount=None if mount is None else Mount(mount.x, mount.y, mount.yaw),
-            time_budget_s=c.episode_max_steps * robot.control_dt_s,
-        )
-        task_facts, given = parse_facts(self.task.facts(context), source=f"task {c.task}")
-        return facts.merged(task_facts, given=given)
+        return episode_facts(
+            self.config, self.scenario.robot, frame, context, seed=seed,
+            task=self._task_spec.fact_name(self.config.sensor), world=self.transport.world_name,
+            recording=self._recording, index=self._episode, sampler=self._sampler,
+            task_facts=self.task.facts(context))
 
     def _end_bag(self, outcome: Outcome | None) -> None:
-        """Close the episode's bag: with its outcome, or, cut short, without one."""
-        bag, self._bag = self._bag, None
-        if bag is None:
-            return
-        self.transport.flush()
-        self.transport.tap = None
-        if outcome is None:
-            bag.abort()
-        else:
+        if getattr(self, "_recording", None) is not None:
             stamp = self._frame.stamp_ns if self._frame is not None else 0
-            bag.close(outcome, stamp)
+            self._recording.end(self.transport, outcome, stamp)

@@ -16,9 +16,11 @@ import math
 import numpy as np
 
 from .baselines import DwaController
-from .config import DwaConfig, EnvConfig, PersonControl
+from .baseline_config import DwaConfig
+from .config import EnvConfig
 from .frame import SensorFrame
 from .robot_info import RobotInfo
+from .task_registry import PersonControl
 from .tasks.collision import sensed_points
 from .tasks.observations import target_polar
 
@@ -111,7 +113,7 @@ class HeadingController:
         self.gain = gain
         self.hybrid = config.person.control == PersonControl.HYBRID.value
         self.follower = None if self.hybrid else PersonFollower(
-            robot, config.baselines.dwa, distance_m=config.person.distance_m,
+            robot, config.person.dwa, distance_m=config.person.distance_m,
             collision_tolerance_m=config.collision_tolerance_m)
 
     def reset(self) -> None:

@@ -164,20 +164,22 @@ class WorldChoice:
 
 @dataclass(frozen=True)
 class ClockConfig:
-    """How sim time advances; these apply at once, the rest of the config at ``reset_world``."""
+    """How sim time advances; these apply at once, the rest of the config at ``reset_world``.
+    Built from ``SimParams`` (``build_clock``), whose fields hold the defaults."""
 
-    mode: ClockMode = ClockMode.LOCKSTEP
-    real_time_factor: float = 1.0
-    cmd_timeout_s: float = 0.5
+    mode: ClockMode
+    real_time_factor: float
+    cmd_timeout_s: float
 
 
 @dataclass(frozen=True)
 class EpisodeConfig:
-    """The next episode's seed, and its start and goal (``None``: sampled)."""
+    """The next episode's seed, and its start and goal (``None``: sampled); built from
+    ``SimParams``, whose fields hold the defaults."""
 
-    seed: int = 0
-    start: Pose2D | None = None
-    goal: tuple[float, float] | None = None
+    seed: int
+    start: Pose2D | None
+    goal: tuple[float, float] | None
 
 
 @dataclass(frozen=True)

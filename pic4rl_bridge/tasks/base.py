@@ -54,6 +54,18 @@ class Judgement:
     def reward(self) -> float:
         return float(sum(self.terms.values()))
 
+    def info(self, step: int, outcome: Outcome | None) -> dict[str, Any]:
+        """The env's ``info`` for this step (``step`` of the episode), with the episode's
+        ``outcome`` once it ends; ``is_success`` is how SB3 logs the success rate."""
+        info: dict[str, Any] = {
+            "reward_terms": dict(self.terms), "collision": self.collision,
+            "warning": self.warning, "min_obstacle_m": self.min_obstacle_m, "step": step,
+        }
+        if outcome is not None:
+            info["outcome"] = outcome.value
+            info["is_success"] = outcome is Outcome.GOAL
+        return info
+
 
 class Task(ABC):
     """A navigation task over a robot (and, in simulation, a known world)."""

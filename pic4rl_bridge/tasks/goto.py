@@ -22,9 +22,10 @@ from pic4rl_metrics.contract import Outcome
 from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import Twist2D, point_along
 
-from ..config import EnvConfig, GoalInput
+from ..config import EnvConfig
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..task_registry import GoalInput, GoToPoseReward
 from .base import EpisodeContext, Judgement, Task
 from .collision import assess
 from .observations import (
@@ -113,7 +114,8 @@ class _GoToPose(Task):
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:
-        reward, goal = self.config.reward, _goal(context)
+        reward: GoToPoseReward = self.config.reward
+        goal = _goal(context)
         d_prev, _ = target_polar(previous.pose, *goal)
         d, angle = target_polar(frame.pose, *goal)
         safety = assess(frame, self.robot, self.config, collision_streak)
@@ -136,6 +138,13 @@ def _goal(context: EpisodeContext) -> tuple[float, float]:
     if context.goal is None:
         raise ValueError("goToPose: the episode's context has no goal")
     return context.goal
+
+
+def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> _GoToPose:
+    """goToPose through ``config.sensor`` (its registry entry's ``build``)."""
+    if config.sensor == "depth":
+        return GoToPoseDepth(config, robot)
+    return GoToPoseLidar(config, robot)
 
 
 class GoToPoseLidar(_GoToPose):

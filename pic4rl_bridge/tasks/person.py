@@ -19,9 +19,11 @@ import numpy as np
 from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
 
-from ..config import EnvConfig, PersonControl
+from ..config import EnvConfig
+from ..errors import ConfigError
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..task_registry import PersonControl, PersonReward
 from .base import EpisodeContext, Judgement, Task
 from .collision import assess
 from .observations import MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors, target_polar
@@ -42,7 +44,7 @@ class PersonMonitoringTask(Task):
         if config.person.control == PersonControl.HYBRID.value:
             from ..follow import PersonFollower
 
-            self.follower = PersonFollower(robot, config.baselines.dwa,
+            self.follower = PersonFollower(robot, config.person.dwa,
                                            distance_m=config.person.distance_m,
                                            collision_tolerance_m=config.collision_tolerance_m)
         size = 1 if self.follower is not None else 3
@@ -88,7 +90,7 @@ class PersonMonitoringTask(Task):
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:
-        reward = self.config.reward
+        reward: PersonReward = self.config.reward
         distance, bearing = _person(frame)
         safety = assess(frame, self.robot, self.config, collision_streak)
         error = abs(distance - self.config.person.distance_m)
@@ -107,6 +109,14 @@ class PersonMonitoringTask(Task):
         return {"person_distance_m": self.config.person.distance_m,
                 "camera_fov_rad": self.robot.depth_hfov_rad,
                 "person_control": self.config.person.control}
+
+
+def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> PersonMonitoringTask:
+    """personMonitoring on an omnidirectional robot (its registry entry's ``build``)."""
+    if not robot.omni:
+        raise ConfigError(f"task: 'personMonitoring' needs an omnidirectional robot; "
+                          f"robot {robot.name!r} is not omni (use an omni robot)")
+    return PersonMonitoringTask(config, robot)
 
 
 def _person(frame: SensorFrame) -> tuple[float, float]:

@@ -12,7 +12,7 @@ start, oriented from the start, or ``vineyard.centerline`` when the config gives
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,10 +24,14 @@ from ..config import EnvConfig
 from ..errors import ConfigError
 from ..frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..task_registry import VineyardReward
 from .base import EpisodeContext, Judgement, Task
 from .collision import assess
 from .goto import planar_action_space, planar_command
 from .observations import depth_observation, depth_space
+
+if TYPE_CHECKING:
+    from pic4rl_sim.engine.world_spec import WorldSpec
 
 
 class VineyardTask(Task):
@@ -61,7 +65,7 @@ class VineyardTask(Task):
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:
         line = _centerline(context)
-        reward = self.config.reward
+        reward: VineyardReward = self.config.reward
         s_prev, _ = project(line, (previous.pose.x, previous.pose.y))
         s, offset = project(line, (frame.pose.x, frame.pose.y))
         safety = assess(frame, self.robot, self.config, collision_streak)
@@ -80,6 +84,18 @@ class VineyardTask(Task):
 
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         return {"row_centerline": _centerline(context).tolist()}
+
+
+def build(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None) -> VineyardTask:
+    """The vineyard task on ``world``'s lanes, unless ``vineyard.centerline`` is set (its
+    registry entry's ``build``)."""
+    lanes = world.lanes if world is not None else ()
+    if not lanes and not config.vineyard.centerline:
+        where = "no world" if world is None else f"world {world.name!r} has no lanes"
+        raise ConfigError(f"vineyard.centerline: [] is invalid for task 'vineyard' ({where}); "
+                          "expected the row's centre line x0, y0, x1, y1, ... or a vineyard "
+                          "world")
+    return VineyardTask(config, robot, lanes)
 
 
 def centerlines(config: EnvConfig,

@@ -191,6 +191,8 @@ def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> 
     (["--ros-args", "-p", "batch_size:=32"], "-p parameters: unknown key 'batch_size'; "),
     (["--env-kwargs", "lidar.beams:abc"],
      "--env-kwargs: lidar.beams: 'abc' is invalid; expected an integer"),
+    (["--ros-args", "-p", "baselines.dwa.horizon_s:=-1.0"],
+     "-p parameters: baselines.dwa.horizon_s: -1.0 is invalid; expected a positive number"),
     (["--sim-kwargs", "lidar.beems:36"],
      "--sim-kwargs: unknown key 'lidar.beems'; did you mean 'lidar.beams'?"),
 ])
@@ -215,6 +217,21 @@ def resolve(argv: list[str]) -> list[AgentSpec]:
     plain, ros = split_ros_args(argv)
     plan = tester.build_plan(tester.build_parser().parse_args(plain), ros)
     return resolve_agents(plan, plan.bags_dir / "r")
+
+
+def test_baseline_settings_come_from_the_baselines_section_and_p(tmp_path: Path) -> None:
+    """``-p baselines.*`` and a params file's ``baselines:`` section reach the DWA baseline;
+    the env's parameters stay the env's."""
+    data = yaml.safe_load(LIDAR_TD3.read_text())
+    data["baselines"] = {"ros__parameters": {"dwa.horizon_s": 2.0, "dwa.linear_samples": 5}}
+    path = tmp_path / "with_baselines.yaml"
+    path.write_text(yaml.safe_dump(data))
+    (spec,) = resolve(["--baseline", "dwa", "--bags", str(tmp_path), "--ros-args",
+                       "--params-file", str(path), "-p", "baselines.dwa.linear_samples:=9",
+                       "-p", "goal_tolerance_m:=0.3"])
+    assert spec.settings is not None
+    assert (spec.settings.dwa.horizon_s, spec.settings.dwa.linear_samples) == (2.0, 9)
+    assert spec.run.env.goal_tolerance_m == 0.3
 
 
 @pytest.fixture

@@ -19,8 +19,9 @@ from hypothesis import strategies as st
 from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
+from pic4rl_bridge.baseline_config import DwaConfig, load_baselines_config
 from pic4rl_bridge.baselines import DwaController, make_baseline
-from pic4rl_bridge.config import DwaConfig, EnvConfig
+from pic4rl_bridge.config import EnvConfig, load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.frame import ScanData, SensorFrame
@@ -129,3 +130,26 @@ def test_a_baseline_that_does_not_fit_the_task_is_refused():
                       max_lateral_m_s=0.0, control_dt_s=0.1)
     with pytest.raises(ConfigError, match="acceleration limits"):
         make_baseline("dwa", EnvConfig(), robot)
+
+
+def test_the_baselines_settings_are_their_own_section(tmp_path):
+    """``baselines:`` beside ``nav_env:`` sets the DWA baseline; the env refuses the old
+    ``baselines.*`` keys with where they went; the person follower's DWA is ``person.dwa``."""
+    path = tmp_path / "p.yaml"
+    path.write_text("nav_env:\n  ros__parameters: {task: goToPose}\n"
+                    "baselines:\n  ros__parameters: {dwa.horizon_s: 2.0, dwa.linear_samples: 5}\n")
+    chosen = load_baselines_config([path], {"dwa.linear_samples": 9})
+    assert (chosen.dwa.horizon_s, chosen.dwa.linear_samples) == (2.0, 9)
+    dwa = make_baseline("dwa", load_env_config(path), JACKAL, settings=chosen)
+    assert isinstance(dwa, DwaController) and dwa.config is chosen.dwa
+    assert len(dwa.window(0.2, 0.0)[0]) == 9
+    with pytest.raises(ConfigError, match=r"'baselines.dwa.horizon_s' is no env parameter: "
+                                          r"baseline settings are the params file's "
+                                          r"'baselines:' section \(dwa.horizon_s\)"):
+        EnvConfig().replace(**{"baselines.dwa.horizon_s": 2.0})
+    with pytest.raises(ConfigError, match=r"baselines.dwa.rollout_dt_s: 3.0 is invalid; "
+                                          r"expected at most baselines.dwa.horizon_s=1.5"):
+        load_baselines_config([], {"dwa.rollout_dt_s": 3.0})
+    with pytest.raises(ConfigError, match=r"person.dwa.horizon_s: -1.0 is invalid"):
+        EnvConfig().replace(**{"person.dwa.horizon_s": -1.0, "person.dwa.rollout_dt_s": 0.0})
+    assert EnvConfig().replace(**{"person.dwa.horizon_s": 2.5}).person.dwa.horizon_s == 2.5

@@ -20,6 +20,7 @@ import pytest
 from docs_helpers import anchors, literal, parameter_rows, section, table_rows
 
 from pic4rl_bridge import ENV_IDS
+from pic4rl_bridge.baseline_config import BaselinesConfig
 from pic4rl_bridge.config import EnvConfig, load_env_config
 from pic4rl_sim.schema import param_names
 
@@ -95,6 +96,15 @@ def test_the_parameter_table_has_the_codes_types_and_defaults(doc):
             wrong.append(f"{name}: no meaning given")
     assert not wrong, "docs/bridge.md's parameter table differs from the code:\n" + "\n".join(
         wrong)
+
+
+def test_the_baselines_table_is_the_baselines_section(doc):
+    """The baselines' settings are their own section's (``BaselinesConfig``), not the env's."""
+    rows = table_rows(section(doc, "## Baselines"))
+    expected = parameter_rows(BaselinesConfig)
+    assert set(expected) == {name for name in rows if name.startswith("dwa.")}
+    assert all(rows[name][:2] == [kind, default] for name, (kind, default) in expected.items())
+    assert not any(name.startswith("baselines.") for name in parameter_rows(EnvConfig))
 
 
 # -- ids and config files ----------------------------------------------------------------------

@@ -1,0 +1,96 @@
+"""The settings of the classical baselines: the ``baselines:`` section of a params file,
+beside ``sim:`` and ``nav_env:``, which ``pic4rl-test --baseline`` reads (the env never
+does)::
+
+    baselines:
+      ros__parameters:
+        dwa.horizon_s: 2.0
+
+On the command line: ``pic4rl-test --baseline dwa --ros-args -p baselines.dwa.horizon_s:=2.0``.
+The person follower's DWA, which a hybrid personMonitoring env runs, is the env's
+(``person.dwa.*``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pic4rl_sim import params_file
+from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, Range, check, from_params, param, section
+
+from .errors import ConfigError, require
+
+BASELINES_NODE = "baselines"
+#: ``-p`` keys with this prefix are the ``baselines:`` section's.
+PREFIX = f"{BASELINES_NODE}."
+
+
+@dataclass(frozen=True)
+class DwaConfig:
+    """The Dynamic Window Approach (``pic4rl_bridge.baselines.DwaController``, and the person
+    follower of ``pic4rl_bridge.follow``). The velocity ranges, acceleration limits, window
+    period and footprint are the robot's. Its owner's section checks it (``check_as``)."""
+
+    horizon_s: float = param(1.5, doc="each velocity sample is simulated this long", unit="s",
+                             range=POSITIVE)
+    rollout_dt_s: float = param(0.1, doc="time between the simulated poses checked against the "
+                                "scan", unit="s", range=POSITIVE)
+    linear_samples: int = param(7, doc="forward speeds sampled across the window (ends "
+                                "included)", range=Range(2, 101))
+    angular_samples: int = param(15, doc="yaw rates sampled across the window (ends included)",
+                                 range=Range(2, 101))
+    heading_weight: float = param(1.0, doc="times 1 - |target bearing| / pi, from the nearest "
+                                  "rollout pose", range=NON_NEGATIVE)
+    clearance_weight: float = param(0.4, doc="times the distance driven before a collision "
+                                    "(capped)", range=NON_NEGATIVE)
+    speed_weight: float = param(0.3, doc="times v / max_linear_m_s", range=NON_NEGATIVE)
+    clearance_cap_m: float = param(0.6, doc="a rollout free of collisions scores this distance",
+                                   unit="m", range=POSITIVE)
+    lookahead_m: float = param(2.0, doc="the target is the goal if a lane is free this far, else "
+                               "along the free lane nearest the goal's bearing", unit="m",
+                               range=POSITIVE)
+    safety_margin_m: float = param(0.05, doc="beyond collision_tolerance_m: closer poses are "
+                                   "collisions", unit="m", range=NON_NEGATIVE)
+    point_resolution_m: float = param(0.05, doc="scan points merged on a grid this fine",
+                                      unit="m", range=POSITIVE)
+
+    def check_as(self, prefix: str) -> None:
+        """``ConfigError`` naming the key as ``prefix`` + field (``person.dwa.``) for a field
+        out of its range, or a rollout step longer than the horizon."""
+        check(self, prefix)
+        require(self.rollout_dt_s <= self.horizon_s, f"{prefix}rollout_dt_s",
+                self.rollout_dt_s, f"at most {prefix}horizon_s={self.horizon_s}")
+
+
+@dataclass(frozen=True)
+class BaselinesConfig:
+    """The classical controllers ``pic4rl-test --baseline`` runs."""
+
+    dwa: DwaConfig = section(DwaConfig)
+
+    def __post_init__(self) -> None:
+        self.dwa.check_as(f"{PREFIX}dwa.")
+
+
+def baselines_config_from_params(params: Mapping[str, Any]) -> BaselinesConfig:
+    """A ``BaselinesConfig`` from the ``baselines:`` section's dotted parameters."""
+    return from_params(BaselinesConfig, params, where=f"{BASELINES_NODE} parameters")
+
+
+def load_baselines_config(paths: Sequence[str | Path],
+                          overrides: Mapping[str, Any] | None = None) -> BaselinesConfig:
+    """The ``baselines:`` sections of ``paths`` (later files win, key by key), then dotted
+    ``overrides`` (``dwa.horizon_s``); defaults where none is given."""
+    params: dict[str, Any] = {}
+    if paths:
+        nodes = (BASELINES_NODE, params_file.ENV_NODE, params_file.SIM_NODE)
+        params = params_file.load(paths, nodes)[BASELINES_NODE]
+    params.update(overrides or {})
+    where = " + ".join(str(p) for p in paths) or "command line"
+    try:
+        return baselines_config_from_params(params)
+    except ConfigError as err:
+        raise ConfigError(f"{where}: {err}") from err
