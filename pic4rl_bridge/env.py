@@ -36,7 +36,7 @@ from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolv
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
-from .robot_info import Scenario
+from .scenario import Scenario
 from .tasks import make_task
 from .tasks.base import EpisodeContext, Judgement
 from .transport import EpisodeRequest, RawMessage, Transport

@@ -23,7 +23,7 @@ from . import decode
 from .config import EnvConfig
 from .errors import ConfigError, EpisodeRejected
 from .frame import ScanData, SensorFrame, as_published
-from .robot_info import Scenario
+from .scenario import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")

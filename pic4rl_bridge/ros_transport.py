@@ -70,7 +70,7 @@ from . import decode
 from .config import EnvConfig, StepMode
 from .errors import ConfigError, EpisodeRejected, SimConflict, TransportError
 from .frame import SensorFrame
-from .robot_info import Scenario
+from .scenario import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)
