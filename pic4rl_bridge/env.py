@@ -37,13 +37,14 @@ from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .scenario import Scenario
+from .sensors import BY_NAME
 from .tasks import make_task
 from .tasks.base import EpisodeContext, Judgement
 from .transport import EpisodeRequest, RawMessage, Transport
 
 log = logging.getLogger(__name__)
 
-_FRAME_SENSORS = frozenset({"scan", "depth", "person", "plan"})
+_FRAME_SENSORS = frozenset(BY_NAME)
 
 
 def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
