@@ -26,6 +26,7 @@ from pic4rl_sim.interfaces import (
     ODOM,
     PLAN,
     SCAN,
+    STEP_TOPICS,
     Cadence,
     Interface,
     QosKind,
@@ -41,6 +42,8 @@ from .sensors import SENSORS
 
 #: The sim node's state and episode topics by relative name, recordable by name alone.
 KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
+#: A step's topics in the sim's publishing order.
+_STEP_ORDER = {t.name: i for i, t in enumerate(STEP_TOPICS)}
 #: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
 STAMP_FIRST = frozenset(i.type for i in (CLOCK, ODOM, IMU, DEPTH_IMAGE, CAMERA_INFO, SCAN,
                                          GOAL_POSE, PLAN))
@@ -89,13 +92,16 @@ class Wiring:
     """The subscriptions to make: topic (as configured) → (type name, QoS); ``roles`` maps
     ``pose``, ``goal`` and each needed sensor to its topic; ``episodic`` the topics published
     once an episode; ``recorded`` the resolved names recorded; ``record_cmd`` whether the
-    commands are recorded."""
+    commands are recorded; ``sync`` the topic a lockstep step waits for: of the needed
+    sensors, the one the sim publishes last in a step (the scan, else the depth image), else
+    the pose."""
 
     wanted: dict[str, tuple[str, QosSettings]] = field(default_factory=dict)
     roles: dict[str, str] = field(default_factory=dict)
     episodic: set[str] = field(default_factory=set)
     recorded: set[str] = field(default_factory=set)
     record_cmd: bool = False
+    sync: str = ""
 
 
 def _like(sim_topic: Interface, sensor_qos: SensorQos) -> tuple[str, QosSettings]:
@@ -124,6 +130,9 @@ def wiring(config: EnvConfig, sensors: frozenset[str],
             out.wanted[topic] = ((sensor.interface.type, goal_qos) if sensor.episodic
                                  else _like(sensor.interface, sensor_qos))
             out.roles[sensor.name] = topic
+    stepped = [s for s in SENSORS if s.name in out.roles and not s.episodic]
+    last = max(stepped, key=lambda s: _STEP_ORDER[s.interface.name], default=None)
+    out.sync = out.roles[last.name] if last is not None else t.pose
     if config.record.enabled:
         _add_recorded(config, out, sensor_qos, resolve)
     out.episodic |= {topic for topic, (_, qos) in out.wanted.items() if qos.transient_local}

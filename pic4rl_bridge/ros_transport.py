@@ -108,6 +108,7 @@ class RosTransport(Transport):
     def _subscribe(self, config: EnvConfig, sensors: frozenset[str]) -> None:
         wired = wiring(config, sensors, self.node.resolve_topic_name)
         self._roles, self._record_cmd = wired.roles, wired.record_cmd
+        self._sync_topic = wired.sync
         resolve = self.node.resolve_topic_name
         for topic, (kind, qos) in wired.wanted.items():
             entry = Topic(topic, kind)
@@ -267,8 +268,7 @@ class RosTransport(Transport):
         it when ``inclusive``); in rate mode, the latest messages."""
         needed = [self._topics[t] for role, t in self._roles.items()
                   if role != "goal" and role not in self._episodic_roles()]
-        sync = self._topics[self._roles.get("scan") or self._roles.get("depth")
-                            or self._roles["pose"]]
+        sync = self._topics[self._sync_topic]
         if self._mode is StepMode.LOCKSTEP:
             status = self._status if self._status_live and not inclusive else None  # a step's
 
