@@ -17,15 +17,9 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Twist, TwistStamped
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import (
-    CAMERA_INFO,
-    CLOCK,
-    DEPTH_IMAGE,
     GOAL_POSE,
-    IMU,
     INTERFACES,
     ODOM,
-    PLAN,
-    SCAN,
     STEP_TOPICS,
     Cadence,
     Interface,
@@ -44,11 +38,6 @@ from .sensors import SENSORS
 KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
 #: A step's topics in the sim's publishing order.
 _STEP_ORDER = {t.name: i for i, t in enumerate(STEP_TOPICS)}
-#: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
-STAMP_FIRST = frozenset(i.type for i in (CLOCK, ODOM, IMU, DEPTH_IMAGE, CAMERA_INFO, SCAN,
-                                         GOAL_POSE, PLAN))
-
-
 def cdr_stamp(data: bytes) -> int:
     """The stamp (ns) of a message that starts with one, read from its CDR bytes: 4 bytes of
     encapsulation (byte 1: 1 = little endian), then ``int32 sec``, ``uint32 nanosec``."""
@@ -92,7 +81,8 @@ class Wiring:
     """The subscriptions to make: topic (as configured) → (type name, QoS); ``roles`` maps
     ``pose``, ``goal`` and each needed sensor to its topic; ``episodic`` the topics published
     once an episode; ``recorded`` the resolved names recorded; ``record_cmd`` whether the
-    commands are recorded; ``sync`` the topic a lockstep step waits for: of the needed
+    commands are recorded; ``once`` the needed sensors published once an episode (the plan),
+    which a reset waits for; ``sync`` the topic a lockstep step waits for: of the needed
     sensors, the one the sim publishes last in a step (the scan, else the depth image), else
     the pose."""
 
@@ -101,6 +91,7 @@ class Wiring:
     episodic: set[str] = field(default_factory=set)
     recorded: set[str] = field(default_factory=set)
     record_cmd: bool = False
+    once: list[str] = field(default_factory=list)
     sync: str = ""
 
 
@@ -130,6 +121,7 @@ def wiring(config: EnvConfig, sensors: frozenset[str],
             out.wanted[topic] = ((sensor.interface.type, goal_qos) if sensor.episodic
                                  else _like(sensor.interface, sensor_qos))
             out.roles[sensor.name] = topic
+    out.once = [s.name for s in SENSORS if s.name in out.roles and s.episodic]
     stepped = [s for s in SENSORS if s.name in out.roles and not s.episodic]
     last = max(stepped, key=lambda s: _STEP_ORDER[s.interface.name], default=None)
     out.sync = out.roles[last.name] if last is not None else t.pose

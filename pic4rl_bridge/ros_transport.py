@@ -37,16 +37,22 @@ from std_srvs.srv import Empty
 
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import QosKind, bridge_qos
-from pic4rl_sim.node.ros_interfaces import profile, ros_type, settings_of, type_name
+from pic4rl_sim.node.ros_interfaces import (
+    profile,
+    ros_type,
+    settings_of,
+    starts_with_stamp,
+    type_name,
+)
 
 from . import decode
 from .config import EnvConfig, StepMode
 from .errors import EpisodeRejected, TransportError
 from .frame import SensorFrame
 from .ros_sim import check_one_sim, episode_request, subscribe_status
-from .ros_topics import STAMP_FIRST, Topic, cdr_stamp, command_message, stamp_of, wiring
+from .ros_topics import Topic, cdr_stamp, command_message, stamp_of, wiring
 from .scenario import Scenario
-from .sensors import BY_NAME, FrameSensor, build_frame
+from .sensors import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)
@@ -108,7 +114,7 @@ class RosTransport(Transport):
     def _subscribe(self, config: EnvConfig, sensors: frozenset[str]) -> None:
         wired = wiring(config, sensors, self.node.resolve_topic_name)
         self._roles, self._record_cmd = wired.roles, wired.record_cmd
-        self._sync_topic = wired.sync
+        self._sync_topic, self._once = wired.sync, wired.once
         resolve = self.node.resolve_topic_name
         for topic, (kind, qos) in wired.wanted.items():
             entry = Topic(topic, kind)
@@ -125,7 +131,7 @@ class RosTransport(Transport):
         """Stores the latest message of a topic frames need (decoded) or of one recorded only
         (just its stamp), and hands it to the tap once it belongs to the episode."""
         kind = ros_type(entry.type_name)
-        decode_all = needed or entry.type_name not in STAMP_FIRST
+        decode_all = needed or not starts_with_stamp(kind)
 
         def on_message(data: bytes) -> None:
             if decode_all:
@@ -203,7 +209,7 @@ class RosTransport(Transport):
             self._spin_until(lambda: goal.stamp_ns > used,
                              self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
         self._used_goal_ns = goal.stamp_ns
-        for role in self._episodic_roles():  # the sim's plan carries its goal's stamp
+        for role in self._once:  # the sim's plan carries its goal's stamp
             entry = self._topics[self._roles[role]]
             first = goal.stamp_ns if self._set_params is not None else 0
             self._spin_until(lambda e=entry: e.stamp_ns >= first, self._timeout_s,
@@ -267,7 +273,7 @@ class RosTransport(Transport):
         """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
         it when ``inclusive``); in rate mode, the latest messages."""
         needed = [self._topics[t] for role, t in self._roles.items()
-                  if role != "goal" and role not in self._episodic_roles()]
+                  if role != "goal" and role not in self._once]
         sync = self._topics[self._sync_topic]
         if self._mode is StepMode.LOCKSTEP:
             status = self._status if self._status_live and not inclusive else None  # a step's
@@ -284,10 +290,6 @@ class RosTransport(Transport):
             what = f"topics {', '.join(t.name for t in needed)}: a first message"
         self._spin_until(ready, self._timeout_s, what)
         return self._frame(sync.stamp_ns)
-
-    def _episodic_roles(self) -> list[str]:
-        """The needed sensors published once an episode (the plan)."""
-        return [role for role in self._roles if role in BY_NAME and BY_NAME[role].episodic]
 
     def _frame(self, stamp_ns: int) -> SensorFrame:
         topics, roles = self._topics, self._roles

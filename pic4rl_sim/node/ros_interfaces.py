@@ -44,6 +44,13 @@ def type_name(kind: type) -> str:
     return f"{kind.__module__.split('.')[0]}/msg/{kind.__name__}"
 
 
+def starts_with_stamp(kind: type) -> bool:
+    """Whether a message class's CDR starts with a ``builtin_interfaces/Time``: its first
+    field is a header (whose first field is the stamp) or a time (``rosgraph_msgs/Clock``)."""
+    fields = kind.get_fields_and_field_types()  # type: ignore[attr-defined]
+    return next(iter(fields.values()), "") in ("std_msgs/Header", "builtin_interfaces/Time")
+
+
 def qos_profile(interface: Interface) -> QoSProfile:
     """The profile the node offers ``interface`` with (a topic's: its QoS kind is set)."""
     assert interface.qos is not None, f"{interface.name} is a service"

@@ -56,3 +56,31 @@ def test_recorded_topics_join_by_their_sim_type_and_unknown_ones_are_refused() -
     bad = EnvConfig().replace(**{"record.enabled": True, "record.topics": ["tf"]})
     with pytest.raises(ConfigError, match="record.topics: 'tf' has no known message type"):
         wiring(bad, frozenset(), resolve)
+
+
+def test_plan_is_waited_for_once_an_episode() -> None:
+    assert wiring(EnvConfig(), frozenset({"scan", "plan"}), resolve).once == ["plan"]
+    assert wiring(EnvConfig(), frozenset({"scan"}), resolve).once == []
+
+
+def test_a_recorded_only_topic_stamp_is_read_from_its_cdr_bytes() -> None:
+    """Every recordable type said to start with a stamp does, on the wire; the others
+    (markers) are the ones with no stamp first."""
+    from builtin_interfaces.msg import Time
+    from pic4rl_sim.node.ros_interfaces import ros_type, starts_with_stamp
+    from rclpy.serialization import serialize_message
+
+    from pic4rl_bridge.ros_topics import KNOWN_TOPICS, cdr_stamp
+
+    without = set()
+    for topic in KNOWN_TOPICS.values():
+        kind = ros_type(topic.type)
+        if not starts_with_stamp(kind):
+            without.add(topic.name)
+            continue
+        msg = kind()
+        stamp = msg.clock if hasattr(msg, "clock") else msg.header.stamp
+        stamp.sec, stamp.nanosec = 12, 345
+        assert isinstance(stamp, Time)
+        assert cdr_stamp(serialize_message(msg)) == 12_000_000_345, topic.name
+    assert without == {"world/markers"}
