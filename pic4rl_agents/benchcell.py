@@ -80,7 +80,7 @@ def _cell_pairs(cell: Cell, root: Path) -> GoalsAndPoses | None:
     path = cell_dir(root, cell) / PAIRS
     if not path.is_file():
         from pic4rl_bridge.episodes import PairSampler
-        from pic4rl_bridge.robot_info import Scenario
+        from pic4rl_bridge.scenario import Scenario
         from pic4rl_sim.engine.sampling import PAIR_KINDS
 
         spec = resolve_agents(_plan(cell, root, episodes=1, pairs="", domain=0))[0]

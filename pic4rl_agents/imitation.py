@@ -32,8 +32,8 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.follow import HeadingController
 from pic4rl_bridge.planner import PlannerController
-from pic4rl_bridge.robot_info import Scenario
 from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
+from pic4rl_bridge.scenario import Scenario
 
 from .config import ImitationConfig
 

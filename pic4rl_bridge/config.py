@@ -152,15 +152,15 @@ class EpisodesConfig:
 class TopicsConfig:
     """Topic names, relative to ``ros.namespace`` unless absolute."""
 
-    cmd_vel: str = param(CMD_VEL.name, doc="velocity commands (geometry_msgs/Twist or "
+    cmd_vel: str = param(CMD_VEL.name, doc=f"velocity commands ({CMD_VEL.type} or "
                          "TwistStamped)")
-    pose: str = param(ODOM.name, doc="odom (wheel odometry) | ground_truth, or any "
-                      "nav_msgs/Odometry topic")
-    scan: str = param(SCAN.name, doc="sensor_msgs/LaserScan")
-    depth: str = param(DEPTH_IMAGE.name, doc="sensor_msgs/Image (32FC1)")
-    goal: str = param(GOAL_POSE.name, doc="geometry_msgs/PoseStamped")
-    person: str = param(PERSON_POSE.name, doc="geometry_msgs/PoseStamped (personMonitoring)")
-    plan: str = param(PLAN.name, doc="nav_msgs/Path: the global plan of goal_input plan (the "
+    pose: str = param(ODOM.name, doc=f"odom (wheel odometry) | ground_truth, or any {ODOM.type} "
+                      "topic")
+    scan: str = param(SCAN.name, doc=SCAN.type)
+    depth: str = param(DEPTH_IMAGE.name, doc=f"{DEPTH_IMAGE.type} (32FC1)")
+    goal: str = param(GOAL_POSE.name, doc=GOAL_POSE.type)
+    person: str = param(PERSON_POSE.name, doc=f"{PERSON_POSE.type} (personMonitoring)")
+    plan: str = param(PLAN.name, doc=f"{PLAN.type}: the global plan of goal_input plan (the "
                       "sim's, or any planner's, e.g. nav2's /plan)")
 
 

@@ -34,7 +34,8 @@ from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolv
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .env_recording import EnvRecording, episode_facts
-from .robot_info import Scenario
+from .scenario import Scenario
+from .sensors import BY_NAME
 from .task_registry import task_spec
 from .tasks import make_task
 from .tasks.base import EpisodeContext
@@ -42,7 +43,7 @@ from .transport import EpisodeRequest, Transport
 
 log = logging.getLogger(__name__)
 
-_FRAME_SENSORS = frozenset({"scan", "depth", "person", "plan"})
+_FRAME_SENSORS = frozenset(BY_NAME)
 
 
 def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,

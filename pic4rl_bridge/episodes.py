@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from pic4rl_sim.engine.paths import PathPlanner
     from pic4rl_sim.engine.world_spec import WorldSpec
 
-    from .robot_info import Scenario
+    from .scenario import Scenario
 
 _SEED_END = 2**31 - 1
 

@@ -13,30 +13,33 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
-from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, INTERFACES, PLAN, STEP_TOPICS, interface
+from pic4rl_sim.interfaces import (
+    CMD_VEL,
+    GOAL_POSE,
+    INTERFACES,
+    PLAN,
+    STEP_TOPICS,
+    QosKind,
+    bridge_qos,
+    interface,
+)
 
 from . import decode
 from .config import EnvConfig
 from .errors import ConfigError, EpisodeRejected
-from .frame import ScanData, SensorFrame, as_published
-from .robot_info import Scenario
+from .frame import SensorFrame, as_published
+from .scenario import Scenario
+from .sensors import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")
-#: The QoS the sim node offers its topics with (``pic4rl_sim.interfaces``), and the ROS
-#: transport its ``cmd_vel`` (history 100); the rest: reliable, volatile, depth 10.
-_NODE_QOS = {i.name: OfferedQos(i.qos.value.reliable, i.qos.value.transient_local,
-                                i.qos.value.depth) for i in INTERFACES if i.qos is not None}
-_NODE_QOS[CMD_VEL.name] = OfferedQos(depth=100)
-
-
-def _f32(value: float) -> float:
-    """``value`` as a float32 message field holds it."""
-    return float(np.float32(value))
+#: The QoS the sim node offers its topics with, and the ROS transport its ``cmd_vel``; the
+#: rest: ``OfferedQos()``.
+_NODE_QOS = {i.name: i.qos.value for i in INTERFACES if i.qos is not None}
+_NODE_QOS[CMD_VEL.name] = bridge_qos(QosKind.RELIABLE)
 
 
 class InProcessTransport(Transport):
@@ -103,23 +106,11 @@ class InProcessTransport(Transport):
         if self.tap is not None:
             return self._messages().state(self._stamp_ns, self._exact_pose, self._sensors,
                                           self._lidar_mount, self.tap)
-        engine = self.engine
+        engine, mount = self.engine, self._lidar_mount
         pose, twist = ((engine.robot_pose(), engine.robot_twist()) if self._exact_pose
                        else engine.wheel_odometry())
-        scan = depth = person = None
-        if "scan" in self._sensors and engine.lidar is not None:
-            lidar = engine.lidar
-            scan = ScanData(engine.scan().astype(np.float32), _f32(lidar.angle_min_rad),
-                            _f32(lidar.angle_increment_rad), _f32(lidar.range_min_m),
-                            _f32(lidar.range_max_m), self._lidar_mount)
-        if "depth" in self._sensors and engine.depth is not None:
-            depth = engine.depth_image().astype(np.float32)
-        if "person" in self._sensors:
-            seen = engine.person_pose()
-            person = as_published(seen[0]) if seen is not None else None
-        plan = engine.plan() if "plan" in self._sensors else None
-        return SensorFrame(self._stamp_ns, as_published(pose), twist, engine.goal, scan, depth,
-                           person, plan)
+        return build_frame(self._stamp_ns, (as_published(pose), twist), engine.goal,
+                           self._sensors, lambda sensor: sensor.read(engine, mount))
 
 
 class _MessageWriter:
@@ -141,6 +132,9 @@ class _MessageWriter:
                        for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
         self._outputs = [(t.name, msg) for t, msg in self.state_messages.published
                          if t.name in topics]
+        #: The step messages by topic, refilled in place each step: a sensor's frame value
+        #: is decoded from its message when the engine publishes one.
+        self._held = {t.name: msg for t, msg in self.state_messages.published}
         self._topics = topics
 
     def _emit(self, topic: str, msg: Any, stamp_ns: int, tap: Tap) -> None:
@@ -167,13 +161,12 @@ class _MessageWriter:
         m.fill(engine, stamp_ns)
         for topic, msg in self._outputs:
             self._emit(topic, msg, stamp_ns, tap)
-        pose, twist = decode.odometry(m.ground_truth if exact_pose else m.odom)
-        scan = depth = person = None
-        if "scan" in sensors and m.scan is not None:
-            scan = decode.scan(m.scan, mount)
-        if "depth" in sensors and m.depth_image is not None:
-            depth = decode.depth_image(m.depth_image)
-        if "person" in sensors and m.person is not None:
-            person = decode.planar_pose(m.person.pose)
-        plan = engine.plan() if "plan" in sensors else None
-        return SensorFrame(stamp_ns, pose, twist, engine.goal, scan, depth, person, plan)
+        held = self._held
+
+        def value(sensor: FrameSensor) -> Any:
+            msg = held.get(sensor.interface.name)
+            return (sensor.read(engine, mount) if msg is None
+                    else sensor.decode(msg, mount, sensor.interface.name))
+
+        return build_frame(stamp_ns, decode.odometry(m.ground_truth if exact_pose else m.odom),
+                           engine.goal, sensors, value)

@@ -21,7 +21,7 @@ from pic4rl_metrics.raster import COLORS, View
 
 from .errors import ConfigError
 from .frame import SensorFrame
-from .robot_info import Scenario
+from .scenario import Scenario
 from .tasks.base import EpisodeContext
 from .tasks.collision import scan_points
 

@@ -22,109 +22,40 @@ ERROR (the physics diverged; the robot is back at its start) becomes the transpo
 from __future__ import annotations
 
 import logging
-import struct
 import time
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
 import rclpy
-from builtin_interfaces.msg import Time
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
-from nav_msgs.msg import Odometry, Path
-from rcl_interfaces.msg import Parameter as ParameterMsg
-from rcl_interfaces.msg import ParameterType, ParameterValue
+from geometry_msgs.msg import Twist, TwistStamped
 from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.context import Context
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rclpy.qos import (
-    DurabilityPolicy,
-    HistoryPolicy,
-    QoSProfile,
-    ReliabilityPolicy,
-)
 from rclpy.serialization import deserialize_message, serialize_message
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_srvs.srv import Empty
 
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
-from pic4rl_sim.interfaces import (
-    DEPTH_IMAGE,
-    DIAGNOSTICS,
-    GOAL_POSE,
-    INTERFACES,
-    ODOM,
-    PERSON_POSE,
-    PLAN,
-    SCAN,
-    Cadence,
-    Interface,
-    QosKind,
+from pic4rl_sim.interfaces import QosKind, bridge_qos
+from pic4rl_sim.node.ros_interfaces import (
+    profile,
+    ros_type,
+    settings_of,
+    starts_with_stamp,
+    type_name,
 )
-from pic4rl_sim.node.ros_interfaces import ros_type
 
 from . import decode
 from .config import EnvConfig, StepMode
-from .errors import ConfigError, EpisodeRejected, SimConflict, TransportError
+from .errors import EpisodeRejected, TransportError
 from .frame import SensorFrame
-from .robot_info import Scenario
+from .ros_sim import check_one_sim, episode_request, subscribe_status
+from .ros_topics import Topic, cdr_stamp, command_message, stamp_of, wiring
+from .scenario import Scenario
+from .sensors import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)
-
-_DEPTH = 100  # history kept per subscription: the recorder must see every message
-_RELIABLE = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
-_BEST_EFFORT = QoSProfile(depth=_DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT)
-_LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                      history=HistoryPolicy.KEEP_LAST)
-#: How the ROS graph names a node whose name record has not arrived yet.
-_UNNAMED = "_NODE_NAME_UNKNOWN_"
-#: The sim node's state and episode topics by relative name, recordable by name alone.
-_KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
-
-
-#: Types whose CDR starts with a ``builtin_interfaces/Time`` (a header's stamp, or the clock).
-_STAMP_FIRST = (Clock, Odometry, LaserScan, Imu, Image, CameraInfo, PoseStamped, Path)
-
-
-def _cdr_stamp(data: bytes) -> int:
-    """The stamp (ns) of a message that starts with one, read from its CDR bytes: 4 bytes of
-    encapsulation (byte 1: 1 = little endian), then ``int32 sec``, ``uint32 nanosec``."""
-    sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
-    return sec * 1_000_000_000 + nanosec
-
-
-def _like(sim_topic: Interface, sensor_qos: QoSProfile) -> tuple[type, QoSProfile]:
-    """A sim topic's type, and ``sensor_qos`` (``ros.sensor_qos``) if it is sensor data."""
-    return ros_type(sim_topic.type), (sensor_qos if sim_topic.qos is QosKind.SENSOR_DATA
-                                      else _RELIABLE)
-
-
-def _type_name(kind: type) -> str:
-    return f"{kind.__module__.split('.')[0]}/msg/{kind.__name__}"
-
-
-def _stamp_of(msg: Any) -> int | None:
-    if isinstance(msg, Clock):
-        return decode.stamp_ns(msg.clock)
-    header = getattr(msg, "header", None)
-    return decode.stamp_ns(header) if header is not None else None
-
-
-class _Topic:
-    """One raw subscription: the latest decoded message and its stamp."""
-
-    def __init__(self, name: str, kind: type) -> None:
-        self.name, self.kind = name, kind
-        self.msg: Any = None
-        self.stamp_ns = -1
-        self.count = 0
-        self.recorded = False
-        self.episodic = False  # published once per episode (goal, plan), not every step
 
 
 class RosTransport(Transport):
@@ -150,7 +81,7 @@ class RosTransport(Transport):
         self.node = node
         self._executor = EventsExecutor(context=node.context)
         self._executor.add_node(node)
-        self._topics: dict[str, _Topic] = {}
+        self._topics: dict[str, Topic] = {}
         self._roles: dict[str, str] = {}  # frame field -> topic key
         self._pending: list[tuple[int, RawMessage]] = []  # (header stamp, message) held while
         # a reset waits for the new episode's first stamp (its goal's)
@@ -159,15 +90,16 @@ class RosTransport(Transport):
         self._closed = False
         self._subscribe(config, sensors)
         self._faults: dict[int, str] = {}  # step stamp (ns) -> why the sim voided the episode
-        self._status: _Topic | None = None
+        self._status: Topic | None = None
         self._status_live = False  # the sim publishes a status every step: wait for it
         if config.ros.sim_node:
-            self._subscribe_status()
+            self._status = subscribe_status(node, self._faults)
         self._cmd_stamped = config.ros.cmd_vel_type == "TwistStamped"
         kind = TwistStamped if self._cmd_stamped else Twist
-        self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel, _RELIABLE)
+        self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel,
+                                              profile(bridge_qos(QosKind.RELIABLE)))
         self._cmd_name = self._cmd_pub.topic_name
-        self._cmd_type = _type_name(kind)
+        self._cmd_type = type_name(kind)
         self._set_params = self._reset_client = None
         if config.ros.sim_node:
             self._set_params = node.create_client(
@@ -175,96 +107,44 @@ class RosTransport(Transport):
         if config.ros.reset_service:
             self._reset_client = node.create_client(Empty, config.ros.reset_service)
         self._used_goal_ns = -1  # the goal stamp of the last episode
-        self._plan_msg: Any = None  # the plan message last decoded, and its points
-        self._plan = np.zeros((0, 2))
+        self._decoded: dict[str, tuple[Any, Any]] = {}  # episodic sensor -> (message, value)
 
     # -- wiring ---------------------------------------------------------------------------
 
     def _subscribe(self, config: EnvConfig, sensors: frozenset[str]) -> None:
-        t = config.topics
-        sensor_qos = _BEST_EFFORT if config.ros.sensor_qos == "best_effort" else _RELIABLE
-        # The sim latches its goal; an operator's tool (rviz2's "2D Goal Pose") publishes
-        # volatile, which a transient-local subscription would not match.
-        goal_qos = _LATCHED if config.ros.sim_node else _RELIABLE
-        wanted: dict[str, tuple[type, QoSProfile]] = {t.pose: (ros_type(ODOM.type), _RELIABLE),
-                                                      t.goal: (ros_type(GOAL_POSE.type), goal_qos)}
-        self._roles = {"pose": t.pose, "goal": t.goal}
-        if "plan" in sensors:  # once per episode, like the goal (nav2's /plan: on each replan)
-            wanted[t.plan] = (ros_type(PLAN.type), goal_qos)
-            self._roles["plan"] = t.plan
-        for role, topic, sim_topic in (("scan", t.scan, SCAN), ("depth", t.depth, DEPTH_IMAGE),
-                                       ("person", t.person, PERSON_POSE)):
-            if role in sensors:
-                wanted[topic] = _like(sim_topic, sensor_qos)
-                self._roles[role] = topic
+        wired = wiring(config, sensors, self.node.resolve_topic_name)
+        self._roles, self._record_cmd = wired.roles, wired.record_cmd
+        self._sync_topic, self._once = wired.sync, wired.once
         resolve = self.node.resolve_topic_name
-        self._record_cmd = False
-        if config.record.enabled:
-            taken = {resolve(name) for name in wanted}
-            for topic in config.record.topics:
-                if resolve(topic) == resolve(t.cmd_vel) or topic == "cmd_vel":
-                    self._record_cmd = True
-                    continue
-                if resolve(topic) in taken:
-                    continue
-                taken.add(resolve(topic))
-                sim_topic = _KNOWN_TOPICS.get(topic) or _KNOWN_TOPICS.get(topic.strip("/"))
-                if sim_topic is None:
-                    raise ConfigError(f"record.topics: {topic!r} has no known message type; "
-                                      f"expected one of {', '.join(_KNOWN_TOPICS)}")
-                wanted[topic] = ((ros_type(sim_topic.type), _LATCHED)
-                                 if sim_topic.qos is QosKind.LATCHED
-                                 else _like(sim_topic, sensor_qos))
-        listed = ({resolve(name) for name in config.record.topics} if config.record.enabled
-                  else set())
-        for topic, (kind, qos) in wanted.items():
-            entry = _Topic(topic, kind)
-            entry.recorded = resolve(topic) in listed
-            entry.episodic = qos.durability == DurabilityPolicy.TRANSIENT_LOCAL or topic in (
-                t.goal, t.plan)
+        for topic, (kind, qos) in wired.wanted.items():
+            entry = Topic(topic, kind)
+            entry.recorded = resolve(topic) in wired.recorded
+            entry.episodic = topic in wired.episodic
             needed = topic in self._roles.values()
-            sub = self.node.create_subscription(kind, topic, self._callback(entry, needed), qos,
+            sub = self.node.create_subscription(ros_type(kind), topic,
+                                                self._callback(entry, needed), profile(qos),
                                                 raw=True)
             entry.name = sub.topic_name
             self._topics[topic] = entry
 
-    def _subscribe_status(self) -> None:
-        """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
-        physics diverged and the robot was put back at its start."""
-        from pic4rl_sim.node.messages import PHYSICS_STATUS
-
-        entry = _Topic(DIAGNOSTICS.name, DiagnosticArray)
-
-        def on_status(msg: DiagnosticArray) -> None:
-            for status in msg.status:
-                if status.name == PHYSICS_STATUS:
-                    entry.stamp_ns = decode.stamp_ns(msg.header)
-                    if status.level == DiagnosticStatus.ERROR:
-                        self._faults[entry.stamp_ns] = status.message
-
-        sub = self.node.create_subscription(DiagnosticArray, DIAGNOSTICS.name, on_status,
-                                            _RELIABLE)
-        entry.name = sub.topic_name
-        self._status = entry
-
-    def _callback(self, entry: _Topic, needed: bool) -> Callable[[bytes], None]:
+    def _callback(self, entry: Topic, needed: bool) -> Callable[[bytes], None]:
         """Stores the latest message of a topic frames need (decoded) or of one recorded only
         (just its stamp), and hands it to the tap once it belongs to the episode."""
-        type_name = _type_name(entry.kind)
-        decode_all = needed or entry.kind not in _STAMP_FIRST
+        kind = ros_type(entry.type_name)
+        decode_all = needed or not starts_with_stamp(kind)
 
         def on_message(data: bytes) -> None:
             if decode_all:
-                entry.msg = deserialize_message(data, entry.kind)
-                stamp = _stamp_of(entry.msg)
+                entry.msg = deserialize_message(data, kind)
+                stamp = stamp_of(entry.msg)
             else:  # recorded only: the stamp straight from the CDR bytes, nothing decoded
-                stamp = _cdr_stamp(data)
+                stamp = cdr_stamp(data)
             stamp = time.time_ns() if stamp is None else stamp
             entry.stamp_ns = stamp
             entry.count += 1
             if self.tap is None or not entry.recorded:
                 return
-            raw = RawMessage(entry.name, type_name, data, self._bag_time(stamp))
+            raw = RawMessage(entry.name, entry.type_name, data, self._bag_time(stamp))
             if self._t0_ns is None:
                 self._pending.append((stamp, raw))
             elif stamp >= self._t0_ns:
@@ -329,11 +209,11 @@ class RosTransport(Transport):
             self._spin_until(lambda: goal.stamp_ns > used,
                              self._ros.operator_timeout_s or None, f"topic {goal.name}: a goal")
         self._used_goal_ns = goal.stamp_ns
-        if "plan" in self._roles:  # the sim's plan carries its goal's stamp; any plan else
-            plan = self._topics[self._roles["plan"]]
+        for role in self._once:  # the sim's plan carries its goal's stamp
+            entry = self._topics[self._roles[role]]
             first = goal.stamp_ns if self._set_params is not None else 0
-            self._spin_until(lambda: plan.stamp_ns >= first, self._timeout_s,
-                             f"topic {plan.name}: the episode's plan")
+            self._spin_until(lambda e=entry: e.stamp_ns >= first, self._timeout_s,
+                             f"topic {entry.name}: the episode's {role}")
         self.fault = None
         self._faults.clear()
         if self._status is not None:
@@ -347,7 +227,7 @@ class RosTransport(Transport):
                     self.tap(raw)
         return frame
 
-    def _wait_for_graph(self, goal: _Topic) -> None:
+    def _wait_for_graph(self, goal: Topic) -> None:
         """Before the first reset: the sim's latched goal seen and our cmd_vel matched."""
         if goal.stamp_ns < 0 and self._set_params is not None:
             self._spin_until(lambda: goal.stamp_ns >= 0, self._timeout_s,
@@ -357,43 +237,13 @@ class RosTransport(Transport):
                              self._timeout_s, f"topic {self._cmd_name}: a subscriber")
 
     def _check_one_sim(self) -> None:
-        """``SimConflict`` when a second simulator answers on our names (a forgotten
-        ``pic4rl-sim``), so that frames and bags would mix two worlds: more than one node
-        named like ``ros.sim_node`` publishes the goal or the pose topic, or the pose topic
-        (which only a simulator or a robot's driver publishes) has a second publisher whose
-        node the graph cannot name yet (DDS may lose a node's name record while several
-        participants start). A graph query: cheap, once an episode."""
-        if not self._ros.sim_node:
-            return
-        sim = self.node.resolve_topic_name(self._ros.sim_node)
-        for role in ("goal", "pose"):
-            topic = self._topics[self._roles[role]].name
-            nodes = [f"{info.node_namespace.rstrip('/')}/{info.node_name}"
-                     for info in self.node.get_publishers_info_by_topic(topic)]
-            twins = [name for name in nodes if name == sim or (
-                role == "pose" and _UNNAMED in name)]
-            if len(twins) > 1:
-                shown = " and ".join(name if _UNNAMED not in name else "a node not yet named"
-                                     for name in twins)
-                raise SimConflict(
-                    f"{len(twins)} simulator nodes publish {topic} in ROS domain "
-                    f"{self.node.context.get_domain_id()}: {shown} (a pic4rl-sim left "
-                    "running?); stop all but one, or give each its own namespace "
-                    "(-r __ns:=/robot2) or ROS_DOMAIN_ID")
+        """``SimConflict`` when a second simulator answers on our names (``ros_sim``)."""
+        if self._ros.sim_node:
+            check_one_sim(self.node, self._ros.sim_node, self._topics[self._roles["goal"]].name,
+                          self._topics[self._roles["pose"]].name)
 
     def _set_episode(self, request: EpisodeRequest) -> None:
-        start = [] if request.start is None else [float(v) for v in request.start]
-        goal = [] if request.goal is None else [float(v) for v in request.goal]
-        params = [
-            ParameterMsg(name="seed", value=ParameterValue(
-                type=ParameterType.PARAMETER_INTEGER, integer_value=int(request.seed))),
-            ParameterMsg(name="start_pose", value=ParameterValue(
-                type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=start)),
-            ParameterMsg(name="goal", value=ParameterValue(
-                type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=goal)),
-        ]
-        request_msg = SetParametersAtomically.Request(parameters=params)
-        result = self._call(self._set_params, request_msg, "episode set-up").result
+        result = self._call(self._set_params, episode_request(request), "episode set-up").result
         if not result.successful:
             raise EpisodeRejected(f"{self._ros.sim_node}: {result.reason}")
 
@@ -401,13 +251,7 @@ class RosTransport(Transport):
 
     def step_command(self, command: Twist2D) -> None:
         """Publish ``command`` (and hand it to the tap, stamped with the last frame's time)."""
-        twist = Twist()
-        twist.linear.x, twist.linear.y, twist.angular.z = command.vx, command.vy, command.wz
-        msg: Any = twist
-        if self._cmd_stamped:
-            msg = TwistStamped(twist=twist)
-            msg.header.stamp = Time(sec=max(self._frame_stamp_ns, 0) // 1_000_000_000,
-                                    nanosec=max(self._frame_stamp_ns, 0) % 1_000_000_000)
+        msg = command_message(command, self._cmd_stamped, max(self._frame_stamp_ns, 0))
         self._cmd_pub.publish(msg)
         if self.tap is not None and self._t0_ns is not None and self._record_cmd:
             self.tap(RawMessage(self._cmd_name, self._cmd_type, serialize_message(msg),
@@ -429,9 +273,8 @@ class RosTransport(Transport):
         """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
         it when ``inclusive``); in rate mode, the latest messages."""
         needed = [self._topics[t] for role, t in self._roles.items()
-                  if role not in ("goal", "plan")]
-        sync = self._topics[self._roles.get("scan") or self._roles.get("depth")
-                            or self._roles["pose"]]
+                  if role != "goal" and role not in self._once]
+        sync = self._topics[self._sync_topic]
         if self._mode is StepMode.LOCKSTEP:
             status = self._status if self._status_live and not inclusive else None  # a step's
 
@@ -450,26 +293,25 @@ class RosTransport(Transport):
 
     def _frame(self, stamp_ns: int) -> SensorFrame:
         topics, roles = self._topics, self._roles
-        pose, twist = decode.odometry(topics[roles["pose"]].msg)
         goal_msg = topics[roles["goal"]].msg
         goal = None if goal_msg is None else (float(goal_msg.pose.position.x),
                                               float(goal_msg.pose.position.y))
-        scan = depth = person = None
-        if "scan" in roles:
-            scan = decode.scan(topics[roles["scan"]].msg, self._lidar_mount)
-        if "depth" in roles:
-            depth = decode.depth_image(topics[roles["depth"]].msg, topic=roles["depth"])
-        if "person" in roles:
-            person = decode.planar_pose(topics[roles["person"]].msg.pose)
-        plan = self._decoded_plan(topics[roles["plan"]].msg) if "plan" in roles else None
+        frame = build_frame(stamp_ns, decode.odometry(topics[roles["pose"]].msg), goal, roles,
+                            self._value)
         self._frame_stamp_ns = stamp_ns
-        return SensorFrame(stamp_ns, pose, twist, goal, scan, depth, person, plan)
+        return frame
 
-    def _decoded_plan(self, msg: Any) -> np.ndarray:
-        """The plan message as points, decoded once per message (not at every step)."""
-        if msg is not self._plan_msg:
-            self._plan_msg, self._plan = msg, decode.path(msg)
-        return self._plan
+    def _value(self, sensor: FrameSensor) -> Any:
+        """The sensor's latest message decoded; an episodic one's once per message (not at
+        every step)."""
+        topic = self._roles[sensor.name]
+        msg = self._topics[topic].msg
+        if not sensor.episodic:
+            return sensor.decode(msg, self._lidar_mount, topic)
+        last = self._decoded.get(sensor.name)
+        if last is None or last[0] is not msg:
+            last = self._decoded[sensor.name] = (msg, sensor.decode(msg, self._lidar_mount, topic))
+        return last[1]
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
         """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
@@ -477,10 +319,7 @@ class RosTransport(Transport):
         infos = self.node.get_publishers_info_by_topic(topic)
         if not infos:
             return None
-        qos = infos[0].qos_profile
-        return OfferedQos(reliable=qos.reliability == ReliabilityPolicy.RELIABLE,
-                          transient_local=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL,
-                          depth=int(qos.depth))
+        return settings_of(infos[0].qos_profile)
 
     def flush(self) -> None:
         """Lockstep: wait (briefly) until every recorded topic has reached the last frame's

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.interfaces import QosSettings
 
 from .frame import SensorFrame
 
@@ -28,14 +29,9 @@ class RawMessage(NamedTuple):
 #: Receives every message of the current episode (the recorder's ``write``).
 Tap = Callable[[RawMessage], None]
 
-
-class OfferedQos(NamedTuple):
-    """How a topic's publisher offers it, as a bag's metadata records it: reliable or best
-    effort, transient-local (latched) or volatile, history depth (0: not known)."""
-
-    reliable: bool = True
-    transient_local: bool = False
-    depth: int = 10
+#: How a topic's publisher offers it, as a bag's metadata records it: the interface table's
+#: QoS settings (reliable, transient-local, history depth; 0: not known).
+OfferedQos = QosSettings
 
 
 @dataclass(frozen=True)

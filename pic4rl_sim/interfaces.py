@@ -23,11 +23,14 @@ class Direction(str, Enum):
 
 @dataclass(frozen=True)
 class QosSettings:
-    """Reliable or best effort, transient local (latched) or volatile, history depth."""
+    """Reliable or best effort, transient local (latched) or volatile, history depth (0: not
+    known). The one description of a QoS: the node's kinds, the bridge's subscriptions, what
+    a bag's metadata records (``pic4rl_bridge.transport.OfferedQos``); rclpy's profiles are
+    made from it (``pic4rl_sim.node.ros_interfaces.profile``)."""
 
-    reliable: bool
-    transient_local: bool
-    depth: int
+    reliable: bool = True
+    transient_local: bool = False
+    depth: int = 10
 
     def __str__(self) -> str:
         return (f"{'reliable' if self.reliable else 'best effort'}, "
@@ -42,6 +45,20 @@ class QosKind(Enum):
     RELIABLE = QosSettings(reliable=True, transient_local=False, depth=10)
     #: The current episode's message reaches a (transient-local) subscriber that joins later.
     LATCHED = QosSettings(reliable=True, transient_local=True, depth=1)
+
+
+#: How many messages the bridge keeps per subscription (and its ``cmd_vel`` publisher): the
+#: recorder must see every message.
+BRIDGE_HISTORY = 100
+
+
+def bridge_qos(kind: QosKind) -> QosSettings:
+    """The QoS the bridge matches a ``kind`` topic with: the same policies, a longer history
+    (``BRIDGE_HISTORY``) unless latched (only the current episode's message counts)."""
+    settings = kind.value
+    if settings.transient_local:
+        return settings
+    return QosSettings(settings.reliable, settings.transient_local, BRIDGE_HISTORY)
 
 
 class Cadence(str, Enum):

@@ -19,14 +19,7 @@ from typing import Any
 
 from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
-from .engine.robot_specs import (
-    DepthCameraSpec,
-    ImuSpec,
-    LidarSpec,
-    OdometrySpec,
-    RobotSpec,
-    load_robot,
-)
+from .engine.robot_specs import SENSOR_KINDS, RobotSpec, load_robot
 from .engine.world_generators import GENERATORS, make_world
 from .engine.world_spec import WorldSpec
 from .errors import ConfigError, require, unknown_key
@@ -108,18 +101,17 @@ def _world_params() -> tuple[ParamSpec, ...]:
 
 
 def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
-    """Sensor overrides: the fields of the robot's sensor specs, with the robot's own sensors
-    as defaults (a sensor the robot lacks defaults to the stock one, disabled)."""
-    return (
-        ParamSpec("lidar.enabled", ParamType.BOOL, robot.lidar is not None,
-                  "whether the robot carries its LiDAR (publishes scan)"),
-        ParamSpec("depth.enabled", ParamType.BOOL, robot.depth is not None,
-                  "whether the robot carries its depth camera (publishes camera/depth/*)"),
-        *specs(LidarSpec, defaults=robot.lidar or LidarSpec(), prefix="lidar."),
-        *specs(DepthCameraSpec, defaults=robot.depth or DepthCameraSpec(), prefix="depth."),
-        *specs(ImuSpec, defaults=robot.imu, prefix="imu."),
-        *specs(OdometrySpec, defaults=robot.odometry, prefix="odometry."),
-    )
+    """Sensor overrides: the fields of the robot's sensor specs (``SENSOR_KINDS``), with the
+    robot's own sensors as defaults (a sensor the robot lacks defaults to the stock one,
+    disabled), after an ``<name>.enabled`` switch for each optional sensor."""
+    switches = tuple(ParamSpec(f"{k.name}.enabled", ParamType.BOOL,
+                               getattr(robot, k.name) is not None,
+                               f"whether the robot carries its {k.label} "
+                               f"(publishes {k.publishes})")
+                     for k in SENSOR_KINDS if k.optional)
+    fields = (specs(k.spec, defaults=getattr(robot, k.name) or k.spec(), prefix=f"{k.name}.")
+              for k in SENSOR_KINDS)
+    return (*switches, *(spec for group in fields for spec in group))
 
 
 def parameter_table(robot: RobotSpec) -> tuple[ParamSpec, ...]:
@@ -220,19 +212,15 @@ def build_robot(values: Mapping[str, Any]) -> RobotSpec:
     """The ``robot`` parameter's robot with the sensor parameters applied."""
     robot = load_robot(values["robot"])
     changes: dict[str, Any] = {}
-    for sensor, stock in (("lidar", robot.lidar or LidarSpec()),
-                          ("depth", robot.depth or DepthCameraSpec())):
+    for kind in SENSOR_KINDS:
+        if kind.optional and not values[f"{kind.name}.enabled"]:
+            changes[kind.name] = None
+            continue
+        stock = getattr(robot, kind.name) or kind.spec()
         fields = {f.name for f in dataclasses.fields(stock)}
-        if values[f"{sensor}.enabled"]:
-            given = {k.split(".")[1]: v for k, v in values.items()
-                     if k.startswith(f"{sensor}.") and k.split(".")[1] in fields}
-            changes[sensor] = dataclasses.replace(stock, **given)
-        else:
-            changes[sensor] = None
-    for sensor in ("imu", "odometry"):
-        stock = getattr(robot, sensor)
-        given = {k.split(".")[1]: v for k, v in values.items() if k.startswith(f"{sensor}.")}
-        changes[sensor] = dataclasses.replace(stock, **given)
+        given = {k.split(".")[1]: v for k, v in values.items()
+                 if k.startswith(f"{kind.name}.") and k.split(".")[1] in fields}
+        changes[kind.name] = dataclasses.replace(stock, **given)
     return robot.with_sensors(**changes)
 
 

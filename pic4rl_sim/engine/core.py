@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
@@ -19,9 +19,9 @@ from .engine_config import EngineConfig
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
 from .paths import plan_path
-from .robot_specs import Drive, RobotSpec
+from .robot_specs import SENSOR_KINDS, Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
-from .sensors import DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
+from .sensors import ENGINE_SENSORS, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
 from .world_spec import WorldSpec
 
 log = logging.getLogger(__name__)
@@ -29,8 +29,9 @@ log = logging.getLogger(__name__)
 _DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver does
 _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQPOS),
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
-# Independent random streams per purpose: reading one sensor never shifts another's noise.
-_STREAMS = ("sampling", "lidar", "depth", "imu", "odometry")
+# Independent random streams per purpose: reading one sensor never shifts another's noise
+# (a sensor kind added at the end of SENSOR_KINDS leaves the others' streams as they were).
+_STREAMS = ("sampling", *(kind.name for kind in SENSOR_KINDS))
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 
@@ -74,10 +75,14 @@ class Engine:
         self.model, self.ids = build_model(robot, world, physics_dt_s=self.config.physics_dt_s)
         self.data = mujoco.MjData(self.model)
         body = self.ids.robot_body
-        self.lidar = robot.lidar and Lidar(self.model, robot.lidar, exclude_body=body)
-        self.depth = robot.depth and DepthCamera(self.model, robot.depth, exclude_body=body)
-        self.imu = Imu(robot.imu)
-        self.odometry = WheelOdometry(robot.odometry)
+        #: The robot's sensors by ``SENSOR_KINDS`` name (an optional one it lacks: absent).
+        self.sensors: dict[str, Any] = {
+            kind.name: ENGINE_SENSORS[kind.name].build(self.model, spec, body)
+            for kind in SENSOR_KINDS if (spec := getattr(robot, kind.name)) is not None}
+        self.lidar: Lidar | None = self.sensors.get("lidar")
+        self.depth: DepthCamera | None = self.sensors.get("depth")
+        self.imu: Imu = self.sensors["imu"]
+        self.odometry: WheelOdometry = self.sensors["odometry"]
         self._odom: tuple[Pose2D, Twist2D] = (Pose2D(0, 0, 0), Twist2D())
         self._rng: dict[str, np.random.Generator] = {}
         self.seed = seed
@@ -241,21 +246,25 @@ class Engine:
             return None
         return self.world.person.pose_at(self.episode_time_s)
 
+    def read(self, sensor: str) -> Any:
+        """The robot's ``sensor`` (a ``SENSOR_KINDS`` name) read now, with its own noise
+        stream (``ENGINE_SENSORS``); error if the robot has none."""
+        require(sensor in self.sensors, f"robot.{sensor}", None, f"a {sensor} on the robot")
+        return ENGINE_SENSORS[sensor].read(self.sensors[sensor], self, self._rng[sensor])  # type: ignore[misc]
+
     def scan(self) -> np.ndarray:
         """LiDAR ranges now (REP 117: ``inf`` beyond range); error if the robot has none."""
         require(self.lidar is not None, "robot.lidar", None, "a LiDAR on the robot to read a scan")
-        return self.lidar.read(self.data, self.robot_pose(), self._rng["lidar"])  # type: ignore[union-attr]
+        return self.read("lidar")
 
     def depth_image(self) -> np.ndarray:
         """Depth image now (m along the optical axis, float32, height × width)."""
         require(self.depth is not None, "robot.depth", None, "a depth camera on the robot")
-        return self.depth.read(self.data, self.robot_pose(), self._rng["depth"])  # type: ignore[union-attr]
+        return self.read("depth")
 
     def imu_reading(self) -> ImuReading:
         """IMU now: orientation, yaw rate, body-frame acceleration including gravity."""
-        d, ids = self.data, self.ids
-        return self.imu.read(float(d.qpos[ids.qpos_yaw]), float(d.qvel[ids.dof_yaw]),
-                             (float(d.qacc[ids.dof_x]), float(d.qacc[ids.dof_y])), self._rng["imu"])
+        return self.read("imu")
 
     def wheel_odometry(self) -> tuple[Pose2D, Twist2D]:
         """Wheel odometry: a pose that starts at the true start and drifts, and the body twist."""

@@ -129,6 +129,31 @@ class OdometrySpec:
 
 
 @dataclass(frozen=True)
+class SensorKind:
+    """One kind of sensor a robot may carry: ``name`` is its ``RobotSpec`` field, its
+    parameters' prefix (``lidar.beams``) and its random stream; ``spec`` its spec class;
+    ``optional`` sensors may be missing (``None``) and get an ``<name>.enabled`` parameter
+    that names the sensor (``label``) and what it publishes (``publishes``)."""
+
+    name: str
+    spec: type
+    optional: bool = False
+    label: str = ""
+    publishes: str = ""
+
+
+#: Every kind of sensor, in ``RobotSpec``'s order: the sim's parameters, a robot file's keys
+#: and the engine's sensors derive from it.
+SENSOR_KINDS = (
+    SensorKind("lidar", LidarSpec, optional=True, label="LiDAR", publishes="scan"),
+    SensorKind("depth", DepthCameraSpec, optional=True, label="depth camera",
+               publishes="camera/depth/*"),
+    SensorKind("imu", ImuSpec),
+    SensorKind("odometry", OdometrySpec),
+)
+
+
+@dataclass(frozen=True)
 class RobotSpec:
     """A mobile base: body, drive, limits (SI units) and sensors."""
 
@@ -163,7 +188,7 @@ class RobotSpec:
                     "0 for a differential-drive robot")
 
     def with_sensors(self, **changes: Any) -> RobotSpec:
-        """A copy with ``lidar``/``depth``/``imu``/``odometry`` replaced."""
+        """A copy with sensors (``SENSOR_KINDS``' names) replaced."""
         return dataclasses.replace(self, **changes)
 
 
@@ -222,8 +247,7 @@ def robot_from_mapping(data: Mapping[str, Any], *, where: str = "robot") -> Robo
     data = dict(data)
     base = BUILT_IN.get(str(data.pop("base", "")))  # start from a built-in robot if named
     values: dict[str, Any] = dataclasses.asdict(base) if base else {}
-    nested = {"footprint": Footprint, "lidar": LidarSpec, "depth": DepthCameraSpec,
-              "imu": ImuSpec, "odometry": OdometrySpec}
+    nested = {"footprint": Footprint, **{k.name: k.spec for k in SENSOR_KINDS}}
     for key, value in data.items():  # nested mappings refine the base robot's sensors
         old = values.get(key)
         merge = isinstance(old, dict) and isinstance(value, Mapping)

@@ -9,7 +9,8 @@ minimum. Frames follow REP 103: base +x forward, +y left, +z up, origin on the f
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
@@ -266,3 +267,34 @@ class WheelOdometry:
         self._pose = Pose2D(odom.x + c * dx - s * dy, odom.y + s * dx + c * dy,
                             wrap_angle(odom.yaw + dtheta))
         return self._pose, Twist2D(dx / dt_s, dy / dt_s, dtheta / dt_s)
+
+
+class EngineSensor(NamedTuple):
+    """How the engine builds and reads one kind of ``robot_specs.SENSOR_KINDS``."""
+
+    #: (model, spec, the robot's body id, which rays skip) → the sensor.
+    build: Callable[[mujoco.MjModel, Any, int], Any]
+    #: (sensor, engine, the sensor's random stream) → a reading; ``None``: the engine
+    #: advances it at each step (wheel odometry).
+    read: Callable[[Any, Any, np.random.Generator], Any] | None = None
+
+
+def _read_rays(sensor: Lidar | DepthCamera, engine: Any, rng: np.random.Generator) -> np.ndarray:
+    return sensor.read(engine.data, engine.robot_pose(), rng)
+
+
+def _read_imu(imu: Imu, engine: Any, rng: np.random.Generator) -> ImuReading:
+    d, ids = engine.data, engine.ids
+    return imu.read(float(d.qpos[ids.qpos_yaw]), float(d.qvel[ids.dof_yaw]),
+                    (float(d.qacc[ids.dof_x]), float(d.qacc[ids.dof_y])), rng)
+
+
+#: Each sensor kind's engine side, by ``SENSOR_KINDS`` name.
+ENGINE_SENSORS = {
+    "lidar": EngineSensor(lambda model, spec, body: Lidar(model, spec, exclude_body=body),
+                          _read_rays),
+    "depth": EngineSensor(lambda model, spec, body: DepthCamera(model, spec, exclude_body=body),
+                          _read_rays),
+    "imu": EngineSensor(lambda model, spec, body: Imu(spec), _read_imu),
+    "odometry": EngineSensor(lambda model, spec, body: WheelOdometry(spec)),
+}

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import array
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -77,11 +78,95 @@ def _odometry(stamp: Time, frame_id: str, exact: bool) -> Odometry:
     return msg
 
 
+class _Imu:
+    """``imu/data``: the IMU's sample (every robot has one)."""
+
+    def __init__(self, engine: Engine, stamp: Time) -> None:
+        imu = engine.imu
+        self.msg = Imu(header=Header(stamp=stamp, frame_id=imu.frame_id),
+                       orientation_covariance=imu.orientation_covariance,
+                       angular_velocity_covariance=imu.angular_velocity_covariance,
+                       linear_acceleration_covariance=imu.linear_acceleration_covariance)
+        self.held = {IMU: self.msg}
+
+    def fill(self, engine: Engine) -> None:
+        reading = engine.imu_reading()
+        q, w, a = self.msg.orientation, self.msg.angular_velocity, self.msg.linear_acceleration
+        q.x, q.y, q.z, q.w = reading.orientation_xyzw
+        w.x, w.y, w.z = reading.angular_velocity_xyz
+        a.x, a.y, a.z = reading.linear_acceleration_xyz
+
+
+class _Person:
+    """``person/pose``: the walking person's pose (worlds with a person)."""
+
+    def __init__(self, engine: Engine, stamp: Time) -> None:
+        self.msg = PoseStamped(header=Header(stamp=stamp, frame_id=WORLD_FRAME))
+        self.held = {PERSON_POSE: self.msg}
+
+    def fill(self, engine: Engine) -> None:
+        person = engine.person_pose()
+        if person is not None:
+            _set_pose(self.msg.pose, person[0])
+
+
+class _Depth:
+    """``camera/depth/image_raw`` (pixels written in place) and its ``camera_info``."""
+
+    def __init__(self, engine: Engine, stamp: Time) -> None:
+        cam = engine.depth
+        assert cam is not None
+        header = Header(stamp=stamp, frame_id=cam.frame_id)
+        image = Image(header=header, height=cam.height, width=cam.width, encoding="32FC1",
+                      is_bigendian=int(sys.byteorder == "big"), step=4 * cam.width)
+        image.data = array.array("B", bytes(4 * cam.width * cam.height))
+        self._pixels = np.frombuffer(image.data, dtype=np.float32).reshape(cam.height,
+                                                                            cam.width)
+        info = CameraInfo(
+            header=header, height=cam.height, width=cam.width, distortion_model="plumb_bob",
+            d=[0.0] * 5, k=cam.k_matrix, r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+            p=cam.p_matrix)
+        self.held = {DEPTH_IMAGE: image, CAMERA_INFO: info}
+
+    def fill(self, engine: Engine) -> None:
+        self._pixels[...] = engine.depth_image()
+
+
+class _Scan:
+    """``scan``: the LiDAR's ranges, written in place."""
+
+    def __init__(self, engine: Engine, stamp: Time) -> None:
+        lidar = engine.lidar
+        assert lidar is not None
+        msg = LaserScan(
+            header=Header(stamp=stamp, frame_id=lidar.frame_id),
+            angle_min=lidar.angle_min_rad, angle_max=lidar.angle_max_rad,
+            angle_increment=lidar.angle_increment_rad, time_increment=0.0,
+            scan_time=engine.config.control_dt_s, range_min=lidar.range_min_m,
+            range_max=lidar.range_max_m)
+        msg.ranges = array.array("f", bytes(4 * lidar.spec.beams))
+        self._ranges = np.frombuffer(msg.ranges, dtype=np.float32)
+        self.held = {SCAN: msg}
+
+    def fill(self, engine: Engine) -> None:
+        self._ranges[...] = engine.scan()
+
+
+#: Each sensor's step messages: (whether an engine has it, its message maker). A maker holds
+#: ``held`` (interface → message, allocated once) and ``fill(engine)`` writes a reading.
+SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], Any]], ...] = (
+    (lambda engine: True, _Imu),
+    (lambda engine: engine.world.person is not None, _Person),
+    (lambda engine: engine.depth is not None, _Depth),
+    (lambda engine: engine.lidar is not None, _Scan),
+)
+
+
 class StateMessages:
     """One step's messages for ``engine``; ``fill`` refreshes them for a new stamp.
 
     ``stamp`` is shared by every header and the clock, so one write re-stamps them all.
-    Sensors the robot lacks (and the person, in a world without one) are ``None``.
+    Sensors the robot lacks (and the person, in a world without one) have no messages.
     """
 
     def __init__(self, engine: Engine) -> None:
@@ -90,47 +175,14 @@ class StateMessages:
         self.clock = Clock(clock=stamp)
         self.ground_truth = _odometry(stamp, WORLD_FRAME, exact=True)
         self.odom = _odometry(stamp, engine.odometry.frame_id, exact=False)
-        imu = engine.imu
-        self.imu = Imu(header=Header(stamp=stamp, frame_id=imu.frame_id),
-                       orientation_covariance=imu.orientation_covariance,
-                       angular_velocity_covariance=imu.angular_velocity_covariance,
-                       linear_acceleration_covariance=imu.linear_acceleration_covariance)
-        self.person = (PoseStamped(header=Header(stamp=stamp, frame_id=WORLD_FRAME))
-                       if engine.world.person is not None else None)
-        self.scan: LaserScan | None = None
-        self._ranges: np.ndarray | None = None
-        if engine.lidar is not None:
-            lidar = engine.lidar
-            self.scan = LaserScan(
-                header=Header(stamp=stamp, frame_id=lidar.frame_id),
-                angle_min=lidar.angle_min_rad, angle_max=lidar.angle_max_rad,
-                angle_increment=lidar.angle_increment_rad, time_increment=0.0,
-                scan_time=engine.config.control_dt_s, range_min=lidar.range_min_m,
-                range_max=lidar.range_max_m)
-            self.scan.ranges = array.array("f", bytes(4 * lidar.spec.beams))
-            self._ranges = np.frombuffer(self.scan.ranges, dtype=np.float32)
-        self.depth_image: Image | None = None
-        self.camera_info: CameraInfo | None = None
-        self._pixels: np.ndarray | None = None
-        if engine.depth is not None:
-            cam = engine.depth
-            header = Header(stamp=stamp, frame_id=cam.frame_id)
-            self.depth_image = Image(header=header, height=cam.height, width=cam.width,
-                                     encoding="32FC1", is_bigendian=int(sys.byteorder == "big"),
-                                     step=4 * cam.width)
-            self.depth_image.data = array.array("B", bytes(4 * cam.width * cam.height))
-            self._pixels = np.frombuffer(self.depth_image.data, dtype=np.float32).reshape(
-                cam.height, cam.width)
-            self.camera_info = CameraInfo(
-                header=header, height=cam.height, width=cam.width, distortion_model="plumb_bob",
-                d=[0.0] * 5, k=cam.k_matrix, r=(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
-                p=cam.p_matrix)
-        held = {CLOCK: self.clock, GROUND_TRUTH: self.ground_truth, ODOM: self.odom,
-                IMU: self.imu, PERSON_POSE: self.person, CAMERA_INFO: self.camera_info,
-                DEPTH_IMAGE: self.depth_image, SCAN: self.scan}
+        self._sensors = [make(engine, stamp) for has, make in SENSOR_MESSAGES if has(engine)]
+        held: dict[Interface, Any] = {CLOCK: self.clock, GROUND_TRUTH: self.ground_truth,
+                                      ODOM: self.odom}
+        for sensor in self._sensors:
+            held.update(sensor.held)
         #: (topic, message) of each step topic this engine has, in publishing order.
         self.published: tuple[tuple[Interface, Any], ...] = tuple(
-            (topic, held[topic]) for topic in STEP_TOPICS if held[topic] is not None)
+            (topic, held[topic]) for topic in STEP_TOPICS if topic in held)
 
     def fill(self, engine: Engine, stamp_ns: int) -> None:
         """Stamp every message with ``stamp_ns`` (ns) and fill it from ``engine`` now."""
@@ -145,20 +197,8 @@ class StateMessages:
         _set_pose(odom.pose.pose, pose)
         lin, ang = odom.twist.twist.linear, odom.twist.twist.angular
         lin.x, lin.y, ang.z = twist.vx, twist.vy, twist.wz
-        reading = engine.imu_reading()
-        imu = self.imu
-        q, w, a = imu.orientation, imu.angular_velocity, imu.linear_acceleration
-        q.x, q.y, q.z, q.w = reading.orientation_xyzw
-        w.x, w.y, w.z = reading.angular_velocity_xyz
-        a.x, a.y, a.z = reading.linear_acceleration_xyz
-        if self.person is not None:
-            person = engine.person_pose()
-            if person is not None:
-                _set_pose(self.person.pose, person[0])
-        if self._pixels is not None:
-            self._pixels[...] = engine.depth_image()
-        if self._ranges is not None:
-            self._ranges[...] = engine.scan()
+        for sensor in self._sensors:
+            sensor.fill(engine)
 
 
 def goal_pose(goal: tuple[float, float], stamp_ns: int) -> PoseStamped:

@@ -37,12 +37,7 @@ from typing import Any
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import Twist
-from rcl_interfaces.msg import (
-    FloatingPointRange,
-    IntegerRange,
-    ParameterDescriptor,
-    SetParametersResult,
-)
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
@@ -72,60 +67,24 @@ from ..interfaces import (
     Interface,
 )
 from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_path, world_markers
+from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
 from ..params import (
     MAX_SEED,
-    ROBOT,
     ClockConfig,
     ClockMode,
     SimConfig,
     WorldChoice,
     build_clock,
     build_config,
-    parameter_table,
-    resolve,
 )
-from ..engine.robot_specs import load_robot
 from ..engine.sampling import check_free
 from ..engine.world_spec import WorldSpec
 from ..params_file import param_rules
-from ..schema import ParamSpec, ParamType, help_text
 
-_ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
-              ParamType.DOUBLE: Parameter.Type.DOUBLE, ParamType.STRING: Parameter.Type.STRING,
-              ParamType.DOUBLE_ARRAY: Parameter.Type.DOUBLE_ARRAY,
-              ParamType.INTEGER_ARRAY: Parameter.Type.INTEGER_ARRAY,
-              ParamType.STRING_ARRAY: Parameter.Type.STRING_ARRAY}
 _CLOCK_KEYS = frozenset({"clock_mode", "real_time_factor", "cmd_timeout_s"})
 _THROTTLE_S = 5.0
 _STOP = Twist2D()
-
-
-def _descriptor(spec: ParamSpec) -> ParameterDescriptor:
-    desc = ParameterDescriptor(description=spec.description)
-    if spec.choices:
-        desc.additional_constraints = f"one of {', '.join(spec.choices)}"
-    if spec.range is not None and spec.type is ParamType.INTEGER:
-        desc.integer_range = [IntegerRange(from_value=int(spec.range[0]),
-                                           to_value=int(spec.range[1]), step=1)]
-    elif spec.range is not None:
-        desc.floating_point_range = [FloatingPointRange(from_value=float(spec.range[0]),
-                                                        to_value=float(spec.range[1]), step=0.0)]
-    return desc
-
-
-class _NodeLogHandler(logging.Handler):
-    """Forwards the package's Python log records (the engine's) to the node's logger."""
-
-    def __init__(self, node: Node) -> None:
-        super().__init__()
-        self._logger = node.get_logger()
-
-    def emit(self, record: logging.LogRecord) -> None:
-        level = record.levelno
-        log = (self._logger.error if level >= logging.ERROR else self._logger.warning
-               if level >= logging.WARNING else self._logger.info)
-        log(self.format(record))
 
 
 class SimNode(Node):
@@ -134,10 +93,9 @@ class SimNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("sim", **kwargs)
-        self._log_handler = _NodeLogHandler(self)
+        self._log_handler = NodeLogHandler(self)
         logging.getLogger("pic4rl_sim").addHandler(self._log_handler)
-        self._table: dict[str, ParamSpec] = {}
-        self._values = self._declare_parameters()
+        self._table, self._values = declare(self)
         self._steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._timer: Timer | None = None
         self._pubs: dict[str, Publisher] = {}
@@ -172,19 +130,6 @@ class SimNode(Node):
         super().destroy_node()
 
     # -- parameters ------------------------------------------------------------------------
-
-    def _declare_parameters(self) -> dict[str, Any]:
-        """Declare the table (robot first: its sensors are the defaults) with the values of
-        the params files and ``-p`` checked against it."""
-        overrides = {name: p.value for name, p in self._parameter_overrides.items()}
-        robot = load_robot(ROBOT.check(overrides.get(ROBOT.name, ROBOT.default)))
-        self._table = {spec.name: spec for spec in parameter_table(robot)}
-        values = resolve(self._table.values(), overrides, also_known=self._parameters)
-        self.declare_parameters("", [(s.name, _ROS_TYPES[s.type], _descriptor(s))
-                                     for s in self._table.values()], ignore_override=True)
-        self.set_parameters([Parameter(name, _ROS_TYPES[self._table[name].type], value)
-                             for name, value in values.items()])
-        return values
 
     def _validate_parameters(self, params: list[Parameter]) -> SetParametersResult:
         """Accept a change only if the whole configuration stays valid and a given start and
@@ -359,23 +304,6 @@ class SimNode(Node):
         return response
 
 
-def _usage() -> str:
-    return "\n".join(["usage: pic4rl-sim [--ros-args [--params-file FILE] [-p NAME:=VALUE] ...]",
-                      "", "parameters (sensor defaults: the default robot's):",
-                      help_text(parameter_table(load_robot(ROBOT.default)))])
-
-
-def _rules_as_parameters(rules: dict[str, Any]) -> list[Parameter]:
-    """``-p`` rules as overrides for the node (checked against the table there)."""
-    out = []
-    for name, value in rules.items():
-        try:
-            out.append(Parameter(name, value=value))
-        except (TypeError, ValueError) as err:
-            raise ConfigError(f"-p {name}: {value!r} is not a ROS parameter value") from err
-    return out
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the sim until interrupted; exit code 2 for a bad argument or parameter."""
     args = ["pic4rl-sim", *(sys.argv[1:] if argv is None else argv)]
@@ -385,7 +313,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"pic4rl-sim: {str(err).split(', at ')[0]}", file=sys.stderr)
         return 2
     if extra in (["-h"], ["--help"]):
-        print(_usage())
+        print(usage())
         return 0
     if extra:
         print(f"pic4rl-sim: unexpected argument {extra[0]!r}; parameters go after --ros-args "
@@ -393,7 +321,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     rclpy.init(args=args)
     try:
-        node = SimNode(parameter_overrides=_rules_as_parameters(param_rules(args)))
+        node = SimNode(parameter_overrides=rules_as_parameters(param_rules(args)))
     except (ConfigError, WorldError) as err:
         print(f"pic4rl-sim: {err}", file=sys.stderr)
         rclpy.try_shutdown()

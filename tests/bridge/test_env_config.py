@@ -22,7 +22,7 @@ from pic4rl_bridge.config import (
     load_env_config,
 )
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.robot_info import Scenario
+from pic4rl_bridge.scenario import Scenario
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIGS = sorted((REPO / "config").glob("env_*.yaml"))

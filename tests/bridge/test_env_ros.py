@@ -196,7 +196,7 @@ def test_twist_stamped_commands(domain: int, ros_client) -> None:
     from pic4rl_sim.engine.geometry import Twist2D
 
     from pic4rl_bridge.config import load_env_config
-    from pic4rl_bridge.robot_info import Scenario
+    from pic4rl_bridge.scenario import Scenario
     from pic4rl_bridge.ros_transport import RosTransport
 
     config = load_env_config(ROOT / "config/env_goto_lidar.yaml").replace(

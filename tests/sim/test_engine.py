@@ -225,3 +225,33 @@ def test_a_given_start_gets_a_goal_far_enough_and_a_failed_reset_changes_nothing
         engine.reset(seed=99, start=Pose2D(9.0, 0.0, 0.0))
     assert (engine.seed, engine.start, engine.goal) == before
     assert engine._rng["lidar"].bit_generator.state == noise_state
+
+
+def test_every_sensor_kind_is_built_and_read_through_the_table():
+    """``SENSOR_KINDS`` (robot_specs) and ``ENGINE_SENSORS`` (sensors) name the same kinds; a
+    robot gets one engine sensor per spec it carries, and ``read`` of each equals its named
+    reader on the same noise stream."""
+    from pic4rl_sim.engine.robot_specs import SENSOR_KINDS, DepthCameraSpec, ImuSpec
+    from pic4rl_sim.engine.sensors import ENGINE_SENSORS
+
+    assert [k.name for k in SENSOR_KINDS] == list(ENGINE_SENSORS)
+    robot = JACKAL.with_sensors(lidar=LidarSpec(beams=30, noise_std_m=0.02),
+                                depth=DepthCameraSpec(width=8, height=6, noise_std_m=0.02),
+                                imu=ImuSpec(gyro_noise_std_rad_s=0.1))
+    engine = Engine(robot, open_field(Box(2.0, 0.0, 0.2, 2.0, 1.0)), seed=4)
+    assert set(engine.sensors) == {k.name for k in SENSOR_KINDS}
+    named = {"lidar": engine.scan, "depth": engine.depth_image, "imu": engine.imu_reading}
+    for name, reader in named.items():
+        engine.reset(seed=4)
+        by_name = reader()
+        engine.reset(seed=4)
+        again = engine.read(name)
+        if name == "imu":  # a reading of three tuples
+            assert again == by_name and by_name.angular_velocity_xyz[2] != 0.0  # noisy gyro
+        else:
+            assert again.dtype == by_name.dtype
+            np.testing.assert_array_equal(again, by_name)
+    no_depth = Engine(JACKAL, open_field(), seed=0)
+    assert "depth" not in no_depth.sensors and no_depth.depth is None
+    with pytest.raises(ConfigError, match="robot.depth"):
+        no_depth.read("depth")

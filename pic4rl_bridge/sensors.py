@@ -1,0 +1,84 @@
+"""The frame's sensors in one table, and the one function that builds a ``SensorFrame``.
+
+Each optional field of ``SensorFrame`` is one ``FrameSensor``: the sim topic that carries it
+(its type, QoS and default name, ``topics.<name>`` in the config), how its message decodes,
+and how the in-process transport reads the same value straight from the engine. Both
+transports build frames through ``build_frame``; a task names the sensors it needs in its
+``required`` with the same names.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
+
+from . import decode
+from .frame import ScanData, SensorFrame, as_published
+
+
+@dataclass(frozen=True)
+class FrameSensor:
+    """One optional field of ``SensorFrame``: ``name`` is the field, the task's ``required``
+    entry and the ``topics`` key; ``interface`` the sim topic that carries it."""
+
+    name: str
+    interface: Interface
+    #: (message, LiDAR mount, topic name) → the field's value.
+    decode: Callable[[Any, Pose2D, str], Any]
+    #: (engine, LiDAR mount) → the same value as the decoded message, or ``None`` when the
+    #: engine has no such sensor (the in-process transport when it does not record).
+    read: Callable[[Any, Pose2D], Any]
+    #: Published once an episode (subscribed like the goal, decoded once per message).
+    episodic: bool = False
+
+
+def _f32(value: float) -> float:
+    """``value`` as a float32 message field holds it."""
+    return float(np.float32(value))
+
+
+def _read_scan(engine: Any, mount: Pose2D) -> ScanData | None:
+    lidar = engine.lidar
+    if lidar is None:
+        return None
+    return ScanData(engine.scan().astype(np.float32), _f32(lidar.angle_min_rad),
+                    _f32(lidar.angle_increment_rad), _f32(lidar.range_min_m),
+                    _f32(lidar.range_max_m), mount)
+
+
+def _read_depth(engine: Any, mount: Pose2D) -> np.ndarray | None:
+    return None if engine.depth is None else engine.depth_image().astype(np.float32)
+
+
+def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
+    seen = engine.person_pose()
+    return None if seen is None else as_published(seen[0])
+
+
+SENSORS = (
+    FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan),
+    FrameSensor("depth", DEPTH_IMAGE,
+                lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth),
+    FrameSensor("person", PERSON_POSE, lambda msg, mount, topic: decode.planar_pose(msg.pose),
+                _read_person),
+    FrameSensor("plan", PLAN, lambda msg, mount, topic: decode.path(msg),
+                lambda engine, mount: engine.plan(), episodic=True),
+)
+#: The frame's optional fields by name, in ``SensorFrame``'s order.
+BY_NAME = {s.name: s for s in SENSORS}
+
+
+def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
+                goal: tuple[float, float] | None, wanted: Iterable[str],
+                value: Callable[[FrameSensor], Any]) -> SensorFrame:
+    """The frame at ``stamp_ns``: pose and twist from ``odometry``, and ``value(sensor)`` for
+    each sensor ``wanted`` (the rest ``None``)."""
+    names = set(wanted)
+    pose, twist = odometry
+    return SensorFrame(stamp_ns, pose, twist, goal,
+                       **{s.name: value(s) for s in SENSORS if s.name in names})
