@@ -190,6 +190,7 @@ class Resume:
     replay_buffer: Path | None
     run_dir: Path
     skipped: tuple[str, ...] = ()
+    trained: str = ""  # the run's training config, in words (set with the session's config)
 
 
 #: What reading a truncated or corrupt zip or pickle raises.
