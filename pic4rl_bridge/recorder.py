@@ -40,6 +40,7 @@ from rosbags.interfaces import (
 )
 from rosbags.rosbag2 import Writer, WriterError
 
+from pic4rl_metrics import atomic
 from pic4rl_metrics.contract import (
     FACTS_TOPIC,
     OUTCOME_TOPIC,
@@ -334,7 +335,7 @@ class RunRecorder:
         text = yaml.safe_dump(plain(config), sort_keys=False)
         n = 1
         while True:
-            path = self.run_dir / (f"{CONFIG_NAME}.yaml" if n == 1 else f"{CONFIG_NAME}-{n}.yaml")
+            path = atomic.numbered(self.run_dir / f"{CONFIG_NAME}.yaml", n, keep_suffix=True)
             try:
                 with path.open("x") as f:
                     f.write(text)

@@ -74,3 +74,16 @@ def test_pic4rl_train_resume_reads_the_run_config_once(tmp_path: Path,
     assert reads == {str((AGENT / "config.yaml").resolve()): 1}
     assert resume is not None and resume.trained.startswith("trained with sensor lidar, from ")
     assert run.train.max_steps == 10
+
+
+def test_the_latest_of_a_runs_configs_is_found_by_the_recorders_naming(tmp_path: Path) -> None:
+    """``config.yaml``, ``config-2.yaml``, ...: one naming rule (``atomic.numbered``) for the
+    recorder that writes them and the runs that read the newest back."""
+    from pic4rl_agents.runs import run_config_file
+    from pic4rl_bridge.recorder import RunRecorder
+
+    written = [RunRecorder(tmp_path, "run", config={"n": n}).config_path for n in range(11)]
+    run = tmp_path / "run"
+    (run / "config-x.yaml").write_text("{}")  # not of the series
+    assert [p.name for p in written[:3]] == ["config.yaml", "config-2.yaml", "config-3.yaml"]
+    assert run_config_file(run) == run / "config-11.yaml"  # by number, not by name
