@@ -119,7 +119,7 @@ def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:
 def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int) -> None:
     """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
     drives sim nodes."""
-    from .run import _stop
+    from .launch import stop_group
     from .tester import run_agent
 
     if cell.transport != "ros":
@@ -135,7 +135,7 @@ def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int
         try:
             run_agent(spec, episodes=episodes, seed=seed, progress=False)
         finally:
-            _stop(sim, 10.0)
+            stop_group(sim, 10.0)
 
 
 def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
