@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
 from pic4rl_metrics import atomic
 from pic4rl_metrics.inputs import METADATA
@@ -70,9 +71,10 @@ def _plan(cell: Cell, root: Path, *, episodes: int, pairs: str, domain: int) -> 
                     env_overrides=env, sim_overrides=sim, progress=False)
 
 
-def _cell_pairs(cell: Cell, root: Path) -> GoalsAndPoses | None:
+def _cell_pairs(cell: Cell, root: Path, env: EnvConfig) -> GoalsAndPoses | None:
     """The cell's pairs in episode order: its file's, or drawn once from the pair set's seed
-    into ``<cell>/pairs.json``; ``None`` for the env's own episodes."""
+    (in ``env``'s robot and world) into ``<cell>/pairs.json``; ``None`` for the env's own
+    episodes."""
     if cell.pairs.file:
         return load_goals_and_poses(cell.pairs.file)
     if not cell.pairs.random:
@@ -83,8 +85,7 @@ def _cell_pairs(cell: Cell, root: Path) -> GoalsAndPoses | None:
         from pic4rl_bridge.scenario import Scenario
         from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-        spec = resolve_agents(_plan(cell, root, episodes=1, pairs="", domain=0))[0]
-        sampler = PairSampler.for_scenario(Scenario(spec.run.env))
+        sampler = PairSampler.for_scenario(Scenario(env.replace(transport="inprocess")))
         drawn = sampler.goals_and_poses(cell.pairs.random, seed=cell.pairs.seed,  # type: ignore[union-attr]
                                         kind=PAIR_KINDS[cell.pairs.kind])
         with atomic.replacing(path) as tmp:
@@ -93,16 +94,18 @@ def _cell_pairs(cell: Cell, root: Path) -> GoalsAndPoses | None:
     return load_goals_and_poses(path)
 
 
-def _pairs_from(pairs: GoalsAndPoses, first: int, folder: Path) -> str:
-    """A pairs file whose pair i is the cell's pair ``first + i`` (cycling)."""
+def _pairs_file(first: int, folder: Path) -> Path:
+    return folder / f"pairs_from_{first:04d}.json"
+
+
+def _pairs_from(pairs: GoalsAndPoses, first: int, folder: Path) -> None:
+    """Write the pairs file whose pair i is the cell's pair ``first + i`` (cycling)."""
     n = len(pairs.goals)
     order = [(first + i) % n for i in range(n)]
     rotated = GoalsAndPoses(pairs.initial_pose, tuple(pairs.goals[i] for i in order),
                             tuple(pairs.poses[i] for i in order))
-    path = folder / f"pairs_from_{first:04d}.json"
-    with atomic.replacing(path) as tmp:
+    with atomic.replacing(_pairs_file(first, folder)) as tmp:
         save_goals_and_poses(rotated, tmp, overwrite=True)
-    return str(path)
 
 
 def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:
@@ -116,7 +119,7 @@ def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:
 def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int) -> None:
     """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
     drives sim nodes."""
-    from .run import _stop
+    from .launch import stop_group
     from .tester import run_agent
 
     if cell.transport != "ros":
@@ -132,7 +135,7 @@ def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int
         try:
             run_agent(spec, episodes=episodes, seed=seed, progress=False)
         finally:
-            _stop(sim, 10.0)
+            stop_group(sim, 10.0)
 
 
 def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
@@ -144,15 +147,18 @@ def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
     folder = cell_dir(root, cell)
     folder.mkdir(parents=True, exist_ok=True)
     _set_aside(root, cell, current.unfinished)
-    pairs = _cell_pairs(cell, root)
     total, first = expected_episodes(cell), len(current.finished)
     domain = 1 + index % DOMAINS
     if first < total:
-        file = _pairs_from(pairs, first, folder) if pairs is not None else ""
+        own_pairs = bool(cell.pairs.file or cell.pairs.random)
+        file = str(_pairs_file(first, folder)) if own_pairs else ""
         # A resumed cell's episodes draw their simulator seeds from seed + first.
         seed = cell.seed + first
         spec = resolve_agents(_plan(cell, root, episodes=total - first, pairs=file,
-                                    domain=domain), folder)[0]
+                                    domain=domain), folder)[0]  # its files, read once
+        pairs = _cell_pairs(cell, root, spec.run.env)
+        if pairs is not None:
+            _pairs_from(pairs, first, folder)
         _drive(spec, cell, episodes=total - first, seed=seed, domain=domain)
     (folder / ERROR).unlink(missing_ok=True)
     atomic.write_text(folder / DONE, json.dumps({"cell": cell.name, "episodes": total}) + "\n")

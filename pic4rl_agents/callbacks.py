@@ -134,6 +134,7 @@ class SeededEvalCallback(EvalCallback):
         self.last_row: dict[str, float] = {}
         self._last_due_s = 0.0
         self._outcomes: list[str] = []
+        self._successes: list[bool] = []  # the latest evaluation's episodes' is_success
 
     def _init_callback(self) -> None:
         super()._init_callback()
@@ -144,8 +145,7 @@ class SeededEvalCallback(EvalCallback):
     @property
     def last_success_rate(self) -> float:
         """The success rate of the latest evaluation (0 before the first)."""
-        buffer = self._is_success_buffer
-        return float(np.mean(buffer)) if buffer else 0.0
+        return float(np.mean(self._successes)) if self._successes else 0.0
 
     def train_wall_s(self, now: float | None = None) -> float:
         """Seconds since ``clock_start`` minus the time spent evaluating."""
@@ -165,7 +165,7 @@ class SeededEvalCallback(EvalCallback):
         self.logger.record("time/wall_s", wall_s)
         self.logger.record("time/train_wall_s", train_s)
         self.eval_env.seed(self.eval_seed)
-        self._outcomes = []
+        self._outcomes, self._successes = [], []
         self.last_row = {"steps": self.num_timesteps, "wall_s": wall_s, "train_wall_s": train_s}
         try:
             keep_going = super()._on_step()
@@ -176,9 +176,14 @@ class SeededEvalCallback(EvalCallback):
         return keep_going
 
     def _log_success_callback(self, locals_: dict[str, Any], globals_: dict[str, Any]) -> None:
+        # SB3's hook for each evaluation step (what it gives ``evaluate_policy``); the rate is
+        # counted here, as SB3 counts its own, rather than read from its private buffer.
         super()._log_success_callback(locals_, globals_)
         if locals_["done"]:
-            self._outcomes.append(str(locals_["info"].get("outcome", "")))
+            info = locals_["info"]
+            self._outcomes.append(str(info.get("outcome", "")))
+            if info.get("is_success") is not None:
+                self._successes.append(bool(info["is_success"]))
 
     def _write_row(self, eval_s: float) -> None:
         rewards, lengths = self.evaluations_results[-1], self.evaluations_length[-1]

@@ -8,7 +8,6 @@ overrides (``pic4rl_agents.overrides``) are applied over the files by ``load_run
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,6 +59,9 @@ class Activation(ParamEnum):
 
 OFF_POLICY = ("ddpg", "td3", "sac", "tqc")
 ALGORITHM_NAMES = tuple(a.value for a in Algorithm)
+#: A run's params file sections.
+NODES = (TRAINER_NODE, ENV_NODE, SIM_NODE)
+Dotted = Mapping[str, Any] | None  # a section's overrides: {"epsilon.decay": 0.999}
 _LAYERS = "a non-empty list of positive layer sizes"
 
 
@@ -300,41 +302,46 @@ class RunConfig:
 
     @property
     def origin(self) -> str:
-        """Its sensor and where it came from, for messages: ``sensor lidar, from a.yaml +
-        command line``."""
+        """Its sensor and sources, for messages: ``sensor lidar, from a.yaml + command line``."""
         parts = [*self.sources, *(["command line"] if self.overridden else [])]
         return f"sensor {self.env.sensor}, from {' + '.join(parts) or 'the defaults'}"
+
+    def sections(self) -> dict[str, dict[str, Any]]:  # as params_file.load gives them
+        return {SIM_NODE: dict(self.env.sim_params), ENV_NODE: self.env.to_params(),
+                TRAINER_NODE: self.train.to_params()}
 
     def to_yaml(self) -> str:
         """The params file of this run (all three sections): ``pic4rl-train`` and
         ``pic4rl-test`` read it back as it is, and ``pic4rl-sim`` reads its ``sim:``."""
-        return params_file.dump({SIM_NODE: dict(self.env.sim_params),
-                                 ENV_NODE: self.env.to_params(),
-                                 TRAINER_NODE: self.train.to_params()})
+        return params_file.dump(self.sections())
+
+    def replace(self, *, train: Dotted = None, env: Dotted = None,
+                sim: Dotted = None) -> RunConfig:
+        """A copy with dotted overrides per section, by ``load_run_config``'s rule."""
+        return run_config(self.sections(), self.sources, train=train, env=env, sim=sim,
+                          overridden=self.overridden)
 
 
-def ros_domain(env: EnvConfig | None) -> str:
-    """The ROS domain an env talks in: its ``ros.domain_id``, else ``ROS_DOMAIN_ID`` (or 0)."""
-    if env is not None and env.ros.domain_id >= 0:
-        return str(env.ros.domain_id)
-    return os.environ.get("ROS_DOMAIN_ID", "0")
-
-
-def load_run_config(paths: Sequence[str | Path], *, train: Mapping[str, Any] | None = None,
-                    env: Mapping[str, Any] | None = None,
-                    sim: Mapping[str, Any] | None = None) -> RunConfig:
+def load_run_config(paths: Sequence[str | Path], *, train: Dotted = None, env: Dotted = None,
+                    sim: Dotted = None) -> RunConfig:
     """The ``trainer``, ``nav_env`` and ``sim`` sections of ``paths`` (later files win, key by
     key, as ROS merges several ``--params-file``), then dotted overrides per section (checked
     by the caller with ``check_overrides``, which names their flags)."""
-    merged = params_file.load(paths, (TRAINER_NODE, ENV_NODE, SIM_NODE))
-    merged[TRAINER_NODE].update(train or {})
-    merged[ENV_NODE].update(env or {})
-    merged[SIM_NODE].update(sim or {})
-    overridden = bool(train or env or sim)
-    where = " + ".join([*(str(p) for p in paths), *(["command line"] if overridden else [])])
+    return run_config(params_file.load(paths, NODES), tuple(str(p) for p in paths),
+                      train=train, env=env, sim=sim)
+
+
+def run_config(sections: Mapping[str, Mapping[str, Any]], sources: Sequence[str] = (), *,
+               train: Dotted = None, env: Dotted = None, sim: Dotted = None,
+               overridden: bool | None = None) -> RunConfig:
+    """The typed run of flat ``sections`` (read once) and dotted overrides per section."""
+    overridden = bool(train or env or sim) if overridden is None else overridden
+    overrides = {TRAINER_NODE: train or {}, ENV_NODE: env or {}, SIM_NODE: sim or {}}
+    merged = params_file.merge({node: {} for node in NODES}, sections, overrides)
+    where = " + ".join([*sources, *(["command line"] if overridden else [])])
     try:
         train_config = train_config_from_params(merged[TRAINER_NODE])
         env_config = env_config_from_params(merged[ENV_NODE], sim_params=merged[SIM_NODE])
     except ConfigError as err:
         raise ConfigError(f"{where or 'command line'}: {err}") from err
-    return RunConfig(train_config, env_config, tuple(str(p) for p in paths), overridden)
+    return RunConfig(train_config, env_config, tuple(sources), overridden)

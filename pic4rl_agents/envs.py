@@ -74,7 +74,9 @@ def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
     a single ROS env; the learner's rewards are the env's times ``reward_scale``; each env's
     pairs follow ``curriculum`` when given. ``vec_env``: ``subproc`` runs each env in a worker
     process, ``dummy`` all of them in this one (cheaper when an env step costs less than the
-    workers' messages, as in process on two cores)."""
+    workers' messages, as in process on two cores). Not SB3's ``make_vec_env``: it gives every
+    rank the same env kwargs (ours differ by ROS namespace and node) and names monitor files
+    ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read)."""
     def factory(rank: int) -> Callable[[], gym.Env]:
         cfg = env_for_rank(config, rank, n_envs)
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None

@@ -7,6 +7,7 @@ ROS's syntax, and hand everything else (``-r``, ``--log-level``) to ``rclpy.init
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -16,7 +17,6 @@ import yaml
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 
-from .config import ros_domain
 from .overrides import yaml_value
 
 
@@ -78,3 +78,10 @@ def no_sim_hint(command: str, env: EnvConfig | None) -> str:
     return (f"  Is a sim answering in ROS domain {ros_domain(env)}? Start one with the same "
             f"params file (pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run "
             f"{command}, or -p transport:=inprocess")
+
+
+def ros_domain(env: EnvConfig | None) -> str:
+    """The ROS domain an env talks in: its ``ros.domain_id``, else ``ROS_DOMAIN_ID`` (or 0)."""
+    if env is not None and env.ros.domain_id >= 0:
+        return str(env.ros.domain_id)
+    return os.environ.get("ROS_DOMAIN_ID", "0")

@@ -43,22 +43,13 @@ CHECKPOINT_PREFIX = "model"  # SB3's CheckpointCallback name_prefix
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
 
 
-def numbered(path: Path, n: int, *, keep_suffix: bool = False) -> Path:
-    """The ``n``-th of a series: ``path`` itself for 1, else ``<name>-<n>`` (before the
-    suffix with ``keep_suffix``)."""
-    if n == 1:
-        return path
-    stem, suffix = (path.stem, path.suffix) if keep_suffix else (path.name, "")
-    return path.with_name(f"{stem}-{n}{suffix}")
-
-
 def free_path(path: Path, *, keep_suffix: bool = False, start: int = 1) -> Path:
-    """The first of ``numbered(path, start)``, ``numbered(path, start + 1)``, ... that does
-    not exist, so nothing is overwritten."""
+    """The first of ``atomic.numbered(path, start)``, ``atomic.numbered(path, start + 1)``,
+    ... that does not exist, so nothing is overwritten."""
     n = start
-    while numbered(path, n, keep_suffix=keep_suffix).exists():
+    while atomic.numbered(path, n, keep_suffix=keep_suffix).exists():
         n += 1
-    return numbered(path, n, keep_suffix=keep_suffix)
+    return atomic.numbered(path, n, keep_suffix=keep_suffix)
 
 
 def session_file(path: Path, session: int) -> Path:
@@ -69,10 +60,9 @@ def session_file(path: Path, session: int) -> Path:
 
 def run_config_file(folder: Path) -> Path | None:
     """A run folder's latest params file: ``config.yaml`` or its newest ``config-N.yaml``."""
-    found = [p for p in folder.glob("config*.yaml")
-             if p.stem == "config" or p.stem.removeprefix("config-").isdigit()]
-    return max(found, key=lambda p: int(p.stem.removeprefix("config-") or 1)
-               if p.stem != "config" else 1, default=None)
+    found = {n: p for p in folder.glob("config*.yaml")
+             if (n := atomic.series_index(p, folder / CONFIG)) is not None}
+    return found[max(found)] if found else None
 
 
 def run_of(model_zip: Path) -> Path | None:
@@ -190,6 +180,7 @@ class Resume:
     replay_buffer: Path | None
     run_dir: Path
     skipped: tuple[str, ...] = ()
+    trained: str = ""  # the run's training config, in words (set with the session's config)
 
 
 #: What reading a truncated or corrupt zip or pickle raises.

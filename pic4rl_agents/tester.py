@@ -28,7 +28,6 @@ command line builds a ``TestPlan``; ``run_test(plan)`` does the test and returns
 from __future__ import annotations
 
 import argparse
-import contextlib
 import logging
 import signal
 import sys
@@ -43,7 +42,6 @@ import numpy as np
 from pic4rl_bridge.baseline_config import PREFIX as BASELINES_PREFIX
 from pic4rl_bridge.baseline_config import baselines_config_from_params
 from pic4rl_bridge.baselines import BASELINES
-from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
@@ -54,7 +52,7 @@ from .config import ENV_NODE, SIM_NODE
 from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
-from .testplan import AgentSpec, TestPlan, first_env, resolve_agents
+from .testplan import AgentSpec, TestPlan, recorded, resolve_agents
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -159,13 +157,14 @@ def _check_video() -> None:
         raise ConfigError(f"--video: {err}") from err
 
 
-def run_test(plan: TestPlan) -> TestResult:
-    """Drive every agent and baseline of ``plan`` on the same episodes, each recorded to a
-    bag in a new ``<bags>/<run>``, then judge the bags."""
+def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestResult:
+    """Drive every agent and baseline of ``plan`` (``agents``: as ``resolve_agents(plan)``
+    gave them, when resolved already) on the same episodes, each recorded to a bag in a new
+    ``<bags>/<run>``, then judge the bags."""
     if plan.video:
         _check_video()
     run_dir = runs.free_path(plan.bags_dir / (plan.run or time.strftime("test_%Y%m%d-%H%M%S")))
-    specs = resolve_agents(plan, run_dir)
+    specs = [recorded(s, run_dir) for s in (agents or resolve_agents(plan))]
     episode_set = specs[-1].episode_set
     log.info("episodes: %s", episode_set)
     outcomes: dict[str, list[str]] = {}
@@ -185,6 +184,9 @@ def run_test(plan: TestPlan) -> TestResult:
     return TestResult(run_dir, episode_set, outcomes, table, failed, videos)
 
 
+_DEFAULT = TestPlan()  # the command line's defaults are the plan's
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pic4rl-test", description=__doc__.split("\n\n")[0],
@@ -195,17 +197,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--baseline", action="append", default=[], choices=BASELINES,
                         help="a classical controller through the same tester (repeatable)")
     parser.add_argument("--algorithm", help="the algorithm of a bare model .zip")
-    parser.add_argument("--episodes", type=int, default=5,
-                        help="episodes per agent (default 5, the paper's)")
+    parser.add_argument("--episodes", type=int, default=_DEFAULT.episodes,
+                        help="episodes per agent (default %(default)s, the paper's)")
     parser.add_argument("--random", type=int, metavar="N",
                         help="N random start-goal pairs instead of the pairs")
     parser.add_argument("--pairs", choices=tuple(PAIR_KINDS),
                         help="kind of the drawn pairs: paper (4-8 m, detour <= 1.3; default "
                              "with --random) or any (the simulator's)")
-    parser.add_argument("--seed", type=int, default=0, help="the episodes' seed (default 0)")
-    parser.add_argument("--bags", dest="bags_dir", default="bags", help="bags directory")
-    parser.add_argument("--run", default="", help="run name (default: test_<date>-<time>); "
-                                                  "a taken name gets -2, -3, ...")
+    parser.add_argument("--seed", type=int, default=_DEFAULT.seed,
+                        help="the episodes' seed (default %(default)s)")
+    parser.add_argument("--bags", dest="bags_dir", default=str(_DEFAULT.bags_dir),
+                        help="bags directory")
+    parser.add_argument("--run", default=_DEFAULT.run, help="run name (default: "
+                        "test_<date>-<time>); a taken name gets -2, -3, ...")
     parser.add_argument("--env-kwargs", nargs="+", default=[], metavar="KEY:VALUE")
     parser.add_argument("--sim-kwargs", nargs="+", default=[], metavar="KEY:VALUE")
     parser.add_argument("--format", default="table",
@@ -242,12 +246,6 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
         progress=not args.no_progress)
 
 
-def _hint_env(plan: TestPlan | None) -> EnvConfig | None:
-    with contextlib.suppress(ConfigError, BridgeError):
-        return first_env(plan) if plan is not None else None
-    return None
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
     from pic4rl_metrics.report import render_comparison
@@ -256,15 +254,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    plan: TestPlan | None = None
+    agents: list[AgentSpec] = []
     try:
         plain, ros = split_ros_args(argv)
         args = build_parser().parse_args(plain)
         plan = build_plan(args, ros)
+        agents = resolve_agents(plan)
         with console_logging(__name__):
-            result = run_test(plan)
+            result = run_test(plan, agents)
     except TransportError as err:
-        print(f"pic4rl-test: {err}\n{no_sim_hint('test', _hint_env(plan))}", file=sys.stderr)
+        env = agents[0].run.env if agents else None
+        print(f"pic4rl-test: {err}\n{no_sim_hint('test', env)}", file=sys.stderr)
         return 2
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-test: {err}", file=sys.stderr)

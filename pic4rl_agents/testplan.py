@@ -20,10 +20,13 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_sim import params_file
 
 from . import runs
-from .config import ENV_NODE, RunConfig, load_run_config
+from .config import ENV_NODE, NODES, RunConfig, run_config
+
+Sections = dict[str, dict[str, Any]]
 
 #: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
 DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"
+DEFAULT_PAIRS_WORLD = ("indoor", 0)  # the world and variant those pairs are in
 
 
 @dataclass(frozen=True)
@@ -85,41 +88,34 @@ def _agent_files(path: Path) -> tuple[Path, Path | None]:
                       f"{runs.MODEL} and {runs.CONFIG}, or a model .zip)")
 
 
-def _test_pairs(plan: TestPlan) -> str | None:
-    """The ``episodes.file`` named at test time (params files, then overrides), if any."""
-    pairs = None
-    for path in plan.params_files:
-        section = params_file.node_section(params_file.read(path), ENV_NODE, source=path) or {}
-        if section.get("episodes.file"):
-            pairs = params_file.beside(section["episodes.file"], Path(path))
-    return plan.env_overrides.get("episodes.file", pairs)
-
-
-def _agents(plan: TestPlan) -> list[AgentSpec]:
-    """The trained agents, each with its run's config and the plan's files and overrides."""
+def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
+    """The trained agents, each with its run's config and the plan's files (``files``, read
+    once) and overrides."""
     train_overrides = {"algorithm": plan.algorithm} if plan.algorithm else {}
     specs: list[AgentSpec] = []
     for item in plan.agents:
         name, sep, location = item.partition("=")
         path = Path(location if sep else item)
         model, config = _agent_files(path)
-        files = ([str(config)] if config else []) + list(plan.params_files)
-        if not files:
+        if config is None and not plan.params_files:
             raise ConfigError(f"--agent {path}: no {runs.CONFIG} beside the model; give the "
                               "env with --ros-args --params-file FILE and --algorithm")
-        run = load_run_config(files, train=train_overrides, env=plan.env_overrides,
-                              sim=plan.sim_overrides)
+        own = params_file.load([config], NODES) if config else {}
+        sources = ([str(config)] if config else []) + list(plan.params_files)
+        run = run_config(params_file.merge(own, files), sources, train=train_overrides,
+                         env=plan.env_overrides, sim=plan.sim_overrides)
         if not sep:
             name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
                 path.parent.name if path.suffix == ".zip" else path.name)
-        trained = load_run_config([config]).origin if config else "no config beside it"
+        trained = run_config(own, [str(config)]).origin if config else "no config beside it"
         specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
     return specs
 
 
-def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec]) -> AgentSpec:
+def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
+              files: Sections) -> AgentSpec:
     """A baseline in the first agent's env (at the robot's full speed range), or in the
-    plan's params files."""
+    plan's params files (``files``, read once)."""
     if baseline not in BASELINES:
         raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
     if agents:
@@ -127,10 +123,10 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec]) -> AgentSp
         if "min_linear_m_s" not in plan.env_overrides:
             # An agent's speed floor is its own training choice; a baseline drives the
             # robot's full range unless the user says otherwise.
-            run = replace(run, env=run.env.replace(min_linear_m_s=0.0))
+            run = run.replace(env={"min_linear_m_s": 0.0})
     elif plan.params_files:
-        run = load_run_config(plan.params_files, env=plan.env_overrides,
-                              sim=plan.sim_overrides)
+        run = run_config(files, plan.params_files, env=plan.env_overrides,
+                         sim=plan.sim_overrides)
     else:
         raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
                           "or --ros-args --params-file FILE")
@@ -141,14 +137,18 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec]) -> AgentSp
 
 def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:
     """The agents and baselines to test, each in its test env (the test episodes, no
-    curriculum), recorded under ``run_dir`` when one is given."""
-    pairs = _test_pairs(plan)
-    agents = _agents(plan)
-    specs = agents + [_baseline(plan, b, agents) for b in plan.baselines]
+    curriculum), recorded under ``run_dir`` when one is given. Every params file is read
+    once, here; what follows works on the typed configs."""
+    files = params_file.load(plan.params_files, NODES)
+    # The pairs named at test time: the params files' (later files win), then the overrides.
+    pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
+    agents = _agents(plan, files)
+    specs = agents + [_baseline(plan, b, agents, files) for b in plan.baselines]
     if not specs:
         raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
                           f"{'|'.join(BASELINES)}")
-    return [_test_env(s, plan, pairs, run_dir) for s in specs]
+    tested = [_test_env(s, plan, pairs) for s in specs]
+    return tested if run_dir is None else [recorded(s, run_dir) for s in tested]
 
 
 def first_env(plan: TestPlan) -> EnvConfig:
@@ -156,17 +156,20 @@ def first_env(plan: TestPlan) -> EnvConfig:
     return resolve_agents(plan)[0].run.env
 
 
-def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None,
-              run_dir: Path | None) -> AgentSpec:
-    """``spec`` set up for testing: the test episodes, no curriculum, recorded in
-    ``run_dir``."""
+def recorded(spec: AgentSpec, run_dir: Path) -> AgentSpec:
+    """``spec`` with its episodes recorded to ``<run_dir>/<its name>/``."""
+    return replace(spec, run=spec.run.replace(env={
+        "record.enabled": True, "record.bags_dir": str(run_dir), "record.run": spec.name}))
+
+
+def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
+    """``spec`` set up for testing: the test episodes, no curriculum."""
     overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
-    if run_dir is not None:
-        overrides.update({"record.enabled": True, "record.bags_dir": str(run_dir),
-                          "record.run": spec.name})
+    from pic4rl_sim.params import SimParams
+
     sim = spec.run.env.sim_params
-    if pairs is None and sim.get("world", "indoor") == "indoor" and not sim.get(
-            "world_variant", 0):
+    world = sim.get("world", SimParams.world), sim.get("world_variant", SimParams.world_variant)
+    if pairs is None and world == DEFAULT_PAIRS_WORLD:
         pairs = str(DEFAULT_PAIRS)
     if plan.random or not pairs:
         kind = plan.pairs or ("paper" if plan.random else "any")
@@ -181,5 +184,4 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None,
                           "episodes.change_goal_and_pose": 1})
         episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
                        else "pairs file") + f" {pairs}"
-    return replace(spec, run=replace(spec.run, env=spec.run.env.replace(**overrides)),
-                   episode_set=episode_set)
+    return replace(spec, run=spec.run.replace(env=overrides), episode_set=episode_set)

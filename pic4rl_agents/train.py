@@ -31,7 +31,7 @@ from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_metrics import atomic
 
 from . import runs
-from .config import RunConfig, load_run_config
+from .config import RunConfig
 from .console import console_logging
 from .rosargs import RosArgs, no_sim_hint, split_ros_args
 from .trainargs import build_parser, resolve
@@ -209,10 +209,9 @@ class Trainer:
         if self.resume is None:
             model = build_model(cfg, env)
         else:
-            trained = runs.run_config_file(self.resume.run_dir)
             model = load_model(
                 self.resume.model, cfg.algorithm, env=env, device=cfg.device,
-                trained=f"trained with {load_run_config([trained]).origin}" if trained else "",
+                trained=self.resume.trained,
                 env_from=f"this session's env ({self.config.origin})")
             if self.resume.replay_buffer is not None and hasattr(model, "load_replay_buffer"):
                 model.load_replay_buffer(self.resume.replay_buffer)

@@ -4,14 +4,24 @@ the flag that gave it), and the run's config and checkpoint they resolve to."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from typing import Any
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError, unknown_key
+from pic4rl_sim import params_file
 from pic4rl_sim.schema import help_text, param_names, specs
 
 from . import runs
-from .config import ENV_NODE, SIM_NODE, TRAINER_NODE, RunConfig, TrainConfig, load_run_config
+from .config import (
+    ENV_NODE,
+    NODES,
+    SIM_NODE,
+    TRAINER_NODE,
+    RunConfig,
+    TrainConfig,
+    run_config,
+)
 from .overrides import check_overrides, parse_overrides
 from .rosargs import RosArgs
 
@@ -82,12 +92,12 @@ def _overrides(args: argparse.Namespace, ros: RosArgs) -> dict[str, dict[str, An
 
 def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, runs.Resume | None]:
     """The run's config from params files, -p items and the flags (in that order), and the
-    checkpoint to resume from."""
+    checkpoint to resume from; each file is read once."""
     overrides = _overrides(args, ros)
     resume = runs.find_resume(args.resume) if args.resume else None
+    latest = runs.run_config_file(resume.run_dir) if resume is not None else None
     files = list(ros.params_files)
     if not files and resume is not None:
-        latest = runs.run_config_file(resume.run_dir)
         if latest is None:
             raise ConfigError(f"--resume {args.resume}: no {runs.CONFIG} in {resume.run_dir}; "
                               "give the params file with --ros-args --params-file FILE")
@@ -95,5 +105,12 @@ def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, runs.Res
     if not files:
         raise ConfigError("no --params-file given (e.g. pic4rl-train --ros-args --params-file "
                           "config/train_goto_lidar_td3.yaml)")
-    return load_run_config(files, train=overrides[TRAINER_NODE], env=overrides[ENV_NODE],
-                           sim=overrides[SIM_NODE]), resume
+    read = {f: params_file.load([f], NODES)
+            for f in dict.fromkeys([*files, *([str(latest)] if latest else [])])}
+    run = run_config(params_file.merge(*(read[f] for f in files)), files,
+                     train=overrides[TRAINER_NODE], env=overrides[ENV_NODE],
+                     sim=overrides[SIM_NODE])
+    if resume is not None and latest is not None:
+        trained = run_config(read[str(latest)], [str(latest)]).origin
+        resume = dataclasses.replace(resume, trained=f"trained with {trained}")
+    return run, resume

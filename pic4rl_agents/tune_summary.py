@@ -15,7 +15,7 @@ import yaml
 from pic4rl_metrics import atomic
 
 if TYPE_CHECKING:
-    from .tune import TuneSettings
+    from .tune_settings import TuneSettings
 
 log = logging.getLogger(__name__)
 

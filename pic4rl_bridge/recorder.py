@@ -24,6 +24,7 @@ from typing import Any
 import yaml
 from rosbags.interfaces import Qos
 
+from pic4rl_metrics import atomic
 from pic4rl_metrics.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
 from pic4rl_metrics.contract import STORAGES, EpisodeFacts, Outcome, plain
 from pic4rl_metrics.errors import OutputError
@@ -196,7 +197,7 @@ class RunRecorder:
         text = yaml.safe_dump(plain(config), sort_keys=False)
         n = 1
         while True:
-            path = self.run_dir / (f"{CONFIG_NAME}.yaml" if n == 1 else f"{CONFIG_NAME}-{n}.yaml")
+            path = atomic.numbered(self.run_dir / f"{CONFIG_NAME}.yaml", n, keep_suffix=True)
             try:
                 with path.open("x") as f:
                     f.write(text)

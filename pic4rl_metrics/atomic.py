@@ -62,3 +62,21 @@ def remove_partials(folder: Path) -> list[Path]:
     for partial in partials:
         partial.unlink(missing_ok=True)
     return partials
+
+
+def numbered(path: Path, n: int, *, keep_suffix: bool = False) -> Path:
+    """The ``n``-th of a series of files that never overwrite each other: ``path`` itself for
+    1, else ``<name>-<n>`` (before the suffix with ``keep_suffix``: ``config-2.yaml``)."""
+    if n == 1:
+        return path
+    stem, suffix = (path.stem, path.suffix) if keep_suffix else (path.name, "")
+    return path.with_name(f"{stem}-{n}{suffix}")
+
+
+def series_index(path: Path, first: Path) -> int | None:
+    """Which of ``numbered(first, n, keep_suffix=True)`` ``path`` is, or None for another."""
+    if path.name == first.name:
+        return 1
+    number = path.name.removeprefix(f"{first.stem}-").removesuffix(first.suffix)
+    ok = path.name.startswith(f"{first.stem}-") and path.name.endswith(first.suffix)
+    return int(number) if ok and number.isdigit() else None

@@ -66,24 +66,40 @@ def beside(file: str, params_file: Path) -> str:
     return str(candidate.resolve()) if candidate.exists() else file
 
 
-def load(paths: Sequence[str | Path], nodes: Iterable[str]) -> dict[str, dict[str, Any]]:
-    """The flat sections ``nodes`` of ``paths``, merged key by key (later files win); a file
-    with none of them is an error naming the file."""
+def read_sections(path: str | Path, nodes: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """The flat sections ``nodes`` of one file, its relative files (``FILE_KEYS``) found
+    ``beside`` it; a file with none of them is an error naming the file."""
     nodes = tuple(nodes)
-    merged: dict[str, dict[str, Any]] = {node: {} for node in nodes}
-    for path in paths:
-        data = read(path)
-        sections = {node: node_section(data, node, source=str(path)) for node in nodes}
-        if all(section is None for section in sections.values()):
-            raise ConfigError(f"{path}: no section for {' or '.join(repr(n) for n in nodes)} "
-                              f"(expected '{nodes[0]}: ros__parameters: ...')")
-        for node, section in sections.items():
-            for key in FILE_KEYS.get(node, ()):
-                value = (section or {}).get(key)
-                if isinstance(value, str) and value:
-                    section[key] = beside(value, Path(path))  # type: ignore[index]
-            merged[node].update(section or {})
+    data = read(path)
+    sections = {node: node_section(data, node, source=str(path)) for node in nodes}
+    if all(section is None for section in sections.values()):
+        raise ConfigError(f"{path}: no section for {' or '.join(repr(n) for n in nodes)} "
+                          f"(expected '{nodes[0]}: ros__parameters: ...')")
+    out: dict[str, dict[str, Any]] = {}
+    for node, section in sections.items():
+        out[node] = dict(section or {})
+        for key in FILE_KEYS.get(node, ()):
+            value = out[node].get(key)
+            if isinstance(value, str) and value:
+                out[node][key] = beside(value, Path(path))
+    return out
+
+
+def merge(*layers: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Sections merged key by key, later layers winning (as ROS merges several
+    ``--params-file``): the one rule for files and for overrides over them."""
+    merged: dict[str, dict[str, Any]] = {}
+    for layer in layers:
+        for node, params in layer.items():
+            merged.setdefault(node, {}).update(params)
     return merged
+
+
+def load(paths: Sequence[str | Path], nodes: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """The flat sections ``nodes`` of ``paths``, each file read once and merged key by key
+    (later files win)."""
+    nodes = tuple(nodes)
+    return merge({node: {} for node in nodes}, *(read_sections(p, nodes) for p in paths))
 
 
 def param_rules(args: Sequence[str]) -> dict[str, Any]:

@@ -14,7 +14,7 @@ import pytest
 import yaml
 from agents_helpers import LIDAR_TD3
 
-from pic4rl_agents import samplers, tune
+from pic4rl_agents import tune, tune_space
 from pic4rl_agents.config import ALGORITHM_NAMES, load_run_config
 
 #: Trials of seconds: tiny nets, 200 steps, 2 evaluations of 1 episode each. Episodes of 30
@@ -50,7 +50,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
     # below it: pruned there (n_startup_trials 1, no warm-up with 2 evaluations).
     base = load_run_config([LIDAR_TD3])
     other = study.ask()
-    samplers.suggest(other, base, {"learning_rate": 0.00042})
+    tune_space.suggest(other, base, {"learning_rate": 0.00042})
     other.report(1.0, 1)
     other.report(1.0, 2)
     study.tell(other, 1.0)
@@ -85,7 +85,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
     assert tuned.train.eval == base.train.eval  # not the trials' 2 evaluations of 1 episode
     assert tuned.env == load_run_config([LIDAR_TD3], env={"episode_max_steps": 30}).env
     assert tuned.train.action_noise_std == other.params["action_noise_std"]
-    assert list(tuned.train.policy.net_arch) == samplers.NET_ARCHS[other.params["net_arch"]]
+    assert list(tuned.train.policy.net_arch) == tune_space.NET_ARCHS[other.params["net_arch"]]
     assert (study_dir / "eval_curves.png").is_file()
 
 
@@ -111,7 +111,7 @@ def test_every_algorithms_sampler_gives_a_valid_config(algorithm: str) -> None:
     study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
     for _ in range(20):
         trial = study.ask()
-        params = samplers.suggest(trial, base, {})
+        params = tune_space.suggest(trial, base, {})
         train = base.train.replace(**params)
         assert train.algorithm == algorithm
         assert trial.user_attrs["hyperparams"] == params

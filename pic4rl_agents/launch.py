@@ -49,7 +49,7 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
     return first_env(build_plan(test_parser().parse_args(plain), ros)), 1
 
 
-def _stop(proc: subprocess.Popen[bytes], timeout_s: float) -> int:
+def stop_group(proc: subprocess.Popen[bytes], timeout_s: float) -> int:
     """SIGINT to ``proc``'s group, then SIGKILL if it lingers; its exit code."""
     if proc.poll() is None:
         try:
@@ -128,9 +128,9 @@ def _watch(command: str, child: subprocess.Popen[bytes],
                 break
             time.sleep(0.2)
     finally:
-        child_code = _stop(child, STOP_TIMEOUT_S)
+        child_code = stop_group(child, STOP_TIMEOUT_S)
         for sim in sims:
-            _stop(sim, 10.0)
+            stop_group(sim, 10.0)
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     return code or child_code

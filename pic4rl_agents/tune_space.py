@@ -1,5 +1,6 @@
-"""The hyperparameter samplers of ``pic4rl-tune``, one per algorithm, as RL Zoo's: an Optuna
-trial → dotted trainer parameters."""
+"""The search space of ``pic4rl-tune``: one hyperparameter sampler per algorithm, as RL
+Zoo's, an Optuna trial → dotted trainer parameters (the pair samplers are
+``pic4rl_sim.engine.sampling``'s)."""
 
 from __future__ import annotations
 
