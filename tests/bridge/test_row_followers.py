@@ -71,7 +71,6 @@ def _scan(ranges: np.ndarray) -> ScanData:
 def _rows_scan(offset_m: float, width_m: float, n: int = 720) -> ScanData:
     """A 360° scan of two lines of trunk points (every 0.5 m) at y = ±width/2 - offset."""
     ranges = np.full(n, np.inf)
-    angles = -math.pi + 2 * math.pi * np.arange(n) / n
     for y in (0.5 * width_m - offset_m, -0.5 * width_m - offset_m):
         for x in np.arange(-1.0, 4.0, 0.5):
             beam = int(round((math.atan2(y, x) + math.pi) / (2 * math.pi / n))) % n
