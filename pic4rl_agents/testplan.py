@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from pic4rl_bridge.baseline_config import BaselinesConfig, load_baselines_config
+from pic4rl_bridge.baseline_config import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
@@ -131,7 +131,8 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
         raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
                           "or --ros-args --params-file FILE")
     check_fits(baseline, run.env)  # before any run directory or bag exists
-    settings = load_baselines_config(plan.params_files, plan.baseline_overrides)
+    settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
+                                where=" + ".join(plan.params_files))
     return AgentSpec(baseline, run, baseline=baseline, settings=settings)
 
 
@@ -139,7 +140,7 @@ def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpe
     """The agents and baselines to test, each in its test env (the test episodes, no
     curriculum), recorded under ``run_dir`` when one is given. Every params file is read
     once, here; what follows works on the typed configs."""
-    files = params_file.load(plan.params_files, NODES)
+    files = params_file.load(plan.params_files, (*NODES, BASELINES_NODE))
     # The pairs named at test time: the params files' (later files win), then the overrides.
     pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
     agents = _agents(plan, files)

@@ -84,13 +84,16 @@ def load_baselines_config(paths: Sequence[str | Path],
                           overrides: Mapping[str, Any] | None = None) -> BaselinesConfig:
     """The ``baselines:`` sections of ``paths`` (later files win, key by key), then dotted
     ``overrides`` (``dwa.horizon_s``); defaults where none is given."""
-    params: dict[str, Any] = {}
-    if paths:
-        nodes = (BASELINES_NODE, params_file.ENV_NODE, params_file.SIM_NODE)
-        params = params_file.load(paths, nodes)[BASELINES_NODE]
-    params.update(overrides or {})
-    where = " + ".join(str(p) for p in paths) or "command line"
+    nodes = (BASELINES_NODE, params_file.ENV_NODE, params_file.SIM_NODE)
+    section = params_file.load(paths, nodes)[BASELINES_NODE] if paths else {}
+    return baselines_config(section, overrides, where=" + ".join(str(p) for p in paths))
+
+
+def baselines_config(section: Mapping[str, Any], overrides: Mapping[str, Any] | None = None,
+                     *, where: str = "") -> BaselinesConfig:
+    """A ``BaselinesConfig`` from a ``baselines:`` section already read (from ``where``) and
+    dotted ``overrides``; an error names ``where`` (or the command line)."""
     try:
-        return baselines_config_from_params(params)
+        return baselines_config_from_params({**section, **(overrides or {})})
     except ConfigError as err:
-        raise ConfigError(f"{where}: {err}") from err
+        raise ConfigError(f"{where or 'command line'}: {err}") from err
