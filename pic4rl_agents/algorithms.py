@@ -1,4 +1,5 @@
-"""The SB3 algorithms by name, with ε-greedy on the off-policy ones, and their networks.
+"""The SB3 classes of the algorithm table (``pic4rl_agents.algorithm_table``), with atomic saves
+and ε-greedy on the off-policy ones, and their networks.
 
 ``build_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
@@ -8,13 +9,13 @@ saved zip back with the same classes.
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-import sb3_contrib
-import stable_baselines3 as sb3
 from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.save_util import load_from_zip_file
@@ -23,6 +24,7 @@ from torch import nn
 from pic4rl_bridge.errors import ConfigError
 
 from pic4rl_metrics.atomic import replacing
+from .algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
 from .config import TrainConfig
 from .exploration import EpsilonGreedy
 from .extractors import DepthGoalExtractor
@@ -55,27 +57,19 @@ def _with_suffix(path: str | Path, suffix: str) -> Path:
     return path if path.suffix else path.with_name(path.name + suffix)
 
 
-class DDPG(AtomicSave, EpsilonGreedy, sb3.DDPG):
-    """SB3's DDPG with the paper's ε-greedy exploration."""
+def _subclass(entry: AlgorithmEntry) -> type[BaseAlgorithm]:
+    """The entry's class with atomic saves, and the paper's ε-greedy when it is off-policy."""
+    module, _, name = entry.cls.rpartition(".")
+    base = getattr(importlib.import_module(module), name)
+    mixins = (AtomicSave, EpsilonGreedy) if entry.off_policy else (AtomicSave,)
+    doc = f"{entry.distribution}'s {name}" + (" with the paper's ε-greedy exploration."
+                                              if entry.off_policy else ".")
+    return type(name, (*mixins, base), {"__module__": __name__, "__doc__": doc})
 
 
-class TD3(AtomicSave, EpsilonGreedy, sb3.TD3):
-    """SB3's TD3 with the paper's ε-greedy exploration."""
-
-
-class SAC(AtomicSave, EpsilonGreedy, sb3.SAC):
-    """SB3's SAC with the paper's ε-greedy exploration."""
-
-
-class TQC(AtomicSave, EpsilonGreedy, sb3_contrib.TQC):
-    """sb3-contrib's TQC with the paper's ε-greedy exploration."""
-
-
-class PPO(AtomicSave, sb3.PPO):
-    """SB3's PPO."""
-
-ALGORITHMS: dict[str, type[BaseAlgorithm]] = {"ddpg": DDPG, "td3": TD3, "sac": SAC, "tqc": TQC,
-                                              "ppo": PPO}
+#: The class of each algorithm of the table, by its name.
+ALGORITHMS: dict[str, type[BaseAlgorithm]] = {
+    name: _subclass(entry) for name, entry in ALGORITHM_TABLE.items()}
 
 _ACTIVATIONS: dict[str, type[nn.Module]] = {"relu": nn.ReLU, "tanh": nn.Tanh, "elu": nn.ELU}
 
@@ -89,10 +83,10 @@ def algorithm_class(name: str) -> type[BaseAlgorithm]:
 
 def _policy(config: TrainConfig, observation_space: gym.Space) -> tuple[str, dict[str, Any]]:
     p = config.policy
-    critic = "vf" if config.algorithm == "ppo" else "qf"
+    critic = "qf" if config.off_policy else "vf"  # an on-policy actor-critic's value network
     kwargs: dict[str, Any] = {"net_arch": {"pi": list(p.net_arch), critic: list(p.critic_arch)},
                               "activation_fn": _ACTIVATIONS[p.activation]}
-    if config.algorithm == "ppo":
+    if not config.off_policy:
         kwargs["log_std_init"] = p.log_std_init
     image = isinstance(observation_space, gym.spaces.Box) and len(observation_space.shape) == 3
     if isinstance(observation_space, gym.spaces.Dict) or image:
@@ -118,23 +112,37 @@ def build_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = 
         common.update(buffer_size=config.buffer_size, batch_size=config.batch_size,
                       learning_starts=config.learning_starts, tau=config.tau,
                       train_freq=config.train_freq, gradient_steps=config.gradient_steps)
-        if config.algorithm in ("sac", "tqc"):
-            ent = config.ent_coef
-            common["ent_coef"] = ent if ent.startswith("auto") else float(ent)
-        if config.algorithm in ("ddpg", "td3") and config.action_noise_std > 0:
-            n = int(np.prod(env.action_space.shape))
-            common["action_noise"] = NormalActionNoise(np.zeros(n),
-                                                       np.full(n, config.action_noise_std))
-    else:
-        ppo = config.ppo
-        common.update(batch_size=config.batch_size, n_steps=ppo.n_steps, n_epochs=ppo.n_epochs,
-                      ent_coef=ppo.ent_coef, gae_lambda=ppo.gae_lambda,
-                      clip_range=ppo.clip_range)
+    for group in ALGORITHM_TABLE[config.algorithm].kwargs:
+        common.update(_KWARG_GROUPS[group](config, env))
     model = cls(policy, env, **common)
     if isinstance(model, EpsilonGreedy):
         e = config.epsilon
         model.set_epsilon(e.initial, e.decay, e.min)
     return model
+
+
+def _action_noise(config: TrainConfig, env: Any) -> dict[str, Any]:
+    if config.action_noise_std <= 0:
+        return {}
+    n = int(np.prod(env.action_space.shape))
+    return {"action_noise": NormalActionNoise(np.zeros(n), np.full(n, config.action_noise_std))}
+
+
+def _ent_coef(config: TrainConfig, env: Any) -> dict[str, Any]:
+    ent = config.ent_coef
+    return {"ent_coef": ent if ent.startswith("auto") else float(ent)}
+
+
+def _ppo(config: TrainConfig, env: Any) -> dict[str, Any]:
+    ppo = config.ppo
+    return {"batch_size": config.batch_size, "n_steps": ppo.n_steps, "n_epochs": ppo.n_epochs,
+            "ent_coef": ppo.ent_coef, "gae_lambda": ppo.gae_lambda,
+            "clip_range": ppo.clip_range}
+
+
+#: The keyword groups an ``AlgorithmEntry`` names: a config and an env → keyword arguments.
+_KWARG_GROUPS: dict[str, Callable[[TrainConfig, Any], dict[str, Any]]] = {
+    "action_noise": _action_noise, "ent_coef": _ent_coef, "ppo": _ppo}
 
 
 def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str = "cpu",

@@ -31,13 +31,11 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
+from .algorithm_table import ALGORITHM_TABLE
 
-class Algorithm(ParamEnum):
-    DDPG = "ddpg"
-    TD3 = "td3"
-    SAC = "sac"
-    TQC = "tqc"
-    PPO = "ppo"
+#: ``trainer.algorithm``'s choices: the algorithm table's names.
+Algorithm = ParamEnum("Algorithm", [(name.upper(), name) for name in ALGORITHM_TABLE],
+                      module=__name__, qualname="Algorithm")
 
 
 class VecEnvKind(ParamEnum):
@@ -57,8 +55,11 @@ class Activation(ParamEnum):
     ELU = "elu"
 
 
-OFF_POLICY = ("ddpg", "td3", "sac", "tqc")
+OFF_POLICY = tuple(name for name, entry in ALGORITHM_TABLE.items() if entry.off_policy)
 ALGORITHM_NAMES = tuple(a.value for a in Algorithm)
+_CHOICES = " | ".join(name if entry.distribution == "stable-baselines3"
+                      else f"{name} ({entry.distribution})"
+                      for name, entry in ALGORITHM_TABLE.items())
 #: A run's params file sections.
 NODES = (TRAINER_NODE, ENV_NODE, SIM_NODE)
 Dotted = Mapping[str, Any] | None  # a section's overrides: {"epsilon.decay": 0.999}
@@ -154,7 +155,7 @@ class ImitationConfig:
     per 1000 env steps decaying to none over ``rl_decay_steps``. Every env step of imitation
     counts in ``max_steps``, and the expert's time in every clock."""
 
-    enabled: bool = param(False, doc="imitation before RL (ddpg, td3, sac, tqc)")
+    enabled: bool = param(False, doc=f"imitation before RL ({', '.join(OFF_POLICY)})")
     expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
                         "privileged planner, pic4rl_bridge.planner) | heading "
                         "(personMonitoring: DWA with a proportional heading law) | centerline "
@@ -194,8 +195,7 @@ class PpoConfig:
 class TrainConfig:
     """Everything ``pic4rl-train`` needs besides the env's and the sim's sections."""
 
-    algorithm: Algorithm = param(Algorithm.TD3, doc="ddpg | td3 | sac | ppo | tqc "
-                                 "(sb3-contrib)")
+    algorithm: Algorithm = param(Algorithm("td3"), doc=_CHOICES)
     run: str = param("", doc="runs_dir/<run>; empty: <algorithm>_<sensor>")
     runs_dir: str = param("runs", doc="where runs go")
     seed: int = param(0, doc="seed of the learner and the envs")
@@ -238,9 +238,9 @@ class TrainConfig:
     def __post_init__(self) -> None:
         check(self)
         eps = self.epsilon
-        require(self.algorithm != "ppo" or eps.initial == 0, "epsilon.initial", eps.initial,
-                "0 for ppo (ε-greedy replaces actions, which an on-policy algorithm cannot "
-                "learn from; PPO explores through its stochastic policy)")
+        require(self.off_policy or eps.initial == 0, "epsilon.initial", eps.initial,
+                f"0 for {self.algorithm} (ε-greedy replaces actions, which an on-policy "
+                "algorithm cannot learn from; PPO explores through its stochastic policy)")
         cur = self.curriculum
         stages = len(cur.min_distance_m)
         require(len(cur.max_distance_m) == stages and len(cur.max_detour) == stages,
@@ -250,8 +250,8 @@ class TrainConfig:
         for low, high, detour in zip(cur.min_distance_m, cur.max_distance_m, cur.max_detour):
             check_pair_filter(low, high, detour, prefix="curriculum.")
         require(not self.imitation.enabled or self.off_policy, "imitation.enabled", True,
-                f"false for {self.algorithm} (imitation initialises an off-policy actor: ddpg, "
-                "td3, sac, tqc)")
+                f"false for {self.algorithm} (imitation initialises an off-policy actor: "
+                f"{', '.join(OFF_POLICY)})")
         require(0 <= cur.down < cur.up <= 1, "curriculum.up", cur.up,
                 f"a success rate in (curriculum.down={cur.down}, 1]")
         require(cur.window > 0, "curriculum.window", cur.window, "a positive number of episodes")

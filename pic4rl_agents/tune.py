@@ -34,12 +34,12 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
+from .algorithm_table import ALGORITHM_TABLE
 from .callbacks import SeededEvalCallback
-from .config import ENV_NODE, TRAINER_NODE, load_run_config
+from .config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
 from .overrides import check_overrides, parse_overrides
 from .console import console_logging
 from .tune_settings import TuneSettings
-from .tune_space import suggest
 from .tune_summary import write_summary
 
 log = logging.getLogger(__name__)
@@ -69,6 +69,16 @@ class TrialReport(BaseCallback):
             return False
         budget = self.settings.trial_seconds
         return not (budget > 0 and evaluation.last_row["train_wall_s"] >= budget)
+
+
+def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
+    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
+    kept in the trial's user attribute ``hyperparams`` for the best params file."""
+    algorithm = base.train.algorithm
+    sampled = ALGORITHM_TABLE[algorithm].sampler(trial, base.train.n_envs)
+    params = {**sampled, "algorithm": algorithm, **fixed}
+    trial.set_user_attr("hyperparams", params)
+    return params
 
 
 def objective(trial: optuna.Trial, settings: TuneSettings) -> float:
@@ -250,8 +260,9 @@ def settings_from(args: argparse.Namespace) -> TuneSettings:
                             where="--hyperparams")
     if args.algorithm:
         fixed.setdefault("algorithm", args.algorithm)
-    if fixed.get("algorithm") == "ppo":
-        fixed.setdefault("epsilon.initial", 0.0)  # a base with ε-greedy: not for PPO
+    entry = ALGORITHM_TABLE.get(str(fixed.get("algorithm")))
+    if entry and not entry.off_policy:
+        fixed.setdefault("epsilon.initial", 0.0)  # a base with ε-greedy: not for on-policy
     if args.eval_episodes is not None and args.eval_episodes < 1:
         raise ConfigError(f"--eval-episodes {args.eval_episodes}: expected a positive integer")
     env = check_overrides(ENV_NODE, parse_overrides(args.env_kwargs, flag="--env-kwargs"),

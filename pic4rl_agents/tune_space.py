@@ -1,13 +1,10 @@
-"""The search space of ``pic4rl-tune``: one hyperparameter sampler per algorithm, as RL
-Zoo's, an Optuna trial → dotted trainer parameters (the pair samplers are
-``pic4rl_sim.engine.sampling``'s)."""
+"""The search space of ``pic4rl-tune``: hyperparameter samplers as RL Zoo's, each an Optuna
+trial and the run's ``n_envs`` → dotted trainer parameters; ``pic4rl_agents.algorithm_table``
+gives each algorithm its own (the pair samplers are ``pic4rl_sim.engine.sampling``'s)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
-
-from .config import RunConfig
 
 #: Hidden layers of the actor and of each critic, by the sampler's name for them.
 NET_ARCHS = {"small": [64, 64], "medium": [128, 128], "big": [256, 256]}
@@ -20,10 +17,11 @@ def _common(trial: Any) -> dict[str, Any]:
             "policy.net_arch": arch, "policy.critic_arch": arch}
 
 
-def sample_off_policy(trial: Any) -> dict[str, Any]:
+def sample_off_policy(trial: Any, n_envs: int = 1) -> dict[str, Any]:
     """SAC and TQC (and the common part of TD3 and DDPG). ``gradient_steps`` is a fraction of
     ``train_freq``: the update-to-data ratio, the wall-clock lever (a gradient step costs
-    more than an env step)."""
+    more than an env step). ``n_envs`` bounds nothing here: the replay buffer holds every
+    env's steps."""
     train_freq = trial.suggest_categorical("train_freq", [1, 2, 4, 8, 16, 32, 64])
     ratio = trial.suggest_categorical("gradient_steps_ratio", [0.25, 0.5, 1.0])
     return {**_common(trial),
@@ -38,7 +36,7 @@ def sample_off_policy(trial: Any) -> dict[str, Any]:
             "epsilon.initial": trial.suggest_categorical("epsilon_initial", [0.0, 0.1, 0.2])}
 
 
-def sample_td3(trial: Any) -> dict[str, Any]:
+def sample_td3(trial: Any, n_envs: int = 1) -> dict[str, Any]:
     """TD3 and DDPG: the off-policy parameters and the Gaussian action noise."""
     return {**sample_off_policy(trial),
             "action_noise_std": trial.suggest_float("action_noise_std", 0.0, 0.5)}
@@ -56,19 +54,3 @@ def sample_ppo(trial: Any, n_envs: int = 1) -> dict[str, Any]:
             "ppo.clip_range": trial.suggest_categorical("clip_range", [0.1, 0.2, 0.3]),
             "policy.activation": trial.suggest_categorical("activation", ["tanh", "relu"])}
 
-
-#: The sampler of each algorithm: a trial → dotted trainer parameters.
-SAMPLERS: dict[str, Callable[..., dict[str, Any]]] = {
-    "td3": sample_td3, "ddpg": sample_td3, "sac": sample_off_policy,
-    "tqc": sample_off_policy, "ppo": sample_ppo}
-
-
-def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
-    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
-    kept in the trial's user attribute ``hyperparams`` for the best params file."""
-    algorithm = base.train.algorithm
-    sampler = SAMPLERS[algorithm]
-    sampled = sampler(trial, base.train.n_envs) if algorithm == "ppo" else sampler(trial)
-    params = {**sampled, "algorithm": algorithm, **fixed}
-    trial.set_user_attr("hyperparams", params)
-    return params

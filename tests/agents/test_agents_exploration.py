@@ -15,13 +15,14 @@ import torch
 from agents_helpers import LIDAR_TD3, TINY, TrainedRun
 from stable_baselines3.common.logger import configure
 
+from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
 from pic4rl_agents.algorithms import ALGORITHMS, build_model
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.exploration import EpsilonGreedy, epsilon_at
 
-OFF_POLICY = sorted(name for name in ALGORITHMS if name != "ppo")  # tqc with sb3-contrib
+OFF_POLICY = sorted(name for name in ALGORITHMS if ALGORITHM_TABLE[name].off_policy)
 LEARNING_STARTS = 100
 SAMPLES = 1000
 

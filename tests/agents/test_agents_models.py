@@ -1,10 +1,12 @@
 """The models: ``DepthGoalExtractor`` (a small CNN on the depth image beside the goal vector),
 ``build_model`` for every algorithm on the LiDAR env (``MlpPolicy``), the depth env
 (``MultiInputPolicy`` with the extractor) and the vineyard's bare image (``CnnPolicy`` with
-it), with the configured network sizes, and ``load_model``'s round trip and errors."""
+it), with the configured network sizes, each algorithm table entry's declared class and
+off-policy flag, and ``load_model``'s round trip and errors."""
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -14,9 +16,17 @@ import numpy as np
 import pytest
 import torch
 from agents_helpers import CONFIG, DEPTH_TD3, LIDAR_TD3, TINY
+from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from torch import nn
 
-from pic4rl_agents.algorithms import ALGORITHMS, algorithm_class, build_model, load_model
+from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.algorithms import (
+    ALGORITHMS,
+    AtomicSave,
+    algorithm_class,
+    build_model,
+    load_model,
+)
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
@@ -25,19 +35,15 @@ from pic4rl_agents.extractors import DepthGoalExtractor
 from pic4rl_bridge.errors import ConfigError
 
 VINEYARD = CONFIG / "env_vineyard_depth.yaml"  # a bare depth image, no goal vector
-ALL = sorted(ALGORITHMS)  # ddpg, ppo, sac, td3, tqc (sb3-contrib is in the rl extra)
+ALL = sorted(ALGORITHMS)  # the algorithm table's (sb3-contrib's TQC is in the rl extra)
 ACTOR, CRITIC = [16, 8], [24]
 CNN_CHANNELS, CNN_FEATURES = [4, 8], 12
 
 
-def test_every_algorithm_of_the_docs_is_there() -> None:
-    assert ALL == ["ddpg", "ppo", "sac", "td3", "tqc"]
-
-
 def test_an_unknown_algorithm_is_refused() -> None:
-    with pytest.raises(ConfigError, match=r"algorithm: 'a2c' is not available; expected one of "
-                                          r"ddpg, ppo, sac, td3"):
-        algorithm_class("a2c")
+    with pytest.raises(ConfigError, match=r"algorithm: 'nope' is not available; expected one of "
+                                          + ", ".join(ALL) + "$"):
+        algorithm_class("nope")
 
 
 # --- the depth extractor ------------------------------------------------------------------------
@@ -116,7 +122,7 @@ def train_config(algorithm: str, **extra: Any) -> Any:
     train.update({"algorithm": algorithm, "policy.net_arch": ACTOR, "policy.critic_arch": CRITIC,
                   "policy.cnn_channels": CNN_CHANNELS, "policy.cnn_features": CNN_FEATURES,
                   "ppo.n_steps": 64, **extra})
-    if algorithm == "ppo":
+    if not ALGORITHM_TABLE[algorithm].off_policy:
         train["epsilon.initial"] = 0.0
     return load_run_config([LIDAR_TD3], train=train).train
 
@@ -128,7 +134,7 @@ def linear_sizes(module: nn.Module) -> list[int]:
 def actor_critic_hidden(model: Any) -> tuple[list[int], list[int]]:
     """The hidden layer sizes of the actor's and the critic's heads."""
     policy = model.policy
-    if isinstance(model, ALGORITHMS["ppo"]):
+    if not isinstance(model, OffPolicyAlgorithm):  # an actor-critic: a value network
         return (linear_sizes(policy.mlp_extractor.policy_net),
                 linear_sizes(policy.mlp_extractor.value_net))
     critic = linear_sizes(policy.critic.q_networks[0])[:-1]  # the last layer: Q (quantiles)
@@ -159,15 +165,30 @@ def test_build_model_follows_the_config(envs: dict[str, Any], algorithm: str,
         assert all(e.features_dim == CNN_FEATURES + goal_dim for e in extractors)
         assert all([c.out_channels for c in e.cnn if isinstance(c, nn.Conv2d)] == CNN_CHANNELS
                    for e in extractors)
-    if algorithm == "ppo":
+    if not ALGORITHM_TABLE[algorithm].off_policy:
         assert model.n_steps == 64 and not isinstance(model, EpsilonGreedy)
     else:
         assert model.learning_starts == 50 and model.buffer_size == 5000
         assert isinstance(model, EpsilonGreedy) and model.epsilon_initial == 0.2
-    assert (model.action_noise is not None) == (algorithm in ("ddpg", "td3"))
+    noise = "action_noise" in ALGORITHM_TABLE[algorithm].kwargs
+    assert (model.action_noise is not None) == noise
     obs = env.reset()
     action, _ = model.predict(obs, deterministic=True)
     assert action.shape == (1, 2) and np.all(np.abs(action) <= 1.0)
+
+
+@pytest.mark.parametrize("name", list(ALGORITHM_TABLE))
+def test_every_table_entry_builds_its_declared_class_and_off_policy_kind(
+        envs: dict[str, Any], name: str) -> None:
+    entry = ALGORITHM_TABLE[name]
+    module, _, class_name = entry.cls.rpartition(".")
+    declared = getattr(importlib.import_module(module), class_name)
+    config = train_config(name)
+    model = build_model(config, envs["lidar"])
+    assert isinstance(model, declared) and type(model).__name__ == class_name
+    assert isinstance(model, AtomicSave)
+    assert isinstance(model, OffPolicyAlgorithm) == entry.off_policy == config.off_policy
+    assert isinstance(model, EpsilonGreedy) == entry.off_policy
 
 
 def test_td3_action_noise_has_the_configured_std(envs: dict[str, Any]) -> None:

@@ -50,7 +50,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
     # below it: pruned there (n_startup_trials 1, no warm-up with 2 evaluations).
     base = load_run_config([LIDAR_TD3])
     other = study.ask()
-    tune_space.suggest(other, base, {"learning_rate": 0.00042})
+    tune.suggest(other, base, {"learning_rate": 0.00042})
     other.report(1.0, 1)
     other.report(1.0, 2)
     study.tell(other, 1.0)
@@ -111,11 +111,11 @@ def test_every_algorithms_sampler_gives_a_valid_config(algorithm: str) -> None:
     study = optuna.create_study(sampler=optuna.samplers.RandomSampler(seed=1))
     for _ in range(20):
         trial = study.ask()
-        params = tune_space.suggest(trial, base, {})
+        params = tune.suggest(trial, base, {})
         train = base.train.replace(**params)
         assert train.algorithm == algorithm
         assert trial.user_attrs["hyperparams"] == params
-        if algorithm == "ppo":
+        if not train.off_policy:
             assert train.batch_size <= train.ppo.n_steps * train.n_envs
         else:
             assert 1 <= train.gradient_steps <= train.train_freq

@@ -19,7 +19,7 @@ from stable_baselines3.common.logger import configure
 from stable_baselines3.common.utils import obs_as_tensor
 
 from pic4rl_agents import train
-from pic4rl_agents.algorithms import TD3, build_model, load_model
+from pic4rl_agents.algorithms import ALGORITHMS, build_model, load_model
 from pic4rl_agents.config import ImitationConfig, load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.envs import make_vec_env
@@ -113,7 +113,7 @@ def test_imitation_then_fine_tuning_gives_an_sb3_model(tmp_path: Path) -> None:
     assert train.main(args) == 0
     run = tmp_path / "il"
     model = load_model(run / "model.zip", "td3")
-    assert isinstance(model, TD3) and model.num_timesteps == 160
+    assert isinstance(model, ALGORITHMS["td3"]) and model.num_timesteps == 160
     summary = yaml.safe_load((run / "summary.yaml").read_text())
     assert summary["total_steps"] == 160
     evaluations = pd.read_csv(run / "eval" / "0" / "evaluations.csv")

@@ -14,7 +14,7 @@ from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 
 from pic4rl_agents import train
-from pic4rl_agents.algorithms import SAC, build_model, load_model
+from pic4rl_agents.algorithms import ALGORITHMS, build_model, load_model
 from pic4rl_agents.config import ImitationConfig, load_run_config
 from pic4rl_agents.envs import make_vec_env
 from pic4rl_agents.imitation import EXPERT, Imitation, make_expert
@@ -69,7 +69,7 @@ def test_imitation_then_rl_on_the_vineyard_recipe(tmp_path: Path) -> None:
             "--ros-args", "--params-file", str(RECIPE)]
     assert train.main(args) == 0
     model = load_model(tmp_path / "vy" / "model.zip", "sac")
-    assert isinstance(model, SAC) and model.num_timesteps == 240
+    assert isinstance(model, ALGORITHMS["sac"]) and model.num_timesteps == 240
     assert model.observation_space.shape == (1, 30, 40)  # no goal, no pose
     progress = pd.read_csv(tmp_path / "vy" / "logs" / "0" / "progress.csv")
     assert progress["train/n_updates"].max() > 10  # the warm-up's 10, then RL's own

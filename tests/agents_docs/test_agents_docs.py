@@ -24,6 +24,7 @@ import yaml
 from docs_helpers import anchors, parameter_rows, section, table_rows
 
 from pic4rl_agents import tester, testplan, train, tune
+from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
 from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -145,6 +146,10 @@ def test_every_training_file_is_named_with_its_run_algorithm_sensor_and_budget(d
 def test_every_algorithm_and_baseline_is_documented(doc):
     rows = table_rows(section(section(doc, TRAIN_SECTION), "### Algorithms and networks"))
     assert set(rows) == set(ALGORITHM_NAMES), sorted(rows)
+    for name, entry in ALGORITHM_TABLE.items():  # its class, and sb3-contrib where it is
+        cell = rows[name][0]
+        assert f"`{entry.cls.rpartition('.')[2]}`" in cell, (name, cell)
+        assert ("sb3-contrib" in cell) == (entry.distribution == "sb3-contrib"), (name, cell)
     text = section(doc, TEST_SECTION)
     for baseline in tester.BASELINES:
         assert f"`--baseline {baseline}`" in text, baseline
