@@ -32,7 +32,8 @@ from pathlib import Path
 from typing import NamedTuple
 
 from _sim import start_sim, stop_sim
-from pic4rl_bridge.baselines import DwaController, make_baseline
+from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.dwa import DwaController
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.frame import SensorFrame
 from pic4rl_sim.engine import paths

@@ -30,7 +30,7 @@ PREFIX = f"{BASELINES_NODE}."
 
 @dataclass(frozen=True)
 class DwaConfig:
-    """The Dynamic Window Approach (``pic4rl_bridge.baselines.DwaController``, and the person
+    """The Dynamic Window Approach (``pic4rl_bridge.dwa.DwaController``, and the person
     follower of ``pic4rl_bridge.follow``). The velocity ranges, acceleration limits, window
     period and footprint are the robot's. Its owner's section checks it (``check_as``)."""
 

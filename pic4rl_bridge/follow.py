@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from .baselines import DwaController
+from .dwa import DwaController
 from .baseline_config import DwaConfig
 from .config import EnvConfig
 from .frame import SensorFrame

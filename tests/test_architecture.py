@@ -68,3 +68,108 @@ def _imported_roots(path: Path) -> set[str]:
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_the_bridge_imports_no_torch_sb3_or_agents(path: Path) -> None:
     assert not _imported_roots(path) & set(BRIDGE_NEVER)
+
+
+# -- the places for a new piece -----------------------------------------------------------------
+
+#: The most places each piece may take (issue 22); every other piece takes one or two.
+MOST_PLACES = {"a sensor": 4, "a task": 3}
+PLACE = re.compile(r"`([^`]+)`(?::\s*`([^`]+)`)?")
+
+
+def _places_rows() -> dict[str, tuple[int, list[tuple[str, str | None]]]]:
+    """``to add`` → (the count the doc gives, [(path, symbol)]) of the "Places" table."""
+    text = DOC.read_text(encoding="utf-8").split("## Places for a new piece", 1)[1]
+    rows = {}
+    for line in text.split("\n## ", 1)[0].splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 4 and cells[1].isdigit():
+            rows[cells[0]] = (int(cells[1]), [(p, s or None) for p, s in PLACE.findall(cells[2])])
+    return rows
+
+
+def _defines(path: Path, symbol: str) -> bool:
+    """``symbol`` (``Name`` or ``Class.member``) is defined or assigned at the start of a line
+    of ``path``."""
+    name = symbol.rsplit(".", 1)[-1]
+    return re.search(rf"^\s*(?:class |def )?{re.escape(name)}\b\s*[:=(]", path.read_text(),
+                     re.M) is not None
+
+
+def test_the_places_for_a_new_piece_are_counted_and_exist() -> None:
+    rows = _places_rows()
+    wanted = {"a sim parameter", "an env parameter", "a trainer parameter", "a recorded topic",
+              "an episode fact", "a sensor", "a task", "a robot", "a world", "a metric",
+              "a baseline", "an algorithm"}
+    assert wanted <= set(rows), f"the Places table lacks {sorted(wanted - set(rows))}"
+    for piece, (count, places) in rows.items():
+        paths = {p for p, _ in places}
+        assert count == len(paths), f"{piece}: the count says {count}, the cell lists {paths}"
+        assert count <= MOST_PLACES.get(piece, 2), f"{piece}: {count} places"
+        for path, symbol in places:
+            if "<" in path:  # a new file: its folder exists and holds others of its kind
+                pattern = re.sub(r"<[^>]+>", "*", path)
+                assert list(ROOT.glob(pattern)), f"{piece}: nothing matches {pattern}"
+                continue
+            assert (ROOT / path).is_file(), f"{piece}: {path} does not exist"
+            assert symbol is None or _defines(ROOT / path, symbol), \
+                f"{piece}: {path} defines no {symbol}"
+
+
+# -- module sizes and import circles ------------------------------------------------------------
+
+def _package_modules() -> list[Path]:
+    return sorted(p for package in PACKAGES for p in (ROOT / package).rglob("*.py"))
+
+
+def test_at_most_three_package_modules_are_over_350_lines() -> None:
+    long = {str(p.relative_to(ROOT)): n for p in _package_modules()
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 350}
+    assert len(long) <= 3, f"modules over 350 lines: {long}"
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports(path: Path, name: str) -> set[str]:
+    """Every package module ``path`` imports, wherever the import stands (in a function, under
+    ``TYPE_CHECKING``): a circle that only types or late imports keep apart is still one."""
+    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[: len(parts) - node.level + 1]
+                                + ([node.module] if node.module else []))
+            found |= {base} | {f"{base}.{a.name}" for a in node.names}
+    return found
+
+
+def test_no_two_package_modules_import_each_other_in_a_circle() -> None:
+    modules = {_module_name(p): p for p in _package_modules()}
+    graph = {name: {m for m in _imports(path, name) if m in modules and m != name}
+             for name, path in modules.items()}
+    # a package's __init__ re-exporting its own modules is no circle of theirs
+    graph = {n: {m for m in deps if not n.startswith(m + ".")} for n, deps in graph.items()}
+    circles = []
+    state: dict[str, int] = {}
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        for dep in sorted(graph[node]):
+            if state.get(dep) == 1:
+                circles.append(stack[stack.index(dep):] + [dep])
+            elif dep not in state:
+                visit(dep, [*stack, dep])
+        state[node] = 2
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name, [name])
+    assert not circles, f"import circles: {circles}"

@@ -20,7 +20,8 @@ from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.baseline_config import DwaConfig, load_baselines_config
-from pic4rl_bridge.baselines import DwaController, make_baseline
+from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.dwa import DwaController
 from pic4rl_bridge.config import EnvConfig, load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
