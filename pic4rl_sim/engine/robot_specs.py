@@ -69,7 +69,7 @@ class RobotSpec:
             spec = sensors[kind.name]
             ok = isinstance(spec, kind.spec) or (spec is None and kind.optional)
             require(ok, f"robot.{kind.name}", spec,
-                    f"a {kind.spec.__name__}{' or None' if kind.optional else ''}")
+                    f"{kind.spec.__name__}{' or None' if kind.optional else ''}")
         object.__setattr__(self, "sensors", MappingProxyType(sensors))
         for key in ("height_m", "mass_kg", "wheel_base_m", "wheel_radius_m", "max_linear_m_s",
                     "max_angular_rad_s", "max_linear_accel_m_s2", "max_angular_accel_rad_s2"):
