@@ -8,7 +8,10 @@ actions give bit-identical observations and rewards through both.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 from pic4rl_metrics.geometry import yaw_from_quaternion
@@ -38,9 +41,11 @@ class ScanData:
         return self.angle_min_rad + self.angle_increment_rad * np.arange(len(self.ranges))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class SensorFrame:
-    """Everything a task may read at one step; a sensor the robot lacks is ``None``.
+    """Everything a task may read at one step: pose, twist and goal, and each sensor's reading
+    by its ``pic4rl_bridge.sensors.SENSORS`` name (given as keywords too, ``scan=...``); a
+    sensor the robot lacks, or the task did not ask for, is absent (its accessor: ``None``).
 
     ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
     the frame the goal is given in); ``goal`` is the current goal in that frame; ``depth`` is
@@ -51,8 +56,34 @@ class SensorFrame:
     stamp_ns: int
     pose: Pose2D
     twist: Twist2D
-    goal: tuple[float, float] | None = None
-    scan: ScanData | None = None
-    depth: np.ndarray | None = None
-    person: Pose2D | None = None
-    plan: np.ndarray | None = None
+    goal: tuple[float, float] | None
+    readings: Mapping[str, Any]
+
+    def __init__(self, stamp_ns: int, pose: Pose2D, twist: Twist2D,
+                 goal: tuple[float, float] | None = None,
+                 readings: Mapping[str, Any] | None = None, **sensors: Any) -> None:
+        """``sensors`` by name add to (or replace) ``readings``; a ``None`` one is absent
+        (``dataclasses.replace(frame, scan=None)`` drops the scan)."""
+        for name, value in (("stamp_ns", stamp_ns), ("pose", pose), ("twist", twist),
+                            ("goal", goal)):
+            object.__setattr__(self, name, value)
+        merged = {**(readings or {}), **sensors}
+        object.__setattr__(self, "readings", MappingProxyType(
+            {name: value for name, value in merged.items() if value is not None}))
+
+    # The stock sensors, typed; another is read as ``readings.get(name)``.
+    @property
+    def scan(self) -> ScanData | None:
+        return self.readings.get("scan")
+
+    @property
+    def depth(self) -> np.ndarray | None:
+        return self.readings.get("depth")
+
+    @property
+    def person(self) -> Pose2D | None:
+        return self.readings.get("person")
+
+    @property
+    def plan(self) -> np.ndarray | None:
+        return self.readings.get("plan")

@@ -1,10 +1,10 @@
 """The frame's sensors in one table, and the one function that builds a ``SensorFrame``.
 
-Each optional field of ``SensorFrame`` is one ``FrameSensor``: the sim topic that carries it
-(its type, QoS and default name, ``topics.<name>`` in the config), how its message decodes,
-and how the in-process transport reads the same value straight from the engine. Both
+Each reading of ``SensorFrame`` is one ``FrameSensor``: the sim topic that carries it (its
+type, QoS and default name, ``topics.<name>`` in the config, with its doc), how its message
+decodes, and how the in-process transport reads the same value straight from the engine. Both
 transports build frames through ``build_frame``; a task names the sensors it needs in its
-``required`` with the same names.
+``required`` and reads them from ``SensorFrame.readings`` with the same names.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from .frame import ScanData, SensorFrame, as_published
 
 @dataclass(frozen=True)
 class FrameSensor:
-    """One optional field of ``SensorFrame``: ``name`` is the field, the task's ``required``
-    entry and the ``topics`` key; ``interface`` the sim topic that carries it."""
+    """One reading of ``SensorFrame``: ``name`` is its key in ``readings``, the task's
+    ``required`` entry and the ``topics`` key; ``interface`` the sim topic that carries it."""
 
     name: str
     interface: Interface
@@ -35,6 +35,18 @@ class FrameSensor:
     read: Callable[[Any, Pose2D], Any]
     #: Published once an episode (subscribed like the goal, decoded once per message).
     episodic: bool = False
+    #: What ``topics.<name>``'s doc adds to the message type.
+    topic_note: str = ""
+
+    @property
+    def default_topic(self) -> str:
+        """``topics.<name>``'s default: the sim's topic."""
+        return self.interface.name
+
+    @property
+    def topic_doc(self) -> str:
+        """``topics.<name>``'s doc: the message type and what it carries."""
+        return f"{self.interface.type}{self.topic_note}"
 
 
 def _f32(value: float) -> float:
@@ -63,13 +75,16 @@ def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
 SENSORS = (
     FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan),
     FrameSensor("depth", DEPTH_IMAGE,
-                lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth),
+                lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth,
+                topic_note=" (32FC1)"),
     FrameSensor("person", PERSON_POSE, lambda msg, mount, topic: decode.planar_pose(msg.pose),
-                _read_person),
+                _read_person, topic_note=" (personMonitoring)"),
     FrameSensor("plan", PLAN, lambda msg, mount, topic: decode.path(msg),
-                lambda engine, mount: engine.plan(), episodic=True),
+                lambda engine, mount: engine.plan(), episodic=True,
+                topic_note=": the global plan of goal_input plan (the sim's, or any planner's, "
+                "e.g. nav2's /plan)"),
 )
-#: The frame's optional fields by name, in ``SensorFrame``'s order.
+#: The frame's sensors by name, in the table's order.
 BY_NAME = {s.name: s for s in SENSORS}
 
 
@@ -77,7 +92,7 @@ def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
                 goal: tuple[float, float] | None, wanted: Iterable[str],
                 value: Callable[[FrameSensor], Any]) -> SensorFrame:
     """The frame at ``stamp_ns``: pose and twist from ``odometry``, and ``value(sensor)`` for
-    each sensor ``wanted`` (the rest ``None``)."""
+    each sensor ``wanted`` in the table's order (the rest, and a ``None`` value, absent)."""
     names = set(wanted)
     pose, twist = odometry
     return SensorFrame(stamp_ns, pose, twist, goal,

@@ -19,7 +19,8 @@ from typing import Any
 
 from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
-from .engine.robot_specs import SENSOR_KINDS, RobotSpec, load_robot
+from .engine.robot_specs import RobotSpec, load_robot
+from .engine.sensors import SENSOR_KINDS
 from .engine.world_generators import GENERATORS, make_world
 from .engine.world_spec import WorldSpec
 from .errors import ConfigError, require, unknown_key
@@ -105,11 +106,11 @@ def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
     robot's own sensors as defaults (a sensor the robot lacks defaults to the stock one,
     disabled), after an ``<name>.enabled`` switch for each optional sensor."""
     switches = tuple(ParamSpec(f"{k.name}.enabled", ParamType.BOOL,
-                               getattr(robot, k.name) is not None,
+                               robot.sensors[k.name] is not None,
                                f"whether the robot carries its {k.label} "
                                f"(publishes {k.publishes})")
                      for k in SENSOR_KINDS if k.optional)
-    fields = (specs(k.spec, defaults=getattr(robot, k.name) or k.spec(), prefix=f"{k.name}.")
+    fields = (specs(k.spec, defaults=robot.sensors[k.name] or k.spec(), prefix=f"{k.name}.")
               for k in SENSOR_KINDS)
     return (*switches, *(spec for group in fields for spec in group))
 
@@ -216,7 +217,7 @@ def build_robot(values: Mapping[str, Any]) -> RobotSpec:
         if kind.optional and not values[f"{kind.name}.enabled"]:
             changes[kind.name] = None
             continue
-        stock = getattr(robot, kind.name) or kind.spec()
+        stock = robot.sensors[kind.name] or kind.spec()
         fields = {f.name for f in dataclasses.fields(stock)}
         given = {k.split(".")[1]: v for k, v in values.items()
                  if k.startswith(f"{kind.name}.") and k.split(".")[1] in fields}

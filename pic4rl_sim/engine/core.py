@@ -19,9 +19,17 @@ from .engine_config import EngineConfig
 from .geometry import Pose2D, Twist2D, wrap_angle
 from .model import build_model
 from .paths import plan_path
-from .robot_specs import SENSOR_KINDS, Drive, RobotSpec
+from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
-from .sensors import ENGINE_SENSORS, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
+from .sensors import (
+    KINDS_BY_NAME,
+    SENSOR_KINDS,
+    DepthCamera,
+    Imu,
+    ImuReading,
+    Lidar,
+    WheelOdometry,
+)
 from .world_spec import WorldSpec
 
 log = logging.getLogger(__name__)
@@ -77,8 +85,8 @@ class Engine:
         body = self.ids.robot_body
         #: The robot's sensors by ``SENSOR_KINDS`` name (an optional one it lacks: absent).
         self.sensors: dict[str, Any] = {
-            kind.name: ENGINE_SENSORS[kind.name].build(self.model, spec, body)
-            for kind in SENSOR_KINDS if (spec := getattr(robot, kind.name)) is not None}
+            kind.name: kind.build(self.model, spec, body)
+            for kind in SENSOR_KINDS if (spec := robot.sensors[kind.name]) is not None}
         self.lidar: Lidar | None = self.sensors.get("lidar")
         self.depth: DepthCamera | None = self.sensors.get("depth")
         self.imu: Imu = self.sensors["imu"]
@@ -248,9 +256,10 @@ class Engine:
 
     def read(self, sensor: str) -> Any:
         """The robot's ``sensor`` (a ``SENSOR_KINDS`` name) read now, with its own noise
-        stream (``ENGINE_SENSORS``); error if the robot has none."""
+        stream (its kind's ``read``); error if the robot has none."""
         require(sensor in self.sensors, f"robot.{sensor}", None, f"a {sensor} on the robot")
-        return ENGINE_SENSORS[sensor].read(self.sensors[sensor], self, self._rng[sensor])  # type: ignore[misc]
+        read = KINDS_BY_NAME[sensor].read
+        return read(self.sensors[sensor], self, self._rng[sensor])  # type: ignore[misc]
 
     def scan(self) -> np.ndarray:
         """LiDAR ranges now (REP 117: ``inf`` beyond range); error if the robot has none."""

@@ -1,4 +1,4 @@
-"""The frame's sensor table (``pic4rl_bridge.sensors``): one entry per optional field of
+"""The frame's sensor table (``pic4rl_bridge.sensors``): one entry per reading of
 ``SensorFrame``, one place that builds frames, and for each sensor the in-process engine read
 bit-identical to decoding the sim node's message (what makes both transports' frames equal)."""
 
@@ -16,18 +16,40 @@ from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
 from pic4rl_sim.engine.world_generators import make_world
 from pic4rl_sim.node.messages import StateMessages, plan_path
 
+from pic4rl_bridge.config import TopicsConfig
 from pic4rl_bridge.frame import ScanData, SensorFrame
 from pic4rl_bridge.sensors import SENSORS, FrameSensor, build_frame
 
 BRIDGE = Path(__file__).resolve().parents[2] / "pic4rl_bridge"
-#: The fields every frame has; the rest are the table's.
+#: The fields every frame has; the sensors' are its ``readings``.
 ALWAYS = ("stamp_ns", "pose", "twist", "goal")
 
 
-def test_every_optional_frame_field_is_one_table_entry_in_order() -> None:
+def test_a_frame_holds_the_tables_sensors_as_readings() -> None:
+    """A frame's fields are the ones every frame has and ``readings``; each sensor of the
+    table is a reading by its name (the stock ones also a typed accessor), so a new sensor
+    needs no new field."""
     fields = [f.name for f in dataclasses.fields(SensorFrame)]
-    assert fields[:len(ALWAYS)] == list(ALWAYS)
-    assert [s.name for s in SENSORS] == fields[len(ALWAYS):]
+    assert fields == [*ALWAYS, "readings"]
+    names = [s.name for s in SENSORS]
+    frame = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, reversed(names),
+                        lambda sensor: f"value of {sensor.name}")
+    assert list(frame.readings) == names
+    typed = [n for n in names if isinstance(getattr(SensorFrame, n, None), property)]
+    assert typed == ["scan", "depth", "person", "plan"]
+    assert [getattr(frame, n) for n in typed] == [frame.readings[n] for n in typed]
+    fewer = dataclasses.replace(frame, scan=None, goal=(1.0, 2.0))
+    assert list(fewer.readings) == names[1:] and fewer.goal == (1.0, 2.0)
+    empty = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, names, lambda sensor: None)
+    assert dict(empty.readings) == {} and empty.scan is None
+
+
+def test_each_sensor_carries_its_topics_default_and_doc() -> None:
+    """``TopicsConfig``'s sensor topics say what the table says (so it can derive from it)."""
+    topics = {f.name: f for f in dataclasses.fields(TopicsConfig)}
+    for sensor in SENSORS:
+        assert topics[sensor.name].default == sensor.default_topic == sensor.interface.name
+        assert topics[sensor.name].metadata["doc"] == sensor.topic_doc
 
 
 def test_only_build_frame_constructs_a_sensor_frame() -> None:

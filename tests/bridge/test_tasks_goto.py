@@ -181,7 +181,7 @@ def test_importing_tasks_pulls_in_neither_ros_nor_mujoco():
 
 def _with_plan(plan: np.ndarray | None) -> SensorFrame:
     base = frame(0.0, goal=(3.0, 0.0))
-    return SensorFrame(base.stamp_ns, base.pose, base.twist, base.goal, base.scan, plan=plan)
+    return SensorFrame(base.stamp_ns, base.pose, base.twist, base.goal, scan=base.scan, plan=plan)
 
 
 @pytest.mark.parametrize("sensor", ["lidar", "depth"])

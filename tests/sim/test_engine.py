@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -136,8 +135,7 @@ def test_the_walking_person_moves_and_bumps_into_a_standing_robot():
 
 
 def test_same_seed_same_commands_same_states_and_sensors():
-    robot = dataclasses.replace(JACKAL, lidar=LidarSpec(beams=90, noise_std_m=0.02,
-                                                        dropout_prob=0.05))
+    robot = JACKAL.with_sensors(lidar=LidarSpec(beams=90, noise_std_m=0.02, dropout_prob=0.05))
     world = open_field(Box(3, 0, 0.2, 4, 1), cylinders=(Cylinder(-2, 1, 0.3, 1),))
     commands = np.random.default_rng(7).uniform(-1, 1, size=(30, 3))
     runs = []
@@ -228,13 +226,13 @@ def test_a_given_start_gets_a_goal_far_enough_and_a_failed_reset_changes_nothing
 
 
 def test_every_sensor_kind_is_built_and_read_through_the_table():
-    """``SENSOR_KINDS`` (robot_specs) and ``ENGINE_SENSORS`` (sensors) name the same kinds; a
-    robot gets one engine sensor per spec it carries, and ``read`` of each equals its named
-    reader on the same noise stream."""
-    from pic4rl_sim.engine.robot_specs import SENSOR_KINDS, DepthCameraSpec, ImuSpec
-    from pic4rl_sim.engine.sensors import ENGINE_SENSORS
+    """``SENSOR_KINDS`` (sensors) is the robot's sensors' one table: a robot holds one spec per
+    kind in its order, gets one engine sensor per spec it carries, and ``read`` of each equals
+    its named reader on the same noise stream."""
+    from pic4rl_sim.engine.robot_specs import DepthCameraSpec, ImuSpec
+    from pic4rl_sim.engine.sensors import SENSOR_KINDS
 
-    assert [k.name for k in SENSOR_KINDS] == list(ENGINE_SENSORS)
+    assert list(JACKAL.sensors) == [k.name for k in SENSOR_KINDS]
     robot = JACKAL.with_sensors(lidar=LidarSpec(beams=30, noise_std_m=0.02),
                                 depth=DepthCameraSpec(width=8, height=6, noise_std_m=0.02),
                                 imu=ImuSpec(gyro_noise_std_rad_s=0.1))

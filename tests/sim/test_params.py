@@ -22,7 +22,8 @@ from pic4rl_sim.params import (
     parse_start,
     resolve,
 )
-from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI
+from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI, robot_from_mapping
+from pic4rl_sim.engine.sensors import SENSOR_KINDS
 from pic4rl_sim.engine.world_generators import GENERATORS
 from pic4rl_sim.schema import param_names
 
@@ -147,6 +148,26 @@ def test_sensor_parameters_override_the_robots_sensors():
     with pytest.raises(ConfigError, match="lidar.range_max_m"):
         build_config(values_for(lidar__range_min_m=5.0, lidar__range_max_m=4.0))
     assert build_config(values_for("omni")).robot == OMNI
+
+
+def test_a_robot_holds_one_spec_per_sensor_kind():
+    """``RobotSpec.sensors`` has every ``SENSOR_KINDS`` kind in order (the typed accessors read
+    it); a robot file writes each at the top level; a wrong kind or spec is named."""
+    assert list(JACKAL.sensors) == [k.name for k in SENSOR_KINDS]
+    assert JACKAL.lidar is JACKAL.sensors["lidar"] and JACKAL.depth is None
+    refined = robot_from_mapping({"base": "jackal", "depth": {"width": 10},
+                                  "lidar": {"beams": 9}})
+    assert refined.depth.width == 10 and refined.depth.height == 60
+    assert refined.lidar == dataclasses.replace(JACKAL.lidar, beams=9)
+    assert robot_from_mapping({"base": "jackal", "lidar": None}).lidar is None
+    with pytest.raises(ConfigError, match=r"unknown key 'lidr'; did you mean 'lidar'"):
+        robot_from_mapping({"base": "jackal", "lidr": {}})
+    with pytest.raises(ConfigError, match=r"unknown key 'sensors'"):
+        robot_from_mapping({"base": "jackal", "sensors": {}})
+    with pytest.raises(ConfigError, match=r"unknown key 'sonar'"):
+        JACKAL.with_sensors(sonar=None)
+    with pytest.raises(ConfigError, match=r"robot.imu: None is invalid; expected ImuSpec$"):
+        JACKAL.with_sensors(imu=None)
 
 
 def test_only_robot_world_sensor_and_timing_changes_need_a_new_engine():
