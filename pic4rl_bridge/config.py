@@ -26,16 +26,7 @@ from typing import Any
 from pic4rl_metrics.contract import STORAGES
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
-from pic4rl_sim.interfaces import (
-    CMD_VEL,
-    DEPTH_IMAGE,
-    GOAL_POSE,
-    ODOM,
-    PERSON_POSE,
-    PLAN,
-    RECORDED,
-    SCAN,
-)
+from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, ODOM, RECORDED
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE
 from pic4rl_sim.schema import (
     NON_NEGATIVE,
@@ -51,6 +42,7 @@ from pic4rl_sim.schema import (
 
 from .baseline_config import PREFIX as BASELINES_PREFIX
 from .errors import ConfigError, require
+from .sensors import SENSORS
 from .task_registry import (
     TASKS,
     GoalInput,
@@ -148,20 +140,24 @@ class EpisodesConfig:
                           self.max_detour or math.inf, prefix="episodes.")  # 0: the kind's
 
 
-@dataclass(frozen=True)
-class TopicsConfig:
-    """Topic names, relative to ``ros.namespace`` unless absolute."""
+def _topics_config() -> type:
+    """The ``topics:`` section: the command, pose and goal topics, then one per frame sensor
+    (``SENSORS``: its sim topic, and its doc), so that a new sensor needs no field here."""
+    fields = [
+        ("cmd_vel", str, param(CMD_VEL.name, doc=f"velocity commands ({CMD_VEL.type} or "
+                                                 "TwistStamped)")),
+        ("pose", str, param(ODOM.name, doc=f"odom (wheel odometry) | ground_truth, or any "
+                                           f"{ODOM.type} topic")),
+        ("goal", str, param(GOAL_POSE.name, doc=GOAL_POSE.type)),
+        *((s.name, str, param(s.default_topic, doc=s.topic_doc)) for s in SENSORS),
+    ]
+    return dataclasses.make_dataclass(
+        "TopicsConfig", fields, frozen=True,
+        namespace={"__module__": __name__,
+                   "__doc__": "Topic names, relative to ``ros.namespace`` unless absolute."})
 
-    cmd_vel: str = param(CMD_VEL.name, doc=f"velocity commands ({CMD_VEL.type} or "
-                         "TwistStamped)")
-    pose: str = param(ODOM.name, doc=f"odom (wheel odometry) | ground_truth, or any {ODOM.type} "
-                      "topic")
-    scan: str = param(SCAN.name, doc=SCAN.type)
-    depth: str = param(DEPTH_IMAGE.name, doc=f"{DEPTH_IMAGE.type} (32FC1)")
-    goal: str = param(GOAL_POSE.name, doc=GOAL_POSE.type)
-    person: str = param(PERSON_POSE.name, doc=f"{PERSON_POSE.type} (personMonitoring)")
-    plan: str = param(PLAN.name, doc=f"{PLAN.type}: the global plan of goal_input plan (the "
-                      "sim's, or any planner's, e.g. nav2's /plan)")
+
+TopicsConfig = _topics_config()
 
 
 @dataclass(frozen=True)

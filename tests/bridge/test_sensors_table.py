@@ -16,7 +16,8 @@ from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
 from pic4rl_sim.engine.world_generators import make_world
 from pic4rl_sim.node.messages import StateMessages, plan_path
 
-from pic4rl_bridge.config import TopicsConfig
+from pic4rl_bridge.config import EnvConfig, env_config_from_params
+from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.frame import ScanData, SensorFrame
 from pic4rl_bridge.sensors import SENSORS, FrameSensor, build_frame
 
@@ -44,12 +45,16 @@ def test_a_frame_holds_the_tables_sensors_as_readings() -> None:
     assert dict(empty.readings) == {} and empty.scan is None
 
 
-def test_each_sensor_carries_its_topics_default_and_doc() -> None:
-    """``TopicsConfig``'s sensor topics say what the table says (so it can derive from it)."""
-    topics = {f.name: f for f in dataclasses.fields(TopicsConfig)}
+def test_each_sensor_has_its_topic_parameter_with_the_tables_default() -> None:
+    """``topics:`` holds one parameter per sensor of the table (with its sim topic as the
+    default), which the params file sets and the schema checks like any other."""
+    default = EnvConfig()
     for sensor in SENSORS:
-        assert topics[sensor.name].default == sensor.default_topic == sensor.interface.name
-        assert topics[sensor.name].metadata["doc"] == sensor.topic_doc
+        assert getattr(default.topics, sensor.name) == sensor.interface.name
+        remapped = env_config_from_params({f"topics.{sensor.name}": f"/robot2/{sensor.name}"})
+        assert getattr(remapped.topics, sensor.name) == f"/robot2/{sensor.name}"
+    with pytest.raises(ConfigError, match="did you mean 'topics.scan'"):
+        env_config_from_params({"topics.scna": "/front/scan"})
 
 
 def test_only_build_frame_constructs_a_sensor_frame() -> None:
