@@ -74,7 +74,15 @@ def test_the_bridge_imports_no_torch_sb3_or_agents(path: Path) -> None:
 
 #: The most places each piece may take (issue 22); every other piece takes one or two.
 MOST_PLACES = {"a sensor": 4, "a task": 3}
+#: One place: a backticked file, then optionally ``: `Symbol```, opening a ";"-separated item
+#: (what stands in parentheses or opens with words is commentary).
 PLACE = re.compile(r"`([^`]+)`(?::\s*`([^`]+)`)?")
+
+
+def _without_parentheses(text: str) -> str:
+    while (stripped := re.sub(r"\([^()]*\)", "", text)) != text:
+        text = stripped
+    return text
 
 
 def _places_rows() -> dict[str, tuple[int, list[tuple[str, str | None]]]]:
@@ -83,8 +91,11 @@ def _places_rows() -> dict[str, tuple[int, list[tuple[str, str | None]]]]:
     rows = {}
     for line in text.split("\n## ", 1)[0].splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(cells) == 4 and cells[1].isdigit():
-            rows[cells[0]] = (int(cells[1]), [(p, s or None) for p, s in PLACE.findall(cells[2])])
+        if len(cells) != 4 or not cells[1].isdigit():
+            continue
+        items = [i.strip() for i in _without_parentheses(cells[2]).split(";")]
+        places = [PLACE.match(i) for i in items if i.startswith("`")]
+        rows[cells[0]] = (int(cells[1]), [(m[1], m[2]) for m in places if m])
     return rows
 
 
