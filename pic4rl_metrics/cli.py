@@ -23,6 +23,7 @@ from .registry import METRICS, REGISTRY
 from .layouts import FORMATS
 from .report import EPISODE_VIEW, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, table_columns
+from .roles import ROLES, Role
 from .topics import TopicMap, load_topic_map, parse_frames
 from .video_cli import add_video_options, run_video_command
 
@@ -41,10 +42,8 @@ def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True)
     topics.add_argument("--pose-frames", type=_frames, metavar="PARENT:CHILD",
                         help="poses from /tf and /tf_static: CHILD's pose in PARENT, e.g. "
                              "odom:base_link or map:base_link")
-    topics.add_argument("--scan-topic", metavar="TOPIC", help="LaserScan topic")
-    topics.add_argument("--cmd-topic", metavar="TOPIC", help="Twist or TwistStamped topic")
-    topics.add_argument("--goal-topic", metavar="TOPIC", help="goal PoseStamped topic")
-    topics.add_argument("--person-topic", metavar="TOPIC", help="tracked person's pose topic")
+    for role in _FLAGGED:
+        topics.add_argument(role.flag, metavar="TOPIC", help=role.help)
     facts = parser.add_argument_group("episode facts (override what the bags record)")
     facts.add_argument("--agent", help="agent name, e.g. for a real-robot log")
     facts.add_argument("--goal", nargs=2, type=float, metavar=("X", "Y"), help="goal position (m)")
@@ -65,6 +64,15 @@ def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True)
                               "always)")
     run.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                      help="progress bar on stderr (default: when stderr is a terminal)")
+
+
+#: The input roles with a ``--<role>-topic`` option.
+_FLAGGED = tuple(role for role in ROLES if role.flag)
+
+
+def _dest(role: Role) -> str:
+    """The ``argparse`` attribute of a role's option (``--cmd-topic``: ``cmd_topic``)."""
+    return str(role.flag).lstrip("-").replace("-", "_")
 
 
 def _jobs(text: str) -> int:
@@ -134,9 +142,8 @@ def _inputs(args: argparse.Namespace) -> tuple[TopicMap, EpisodeFacts, frozenset
     if args.topic_map is not None:
         topic_map, facts, given = load_topic_map(args.topic_map)
     topic_map = topic_map.with_overrides(
-        pose=tuple(args.pose_topic) if args.pose_topic else None, scan=args.scan_topic,
-        cmd_vel=args.cmd_topic, goal=args.goal_topic, person=args.person_topic,
-        pose_frames=args.pose_frames,
+        pose=tuple(args.pose_topic) if args.pose_topic else None, pose_frames=args.pose_frames,
+        **{role.name: getattr(args, _dest(role)) for role in _FLAGGED},
     )
     cli = {
         "agent": args.agent, "goal": args.goal, "start": args.start, "footprint": args.footprint,

@@ -26,6 +26,7 @@ from .kinematics import (
     seconds,
     velocity_series,
 )
+from .roles import SERIES_ROLES
 from .rows import lane_deviations
 from .series import Episode, ScanSeries
 
@@ -289,12 +290,11 @@ class Derived:
 
 
 #: The inputs a metric may need (``@metric(needs=...)``), each with its test of whether an
-#: episode has it; a metric whose input is missing gives NaN.
+#: episode has it; a metric whose input is missing gives NaN. A role that fills a series
+#: (``roles.SERIES_ROLES``) is needed by its name; the rest are facts.
 INPUT_TESTS: dict[str, Callable[[Derived], bool]] = {
     "pose": lambda d: True,
-    "scan": lambda d: d.scan is not None,
-    "cmd_vel": lambda d: d.episode.cmd is not None and len(d.episode.cmd) > 0,
-    "person": lambda d: d.episode.person is not None and len(d.episode.person) > 0,
+    **{role.name: role.present for role in SERIES_ROLES.values()},
     "goal": lambda d: d.facts.goal is not None,
     "footprint": lambda d: d.facts.footprint is not None,
     "max_speed": lambda d: d.facts.max_speed_mps is not None,

@@ -23,39 +23,15 @@ from . import tf
 from .bagfile import OpenBag, bag_errors
 from .contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from .errors import ConfigError, EpisodeError
-from .geometry import Mount, yaw_from_quaternion
+from .geometry import Mount
+from .roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from .series import Episode
-from .timebase import Samples, cmd_series, point_series, pose_series, scan_series
-from .topics import (
-    LASER_SCAN,
-    ODOMETRY,
-    POSE_COV,
-    POSE_STAMPED,
-    TF_MESSAGE,
-    TWIST_STAMPED,
-    TopicMap,
-    choose_topics,
-)
+from .timebase import Samples, pose_series
+from .topics import TopicMap, choose_topics
 
 
 def _stamp_ns(header: Any) -> int:
     return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
-
-
-def _pose_row(msg: Any, msgtype: str) -> tuple[float, ...]:
-    """(x, y, yaw, vx, vy, wz) of a pose message; NaN twist when the type has none."""
-    pose = msg.pose if msgtype == POSE_STAMPED else msg.pose.pose
-    p, q = pose.position, pose.orientation
-    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w)
-    if msgtype == ODOMETRY:
-        t = msg.twist.twist
-        return (p.x, p.y, yaw, t.linear.x, t.linear.y, t.angular.z)
-    return (p.x, p.y, yaw, math.nan, math.nan, math.nan)
-
-
-def _cmd_row(msg: Any, msgtype: str) -> tuple[float, float, float]:
-    twist = msg.twist if msgtype == TWIST_STAMPED else msg
-    return (twist.linear.x, twist.linear.y, twist.angular.z)
 
 
 def _tf_extract(msg: Any, _msgtype: str) -> list[tf.Row]:
@@ -64,14 +40,7 @@ def _tf_extract(msg: Any, _msgtype: str) -> list[tf.Row]:
 
 #: Per role, the payload kept of each message (a TFMessage's transforms whatever the role).
 _EXTRACTORS: dict[str, Callable[[Any, str], Any]] = {
-    "pose": _pose_row,
-    "goal": _pose_row,
-    "person": _pose_row,
-    "scan": lambda m, _t: (m.ranges, m.angle_min, m.angle_increment, m.range_min, m.range_max),
-    "cmd_vel": _cmd_row,
-    "facts": lambda m, _t: m.data,
-    "outcome": lambda m, _t: m.data,
-}
+    "pose": pose_row, **{role.name: role.extract for role in ROLES}}
 
 
 class _BagContents:
@@ -108,7 +77,7 @@ class _BagContents:
                 add_recv(recv_ns)
                 add_row(extract(msg, msgtype))
         for role, conn in ((wanted[c.topic], c) for c in conns):
-            if conn.msgtype in (LASER_SCAN, ODOMETRY, POSE_STAMPED, POSE_COV, TWIST_STAMPED):
+            if has_header(conn.msgtype):
                 self.topics[role].has_header = True
         if self.topics["tf_static"].rows and self.topics["scan"].rows:
             self._frames(bag, conns, wanted)
@@ -253,8 +222,7 @@ def read_episode(
         facts=merged,
         pose=pose,
         pose_topic=bag.pose_topic,
-        scan=scan_series(bag.topics["scan"], offset, warnings),
-        cmd=cmd_series(bag.topics["cmd_vel"], offset, warnings),
-        person=point_series(bag.topics["person"], offset, warnings),
+        inputs={name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]
+                for name, role in SERIES_ROLES.items()},
         warnings=tuple(warnings),
     )

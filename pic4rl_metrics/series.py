@@ -1,92 +1,25 @@
-"""Decoded time series of one episode, as plain numpy arrays.
+"""Decoded time series of one episode, as plain numpy arrays: the ``Episode``.
 
-Timestamps stay int nanoseconds (``t_ns``) on one time base per bag: message header stamps,
-with headerless messages moved onto that base (see ``reader``). Arrays are sorted by time
-with exact duplicates removed; frames are those of the recorded messages (poses in the pose
-topic's frame, twists in the robot's body frame as ``nav_msgs/Odometry`` defines them).
+Its series besides the pose are those the input roles fill (``roles.SERIES_ROLES``): each is an
+attribute (``episode.scan``), ``None`` when the bag has none, and a keyword of ``Episode`` and
+of ``dataclasses.replace``. The series' kinds live in ``series_kinds``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 from .contract import EpisodeFacts
+from .roles import SERIES_ROLES
+from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
+
+__all__ = ["CmdSeries", "Episode", "PointSeries", "PoseSeries", "ScanSeries"]
 
 
-@dataclass(frozen=True)
-class PoseSeries:
-    """Robot pose (m, rad) and, when the source carries one, its body-frame twist."""
-
-    t_ns: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    yaw: np.ndarray
-    #: Body-frame twist (m/s, rad/s); ``None`` for pose-only sources (PoseStamped).
-    vx: np.ndarray | None = None
-    vy: np.ndarray | None = None
-    wz: np.ndarray | None = None
-
-    def __len__(self) -> int:
-        return len(self.t_ns)
-
-
-@dataclass(frozen=True)
-class ScanSeries:
-    """2D laser scans, padded to a common beam count with NaN (ranges in m, angles in rad)."""
-
-    t_ns: np.ndarray
-    ranges: np.ndarray  # (n_scans, n_beams) float32/float64, NaN where padded
-    angles: np.ndarray  # (n_scans, n_beams) bearing of each beam in the scan frame
-    range_min: np.ndarray  # (n_scans,)
-    range_max: np.ndarray  # (n_scans,)
-
-    def __len__(self) -> int:
-        return len(self.t_ns)
-
-    def valid_ranges(self) -> np.ndarray:
-        """Ranges with every non-return as NaN, following REP 117.
-
-        ``+inf`` (no return), NaN (error) and finite values outside ``[range_min, range_max]``
-        are no obstacle; ``-inf`` (object closer than ``range_min``) counts as ``range_min``.
-        """
-        ranges = np.asarray(self.ranges, dtype=float)
-        rmin = self.range_min[:, None]
-        rmax = self.range_max[:, None]
-        too_close = np.isneginf(ranges)
-        in_range = np.isfinite(ranges) & (ranges >= rmin) & (ranges <= rmax)
-        out = np.where(in_range, ranges, np.nan)
-        return np.where(too_close, np.broadcast_to(rmin, ranges.shape), out)
-
-
-@dataclass(frozen=True)
-class CmdSeries:
-    """Velocity commands (m/s, rad/s) from ``Twist`` or ``TwistStamped``."""
-
-    t_ns: np.ndarray
-    vx: np.ndarray
-    vy: np.ndarray
-    wz: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.t_ns)
-
-
-@dataclass(frozen=True)
-class PointSeries:
-    """Positions (m) of something tracked over time, e.g. the walking person."""
-
-    t_ns: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.t_ns)
-
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Episode:
     """Everything the metrics need from one bag."""
 
@@ -94,8 +27,27 @@ class Episode:
     facts: EpisodeFacts
     pose: PoseSeries
     pose_topic: str
-    scan: ScanSeries | None = None
-    cmd: CmdSeries | None = None
-    person: PointSeries | None = None
+    #: The roles' series by name (``scan``, ``cmd``, ``person``), ``None`` for those it lacks.
+    inputs: Mapping[str, Any] = field(default_factory=dict)
     #: Things noticed while reading that do not stop the metrics (e.g. reordered stamps).
     warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    def __init__(self, bag: Path, facts: EpisodeFacts, pose: PoseSeries, pose_topic: str,
+                 inputs: Mapping[str, Any] | None = None, warnings: tuple[str, ...] = (),
+                 **series: Any) -> None:
+        unknown = sorted(set(series) - set(SERIES_ROLES))
+        if unknown:
+            msg = f"Episode() got unknown series {unknown}; known: {sorted(SERIES_ROLES)}"
+            raise TypeError(msg)
+        merged = dict.fromkeys(SERIES_ROLES) | dict(inputs or {}) | series
+        for name, value in (("bag", bag), ("facts", facts), ("pose", pose),
+                            ("pose_topic", pose_topic), ("inputs", merged),
+                            ("warnings", tuple(warnings))):
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name: str) -> Any:
+        """A role's series (``episode.scan``); only called for names that are no field."""
+        if name in SERIES_ROLES:
+            return self.__dict__["inputs"][name]
+        msg = f"{type(self).__name__!r} object has no attribute {name!r}"
+        raise AttributeError(msg)

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .series import CmdSeries, PointSeries, PoseSeries, ScanSeries
+from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
 
 
 class Samples:

@@ -28,6 +28,7 @@ import yaml
 from . import contract
 from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError, TopicError
+from .roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
 
 
 def normalize_topic(name: str) -> str:
@@ -36,43 +37,20 @@ def normalize_topic(name: str) -> str:
     return name if name.startswith("/") else f"/{name}"
 
 
-ODOMETRY = "nav_msgs/msg/Odometry"
-POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
-POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
-TWIST = "geometry_msgs/msg/Twist"
-TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
-LASER_SCAN = "sensor_msgs/msg/LaserScan"
-STRING = "std_msgs/msg/String"
-TF_MESSAGE = "tf2_msgs/msg/TFMessage"
-
-SUPPORTED_POSE_MSGS = frozenset({ODOMETRY, POSE_STAMPED, POSE_COV})
-SUPPORTED_CMD_MSGS = frozenset({TWIST, TWIST_STAMPED})
-#: The one-topic roles of a topic map (each a ``TopicMap`` field) and the message types each
-#: accepts, in the order they are chosen; a topic-map YAML names them by role, the facts and
-#: outcome topics as ``facts_topic`` and ``outcome_topic``.
-ROLE_TYPES: dict[str, frozenset[str]] = {
-    "scan": frozenset({LASER_SCAN}),
-    "cmd_vel": SUPPORTED_CMD_MSGS,
-    "goal": SUPPORTED_POSE_MSGS,
-    "person": SUPPORTED_POSE_MSGS,
-    "facts": frozenset({STRING}),
-    "outcome": frozenset({STRING}),
-}
-_YAML_KEY = {role: f"{role}_topic" if role in ("facts", "outcome") else role
-             for role in ROLE_TYPES}
+_YAML_KEY = {role.name: role.key for role in ROLES}
+_DEFAULT_TOPICS = tuple((role.name, role.topic) for role in ROLES)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class TopicMap:
-    """Where each input of the metrics lives in a bag; ``None`` switches an input off."""
+    """Where each input of the metrics lives in a bag; ``None`` switches an input off.
+
+    Besides the pose, a topic per role of ``roles.ROLES``: an attribute (``topic_map.scan``)
+    and a keyword (``TopicMap(scan="/front/scan")``, ``dataclasses.replace``)."""
 
     pose: tuple[str, ...] = (contract.GROUND_TRUTH_TOPIC, contract.ODOM_TOPIC)
-    scan: str | None = contract.SCAN_TOPIC
-    cmd_vel: str | None = contract.CMD_VEL_TOPIC
-    goal: str | None = contract.GOAL_TOPIC
-    person: str | None = contract.PERSON_TOPIC
-    facts: str | None = contract.FACTS_TOPIC
-    outcome: str | None = contract.OUTCOME_TOPIC
+    #: (role, topic) for every role, in ``ROLES`` order.
+    topics: tuple[tuple[str, str | None], ...] = _DEFAULT_TOPICS
     #: (parent, child): the pose is ``child``'s in ``parent`` from the ``TFMessage`` topics
     #: (``pose``, default ``/tf``, and its ``_static`` sibling) instead of a pose topic.
     pose_frames: tuple[str, str] | None = None
@@ -81,17 +59,36 @@ class TopicMap:
     #: Roles the user named: a missing topic for one of these is an error, not a skip.
     explicit: frozenset[str] = frozenset()
 
-    def __post_init__(self) -> None:
-        if not self.pose:
+    def __init__(self, pose: Sequence[str] = (contract.GROUND_TRUTH_TOPIC, contract.ODOM_TOPIC),
+                 topics: Sequence[tuple[str, str | None]] = _DEFAULT_TOPICS,
+                 pose_frames: tuple[str, str] | str | None = None,
+                 metrics: tuple[str, ...] | None = None,
+                 explicit: frozenset[str] = frozenset(), **roles: str | None) -> None:
+        unknown = sorted(set(roles) - set(ROLE))
+        if unknown:
+            msg = f"TopicMap() got unknown roles {unknown}; known: {sorted(ROLE)}"
+            raise TypeError(msg)
+        if not pose:
             msg = "topic map: 'pose' needs at least one topic"
             raise ConfigError(msg)
-        object.__setattr__(self, "pose", tuple(normalize_topic(t) for t in self.pose))
-        if isinstance(self.pose_frames, str):
-            object.__setattr__(self, "pose_frames", parse_frames(self.pose_frames, "pose_frames"))
-        for name in ROLE_TYPES:
-            value = getattr(self, name)
-            if value is not None:
-                object.__setattr__(self, name, normalize_topic(value))
+        if isinstance(pose_frames, str):
+            pose_frames = parse_frames(pose_frames, "pose_frames")
+        merged = dict(topics) | roles
+        values = {
+            "pose": tuple(normalize_topic(t) for t in pose),
+            "topics": tuple((name, None if merged[name] is None else normalize_topic(merged[name]))
+                            for name in ROLE),
+            "pose_frames": pose_frames, "metrics": metrics, "explicit": explicit,
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name: str) -> str | None:
+        """A role's topic (``topic_map.scan``); only called for names that are no field."""
+        if name in ROLE:
+            return dict(self.__dict__["topics"])[name]
+        msg = f"{type(self).__name__!r} object has no attribute {name!r}"
+        raise AttributeError(msg)
 
     def with_overrides(self, **overrides: str | Sequence[str] | None) -> TopicMap:
         """Return a copy with the given (non-``None``) entries replaced."""
@@ -169,7 +166,7 @@ def topic_map_from_dict(
 
 #: Roles that, when their default topic is absent, take the bag's only topic of their type
 #: (a namespaced ``/robot1/scan``), as the pose takes the only ``Odometry`` topic.
-_ONLY_OF_TYPE = {"scan": LASER_SCAN}
+_ONLY_OF_TYPE = {role.name: role.only_of_type for role in ROLES if role.only_of_type}
 _FRAMES_HINT = "pass --pose-frames PARENT:CHILD (e.g. odom:base_link) to read poses from it"
 
 
