@@ -110,6 +110,7 @@ def _defines(path: Path, symbol: str) -> bool:
 def test_the_places_for_a_new_piece_are_counted_and_exist() -> None:
     rows = _places_rows()
     wanted = {"a sim parameter", "an env parameter", "a trainer parameter", "a recorded topic",
+              "a topic the metrics read",
               "an episode fact", "a sensor", "a task", "a robot", "a world", "a metric",
               "a baseline", "an algorithm"}
     assert wanted <= set(rows), f"the Places table lacks {sorted(wanted - set(rows))}"
