@@ -9,7 +9,8 @@ same video: a matplotlib figure redrawn for every frame (path, scan, robot, curs
 **Rendering off.** Env steps (goToPose LiDAR, in process, the robot turning on the spot) with
 ``render_mode=None``, against the same loop on the bridge as it was before rendering existed
 (``--against REV``, default: the parent of the commit that gave ``NavEnv`` its render modes;
-both in fresh processes, interleaved). Target: less than 2 % of the env step time. Also the
+with the sim and metrics of that revision, which that bridge runs on; both in fresh
+processes, interleaved). Target: less than 2 % of the env step time. Also the
 cost of the step's one render hook alone (timed directly), of tracking the path with
 ``render_mode="rgb_array"``, and of rendering every step as ``RecordVideo`` does.
 
@@ -128,11 +129,12 @@ def base_revision(against: str | None) -> str | None:
     return f"{commits[0]}^" if done.returncode == 0 and commits else None
 
 
-def old_bridge(rev: str, folder: Path) -> Path:
-    """``pic4rl_bridge`` at ``rev``, unpacked into ``folder``."""
+def old_packages(rev: str, folder: Path) -> Path:
+    """The bridge and the packages it runs on (sim, metrics) at ``rev``, unpacked into
+    ``folder``: an old bridge does not run on today's sim and metrics."""
     archive = folder / "old.tar"
-    subprocess.run(["git", "archive", "-o", str(archive), rev, "pic4rl_bridge"], cwd=REPO,
-                   check=True)
+    subprocess.run(["git", "archive", "-o", str(archive), rev, "pic4rl_bridge", "pic4rl_sim",
+                    "pic4rl_metrics"], cwd=REPO, check=True)
     with tarfile.open(archive) as tar:
         tar.extractall(folder / "old", filter="data")
     return folder / "old"
@@ -181,7 +183,7 @@ def env_figures(args: argparse.Namespace, folder: Path) -> dict[str, float]:
                "env_render_every_step_overhead": best["every_step"] / best["off"] - 1}
     rev = base_revision(args.against)
     if rev is not None:
-        old = old_bridge(rev, folder)
+        old = old_packages(rev, folder)
         new_s = old_s = float("inf")
         for _ in range(args.rounds):
             old_s = min(old_s, worker_s([old, REPO], args.steps, args.repeat, modes=0))
