@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.geometry import Footprint, Mount
+from pic4rl_metrics.geometry import Mount
 
 from .config import EnvConfig
 from .episodes import PairSampler
@@ -78,14 +78,13 @@ def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,
     lengths: tuple[float | None, float | None] = (None, None)
     if context.goal is not None and sampler is not None and bag is not None:
         lengths = sampler.path_lengths(context.start, context.goal)
-    c, fp = config, robot.footprint
+    c = config
     mount = frame.scan.mount if frame.scan is not None else None  # the collision test's
     facts = EpisodeFacts(
         agent=c.agent, task=task, world=world, robot=robot.name,
         run=recording.recorder.run_dir.name if recording is not None else "",
         episode=bag.path.name if bag is not None else str(index), seed=seed,
-        footprint=(Footprint(radius_m=fp.radius_m) if fp.radius_m is not None
-                   else Footprint(length_m=fp.length_m, width_m=fp.width_m)),
+        footprint=robot.footprint,
         start=tuple(context.start),
         goal=context.goal,
         goal_tolerance_m=c.goal_tolerance_m, collision_tolerance_m=c.collision_tolerance_m,

@@ -6,7 +6,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from pic4rl_sim.engine.geometry import Footprint, Pose2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import DepthCameraSpec, Drive, RobotSpec
 
 from .config import EnvConfig

@@ -13,7 +13,8 @@ from importlib import import_module
 from typing import Any
 
 #: Public name → the module that defines it, imported on first use (PEP 562): the sim imports
-#: ``pic4rl_metrics.errors`` alone and must not pay for pandas and rosbags.
+#: ``pic4rl_metrics.errors`` and ``pic4rl_metrics.geometry`` alone and must not pay for pandas
+#: and rosbags.
 _HOMES = {
     "BagResult": "batch", "MetricsResult": "batch", "compute": "batch", "judge_bag": "batch",
     "EpisodeFacts": "contract", "Outcome": "contract",

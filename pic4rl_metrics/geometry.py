@@ -1,11 +1,12 @@
-"""Planar geometry the metrics and the bridge share: a robot's footprint, a sensor's mount, a
-quaternion's yaw and the projection of points onto a polyline.
+"""Planar geometry the metrics, the sim and the bridge share: a robot's footprint, a sensor's
+mount, a quaternion's yaw and the projection of points onto a polyline.
 
-``Footprint`` and ``Mount`` are the value types of two ``EpisodeFacts`` fields (the facts
-themselves, their encoding and decoding are the bag contract's, ``contract``). The bridge
-imports the rest from here (pic4rl_metrics may import no other pic4rl package), so each is
-written once: ``yaw_from_quaternion`` for every decoded pose, ``project`` for the row
-follower, the planner and the tasks' progress, the same projection as the row metrics'.
+``Footprint`` is the sim's robot specs' footprint and the value type of an ``EpisodeFacts``
+field, ``Mount`` another field's (the facts themselves, their encoding and decoding are the bag
+contract's, ``contract``). The sim and the bridge import them from here (pic4rl_metrics may
+import no other pic4rl package; this module loads only numpy), so each is written once:
+``yaw_from_quaternion`` for every decoded pose, ``project`` for the row follower, the planner
+and the tasks' progress, the same projection as the row metrics'.
 """
 
 from __future__ import annotations
@@ -23,26 +24,36 @@ from .errors import ConfigError
 
 @dataclass(frozen=True)
 class Footprint:
-    """Robot footprint centred on the base frame: a circle or an axis-aligned rectangle (m)."""
+    """Robot footprint centred on the base frame (m): a circle (``radius_m``), or a rectangle
+    along the body axes (``length_m`` along x and ``width_m`` along y, both needed)."""
 
     radius_m: float | None = None
     length_m: float | None = None
     width_m: float | None = None
 
     def __post_init__(self) -> None:
-        is_circle = self.radius_m is not None
-        is_rect = self.length_m is not None or self.width_m is not None
-        if is_circle == is_rect:
-            msg = f"footprint: give either radius_m or length_m and width_m, got {self!r}"
+        sides = (self.length_m, self.width_m)
+        circle = self.radius_m is not None and sides == (None, None)
+        rectangle = self.radius_m is None and None not in sides
+        if not (circle or rectangle):
+            msg = f"footprint: {self!r} is invalid; expected radius_m, or length_m and width_m"
             raise ConfigError(msg)
         for name in ("radius_m", "length_m", "width_m"):
             value = getattr(self, name)
-            if is_rect and name != "radius_m" and value is None:
-                msg = f"footprint: rectangle needs {name}, got {self!r}"
-                raise ConfigError(msg)
             if value is not None and not (math.isfinite(value) and value > 0):
-                msg = f"footprint.{name}: {value!r} must be a positive number of metres"
-                raise ConfigError(msg)
+                msg = f"footprint.{name}: {value!r} is invalid; expected a positive number of "
+                raise ConfigError(msg + "metres")
+
+    @property
+    def is_circle(self) -> bool:
+        return self.radius_m is not None
+
+    @property
+    def bounding_radius_m(self) -> float:
+        """Radius of the smallest circle around the footprint (m)."""
+        if self.radius_m is not None:
+            return self.radius_m
+        return 0.5 * math.hypot(self.length_m, self.width_m)  # type: ignore[arg-type]
 
     @classmethod
     def parse(cls, value: Any, *, source: str = "facts") -> Footprint:

@@ -12,7 +12,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from pic4rl_sim.engine.geometry import Footprint, Pose2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
 from ..frame import ScanData, SensorFrame

@@ -1,14 +1,12 @@
-"""Planar poses and footprints: the few shapes every part of the sim shares."""
+"""Planar poses: the few shapes every part of the sim shares (the robot's ``Footprint`` is
+``pic4rl_metrics.geometry``'s, shared with the bag facts)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-
-from ..errors import require
 
 
 class Pose2D(NamedTuple):
@@ -25,36 +23,6 @@ class Twist2D(NamedTuple):
     vx: float = 0.0
     vy: float = 0.0
     wz: float = 0.0
-
-
-@dataclass(frozen=True)
-class Footprint:
-    """Robot footprint centred on the base frame: a circle, or a rectangle along the body axes."""
-
-    radius_m: float | None = None
-    length_m: float | None = None
-    width_m: float | None = None
-
-    def __post_init__(self) -> None:
-        is_circle = self.radius_m is not None
-        is_rect = self.length_m is not None and self.width_m is not None
-        require(is_circle != is_rect, "footprint", self, "radius_m, or length_m and width_m")
-        for name in ("radius_m", "length_m", "width_m"):
-            value = getattr(self, name)
-            if value is not None:
-                ok = math.isfinite(value) and value > 0
-                require(ok, f"footprint.{name}", value, "a positive number of metres")
-
-    @property
-    def is_circle(self) -> bool:
-        return self.radius_m is not None
-
-    @property
-    def bounding_radius_m(self) -> float:
-        """Radius of the smallest circle around the footprint (m)."""
-        if self.radius_m is not None:
-            return self.radius_m
-        return 0.5 * math.hypot(self.length_m, self.width_m)  # type: ignore[arg-type]
 
 
 def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:

@@ -16,10 +16,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, TypeVar
 
+from pic4rl_metrics.geometry import Footprint
 
 from ..errors import ConfigError, require, unknown_key
 from ..schema import NON_NEGATIVE, POSITIVE, read_yaml
-from .geometry import Footprint
 from .sensors import (
     KINDS_BY_NAME,
     SENSOR_KINDS,

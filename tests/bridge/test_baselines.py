@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.baseline_config import DwaConfig, load_baselines_config

@@ -12,7 +12,8 @@ from typing import Any
 
 import pytest
 import yaml
-from pic4rl_sim.engine.geometry import Footprint, Pose2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D
 
 from pic4rl_sim.interfaces import RECORDED
 from pic4rl_sim.schema import param_names

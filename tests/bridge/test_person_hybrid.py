@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from pic4rl_bridge.baselines import make_baseline
 from pic4rl_bridge.config import EnvConfig

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path
 from pic4rl_sim.engine.world_spec import Box, WorldSpec
 

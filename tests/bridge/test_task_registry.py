@@ -29,7 +29,7 @@ from pic4rl_bridge.task_registry import (
 )
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
-from pic4rl_sim.engine.geometry import Footprint
+from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.schema import param_names
 
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.5, width_m=0.43),

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.frame import ScanData, SensorFrame

@@ -16,7 +16,8 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 INC = 2 * math.pi / 360
 TERMS = {"distance", "heading", "step", "proximity", "goal", "collision"}

@@ -15,7 +15,8 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.person import PersonMonitoringTask
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 OMNI = RobotInfo(name="omni", footprint=Footprint(length_m=0.6, width_m=0.4), omni=True,
                  min_linear_m_s=-0.8, max_linear_m_s=0.8, max_angular_rad_s=1.5,

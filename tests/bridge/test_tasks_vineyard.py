@@ -14,7 +14,8 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.vineyard import VineyardTask, polyline_length, project
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Footprint, Pose2D, Twist2D
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.world_spec import WorldSpec
 
 STRAIGHT = ((0.0, 0.0), (10.0, 0.0))

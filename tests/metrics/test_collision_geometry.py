@@ -20,7 +20,6 @@ from pic4rl_metrics.geometry import Mount
 from pic4rl_metrics.derived import scan_clearance
 from pic4rl_metrics.series import ScanSeries
 from pic4rl_metrics.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
-from pic4rl_sim.engine.geometry import Footprint as SimFootprint
 from pic4rl_sim.engine.geometry import Pose2D
 from world_helpers import walled_square_mjcf
 
@@ -28,18 +27,16 @@ REAL_BAGS = Path(__file__).resolve().parents[2].parent / "shared" / "real_bags"
 JACKAL = {"length_m": 0.508, "width_m": 0.430}
 sizes = st.floats(0.05, 1.5)
 footprints = st.one_of(
-    st.builds(lambda r: (Footprint(radius_m=r), SimFootprint(radius_m=r)), sizes),
-    st.builds(lambda a, b: (Footprint(length_m=a, width_m=b), SimFootprint(length_m=a, width_m=b)),
-              sizes, sizes),
+    st.builds(Footprint, radius_m=sizes),
+    st.builds(Footprint, length_m=sizes, width_m=sizes),
 )
 
 
 @settings(max_examples=200, deadline=None)
 @given(footprints, st.integers(0, 2**32 - 1))
-def test_signed_distance_equals_the_envs(pair: tuple[Footprint, SimFootprint], seed: int) -> None:
-    ours, env = pair
+def test_signed_distance_equals_the_envs(footprint: Footprint, seed: int) -> None:
     points = np.random.default_rng(seed).uniform(-2, 2, size=(64, 2))
-    assert np.allclose(ours.signed_distance(points), footprint_clearance(points, env),
+    assert np.allclose(footprint.signed_distance(points), footprint_clearance(points, footprint),
                        rtol=0, atol=1e-12)
 
 
@@ -47,11 +44,10 @@ def test_signed_distance_equals_the_envs(pair: tuple[Footprint, SimFootprint], s
 @given(footprints, st.integers(0, 2**32 - 1),
        st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-math.pi, math.pi)))
 def test_scan_margin_equals_the_envs_obstacle_distance(
-    pair: tuple[Footprint, SimFootprint], seed: int, mount: tuple[float, float, float]
+    footprint: Footprint, seed: int, mount: tuple[float, float, float]
 ) -> None:
     """Random scans (with inf, -inf and NaN beams) from a random mount: the metrics' margin of
     each scan is the env's nearest signed distance."""
-    ours, env = pair
     rng = np.random.default_rng(seed)
     n = 24
     ranges = rng.uniform(0.0, 3.0, size=(3, n)).astype(np.float32)
@@ -61,10 +57,11 @@ def test_scan_margin_equals_the_envs_obstacle_distance(
     amin, inc, rmin, rmax = -math.pi, 2 * math.pi / n, 0.0, 10.0
     series = ScanSeries(np.arange(3) * 100, ranges, np.tile(amin + inc * np.arange(n), (3, 1)),
                         np.full(3, rmin), np.full(3, rmax))
-    margin = scan_clearance(series, EpisodeFacts(footprint=ours, scan_mount=Mount(*mount))).margin_m
+    facts = EpisodeFacts(footprint=footprint, scan_mount=Mount(*mount))
+    margin = scan_clearance(series, facts).margin_m
     for row, got in zip(ranges, margin, strict=True):
         points = scan_points(ScanData(row, amin, inc, rmin, rmax, Pose2D(*mount)))
-        want = footprint_clearance(points, env).min() if len(points) else math.nan
+        want = footprint_clearance(points, footprint).min() if len(points) else math.nan
         assert got == pytest.approx(want, abs=1e-9, nan_ok=True)
 
 

@@ -10,6 +10,7 @@ import sys
 
 import pytest
 
+from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.errors import ConfigError
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.params import (
@@ -168,6 +169,26 @@ def test_a_robot_holds_one_spec_per_sensor_kind():
         JACKAL.with_sensors(sonar=None)
     with pytest.raises(ConfigError, match=r"robot.imu: None is invalid; expected ImuSpec$"):
         JACKAL.with_sensors(imu=None)
+
+
+def test_a_robots_footprint_is_a_circle_or_a_whole_rectangle():
+    """A robot file refines the footprint (the episode facts' ``Footprint`` class) to a circle
+    or a whole rectangle; half a rectangle, or a circle with a side, is refused."""
+    box = robot_from_mapping({"base": "burger",
+                              "footprint": {"radius_m": None, "length_m": 0.6, "width_m": 0.8}})
+    assert box.footprint == Footprint(length_m=0.6, width_m=0.8) and not box.footprint.is_circle
+    assert box.footprint.bounding_radius_m == pytest.approx(0.5)
+    assert BURGER.footprint.is_circle and BURGER.footprint.bounding_radius_m == 0.105
+    expected = r" is invalid; expected radius_m, or length_m and width_m$"
+    with pytest.raises(ConfigError, match=r"^footprint: Footprint\(radius_m=0\.105, length_m=0\.6, "
+                       r"width_m=None\)" + expected):
+        robot_from_mapping({"base": "burger", "footprint": {"length_m": 0.6}})
+    with pytest.raises(ConfigError, match=r"^footprint: Footprint\(radius_m=None, length_m=None, "
+                       r"width_m=0\.8\)" + expected):
+        Footprint(width_m=0.8)
+    with pytest.raises(ConfigError, match=r"^footprint\.width_m: -0\.4 is invalid; expected a "
+                       r"positive number of metres$"):
+        robot_from_mapping({"base": "jackal", "footprint": {"width_m": -0.4}})
 
 
 def test_only_robot_world_sensor_and_timing_changes_need_a_new_engine():

@@ -1,5 +1,6 @@
 """The engine stands without ROS: rclpy only in the node's modules, never torch or SB3; of the
-other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``)."""
+other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``) and
+``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact)."""
 
 from __future__ import annotations
 
@@ -15,8 +16,11 @@ ROS_PACKAGE = "node"  # pic4rl_sim/node/: the only place that may import rclpy a
 ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "rosgraph_msgs",
              "visualization_msgs", "rcl_interfaces", "builtin_interfaces")
 NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_bridge", "pic4rl_agents")
-#: The one door to another pic4rl package: the lowest room's shared ``ConfigError``.
-METRICS_DOOR = "pic4rl_metrics.errors"
+#: The doors to another pic4rl package: the lowest room's shared ``ConfigError`` and
+#: ``Footprint``, both light (no pandas, rosbags or matplotlib).
+METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry"}
+#: What the metrics' doors must not load: the metrics' heavy libraries.
+METRICS_HEAVY = ("pandas", "rosbags", "matplotlib")
 
 
 def imported_modules(path: Path) -> set[str]:
@@ -41,19 +45,19 @@ def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> N
         roots = imported_roots(path)
         assert not roots & set(NEVER), f"{path.name} imports {sorted(roots & set(NEVER))}"
         metrics = {m for m in imported_modules(path) if m.split(".")[0] == "pic4rl_metrics"}
-        assert metrics <= {METRICS_DOOR}, f"{path.name} imports {sorted(metrics)}"
+        assert metrics <= METRICS_DOORS, f"{path.name} imports {sorted(metrics)}"
         if path.relative_to(PACKAGE).parts[0] != ROS_PACKAGE:
             ros = sorted(roots & set(ROS_ROOTS))
             assert not ros, f"{path.name} imports {ros}"
 
 
 def _loaded(modules: str) -> tuple[list[str], bool]:
-    """The ROS, RL and sibling modules, and whether MuJoCo, that importing ``modules`` (in a
-    fresh interpreter) loads."""
+    """The ROS, RL, sibling and heavy metrics modules, and whether MuJoCo, that importing
+    ``modules`` (in a fresh interpreter) loads."""
     code = (
         "import json, sys\n"
         f"import {modules}\n"
-        f"heavy = {ROS_ROOTS + NEVER!r}\n"
+        f"heavy = {ROS_ROOTS + NEVER + METRICS_HEAVY!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
         "print(json.dumps('mujoco' in sys.modules))\n"
     )
