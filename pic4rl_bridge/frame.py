@@ -67,7 +67,7 @@ class SensorFrame:
         for name, value in (("stamp_ns", stamp_ns), ("pose", pose), ("twist", twist),
                             ("goal", goal)):
             object.__setattr__(self, name, value)
-        merged = {**(readings or {}), **sensors}
+        merged = {**(readings or {}), **sensors} if sensors else readings or {}
         object.__setattr__(self, "readings", MappingProxyType(
             {name: value for name, value in merged.items() if value is not None}))
 

@@ -9,7 +9,7 @@ transports build frames through ``build_frame``; a task names the sensors it nee
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -89,11 +89,13 @@ BY_NAME = {s.name: s for s in SENSORS}
 
 
 def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
-                goal: tuple[float, float] | None, wanted: Iterable[str],
+                goal: tuple[float, float] | None, wanted: Collection[str],
                 value: Callable[[FrameSensor], Any]) -> SensorFrame:
     """The frame at ``stamp_ns``: pose and twist from ``odometry``, and ``value(sensor)`` for
     each sensor ``wanted`` in the table's order (the rest, and a ``None`` value, absent)."""
-    names = set(wanted)
     pose, twist = odometry
-    return SensorFrame(stamp_ns, pose, twist, goal,
-                       **{s.name: value(s) for s in SENSORS if s.name in names})
+    readings = {}
+    for sensor in SENSORS:
+        if sensor.name in wanted and (reading := value(sensor)) is not None:
+            readings[sensor.name] = reading
+    return SensorFrame(stamp_ns, pose, twist, goal, readings)

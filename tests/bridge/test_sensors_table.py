@@ -33,7 +33,7 @@ def test_a_frame_holds_the_tables_sensors_as_readings() -> None:
     fields = [f.name for f in dataclasses.fields(SensorFrame)]
     assert fields == [*ALWAYS, "readings"]
     names = [s.name for s in SENSORS]
-    frame = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, reversed(names),
+    frame = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, names[::-1],
                         lambda sensor: f"value of {sensor.name}")
     assert list(frame.readings) == names
     typed = [n for n in names if isinstance(getattr(SensorFrame, n, None), property)]
