@@ -13,12 +13,10 @@ The person follower's DWA, which a hybrid personMonitoring env runs, is the env'
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-from pic4rl_sim import params_file
 from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, Range, check, from_params, param, section
 
 from .errors import ConfigError, require
@@ -78,15 +76,6 @@ class BaselinesConfig:
 def baselines_config_from_params(params: Mapping[str, Any]) -> BaselinesConfig:
     """A ``BaselinesConfig`` from the ``baselines:`` section's dotted parameters."""
     return from_params(BaselinesConfig, params, where=f"{BASELINES_NODE} parameters")
-
-
-def load_baselines_config(paths: Sequence[str | Path],
-                          overrides: Mapping[str, Any] | None = None) -> BaselinesConfig:
-    """The ``baselines:`` sections of ``paths`` (later files win, key by key), then dotted
-    ``overrides`` (``dwa.horizon_s``); defaults where none is given."""
-    nodes = (BASELINES_NODE, params_file.ENV_NODE, params_file.SIM_NODE)
-    section = params_file.load(paths, nodes)[BASELINES_NODE] if paths else {}
-    return baselines_config(section, overrides, where=" + ".join(str(p) for p in paths))
 
 
 def baselines_config(section: Mapping[str, Any], overrides: Mapping[str, Any] | None = None,

@@ -17,10 +17,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim import params_file
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
-from pic4rl_bridge.baseline_config import DwaConfig, load_baselines_config
+from pic4rl_bridge.baseline_config import BASELINES_NODE, DwaConfig, baselines_config
 from pic4rl_bridge.baselines import make_baseline
 from pic4rl_bridge.dwa import DwaController
 from pic4rl_bridge.config import EnvConfig, load_env_config
@@ -140,7 +141,8 @@ def test_the_baselines_settings_are_their_own_section(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("nav_env:\n  ros__parameters: {task: goToPose}\n"
                     "baselines:\n  ros__parameters: {dwa.horizon_s: 2.0, dwa.linear_samples: 5}\n")
-    chosen = load_baselines_config([path], {"dwa.linear_samples": 9})
+    section = params_file.load([path], (BASELINES_NODE, "nav_env"))[BASELINES_NODE]
+    chosen = baselines_config(section, {"dwa.linear_samples": 9}, where=str(path))
     assert (chosen.dwa.horizon_s, chosen.dwa.linear_samples) == (2.0, 9)
     dwa = make_baseline("dwa", load_env_config(path), JACKAL, settings=chosen)
     assert isinstance(dwa, DwaController) and dwa.config is chosen.dwa
@@ -151,7 +153,7 @@ def test_the_baselines_settings_are_their_own_section(tmp_path):
         EnvConfig().replace(**{"baselines.dwa.horizon_s": 2.0})
     with pytest.raises(ConfigError, match=r"baselines.dwa.rollout_dt_s: 3.0 is invalid; "
                                           r"expected at most baselines.dwa.horizon_s=1.5"):
-        load_baselines_config([], {"dwa.rollout_dt_s": 3.0})
+        baselines_config({}, {"dwa.rollout_dt_s": 3.0})
     with pytest.raises(ConfigError, match=r"person.dwa.horizon_s: -1.0 is invalid"):
         EnvConfig().replace(**{"person.dwa.horizon_s": -1.0, "person.dwa.rollout_dt_s": 0.0})
     assert EnvConfig().replace(**{"person.dwa.horizon_s": 2.5}).person.dwa.horizon_s == 2.5
