@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -222,6 +223,18 @@ class WallClockLimit(BaseCallback):
 
     def _on_step(self) -> bool:
         return time.perf_counter() - self.start < self.limit_s
+
+
+class StopWhenSet(BaseCallback):
+    """Ends training at the next step once ``event`` is set: a stop signal that Python could
+    not raise as ``KeyboardInterrupt`` (see ``train.stop_on_signal``) still stops."""
+
+    def __init__(self, event: threading.Event) -> None:
+        super().__init__()
+        self.event = event
+
+    def _on_step(self) -> bool:
+        return not self.event.is_set()
 
 
 class StopAfterEval(BaseCallback):

@@ -17,6 +17,7 @@ import contextlib
 import logging
 import signal
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Iterator, Sequence
@@ -40,21 +41,23 @@ log = logging.getLogger(__name__)
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM (``pic4rl-run`` stopping us, a cluster's scheduler) ends training the way Ctrl-C
-    does: the model and replay buffer are saved first."""
+def stop_on_signal(stop: threading.Event) -> Iterator[None]:
+    """Ctrl-C and SIGTERM (``pic4rl-run`` stopping us, a cluster's scheduler) end training the
+    way Ctrl-C does: the model and replay buffer are saved first. The signal sets ``stop``
+    and raises ``KeyboardInterrupt``; Python drops an exception raised while a weakref
+    callback or ``__del__`` runs (drawing the reward curve makes many), so ``StopWhenSet``
+    ends training at the next step from the flag as well. Setting the SIGINT handler also
+    undoes the ignored SIGINT that a process started in the background by a shell inherits."""
     def handler(signum: int, frame: object) -> None:
+        stop.set()
         raise KeyboardInterrupt
 
-    previous = signal.signal(signal.SIGTERM, handler)
-    # A process started in the background by a shell inherits SIGINT ignored; Ctrl-C and
-    # pic4rl-run's SIGINT must still reach us.
-    previous_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGTERM, signal.SIGINT)}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
-        signal.signal(signal.SIGINT, previous_int)
+        for signum, old in previous.items():
+            signal.signal(signum, old)
 
 
 @contextlib.contextmanager
@@ -92,6 +95,7 @@ class Trainer:
         self.ros = ros or RosArgs()
         self.after_eval = after_eval
         self.interrupted = False  # Ctrl-C or SIGTERM ended the last run()
+        self._stop = threading.Event()  # set by that signal (``stop_on_signal``)
         self.layout = (runs.RunDir.resume(resume.run_dir) if resume is not None
                        else runs.RunDir.new(Path(run.train.runs_dir), run.name))
 
@@ -102,6 +106,8 @@ class Trainer:
     def run(self) -> Path:
         """Train this session (resumed where the run was), save, and close what it opened."""
         import torch
+
+        from .callbacks import StopWhenSet
 
         cfg = self.config.train
         session = self._session_env()
@@ -117,7 +123,8 @@ class Trainer:
             started = time.perf_counter()
             env = self._training_env(stack, env_cfg, seed, node)
             model = self._model(env)
-            callbacks = self._callbacks(stack, env_cfg, started)
+            self._stop.clear()
+            callbacks = [StopWhenSet(self._stop), *self._callbacks(stack, env_cfg, started)]
             # Only now: a session that fails to start (a checkpoint that does not fit the
             # env, no sim) leaves no config behind.
             self.layout.write_config(self.config.to_yaml())
@@ -138,7 +145,7 @@ class Trainer:
             return True
         callback = CallbackList(callbacks)
         callback.init_callback(model)
-        with _sigterm_as_interrupt():
+        with stop_on_signal(self._stop):
             try:
                 imitation = Imitation(cfg.imitation, env, env_cfg, model, callback,
                                       batch_size=cfg.batch_size, seed=cfg.seed,
@@ -146,12 +153,13 @@ class Trainer:
                 done = imitation.run()
                 if cfg.imitation.rl_gradient_steps > 0:
                     callbacks.insert(0, DecayingCloning(imitation))
-                return done
             except KeyboardInterrupt:
-                self.interrupted = True
-                log.warning("interrupted during imitation at %d steps; saving",
-                            model.num_timesteps)
-                return False
+                done = False
+        if self._stop.is_set():
+            self.interrupted = True
+            log.warning("interrupted during imitation at %d steps; saving", model.num_timesteps)
+            return False
+        return done
 
     def _session_env(self) -> tuple[EnvConfig, int] | None:
         """This session's env and seed; None when the resumed model has trained enough.
@@ -273,7 +281,7 @@ class Trainer:
     def _learn(self, model: Any, callbacks: list[Any]) -> None:
         """Train up to ``max_steps``; Ctrl-C or SIGTERM ends it (the caller saves)."""
         cfg = self.config.train
-        with _sigterm_as_interrupt():
+        with stop_on_signal(self._stop):
             try:
                 if model.num_timesteps >= cfg.max_steps:
                     return  # imitation used every step
@@ -282,8 +290,10 @@ class Trainer:
                             reset_num_timesteps=fresh,
                             log_interval=10 if cfg.off_policy else 1)
             except KeyboardInterrupt:
-                self.interrupted = True
-                log.warning("interrupted at %d steps; saving", model.num_timesteps)
+                pass
+        if self._stop.is_set():
+            self.interrupted = True
+            log.warning("interrupted at %d steps; saving", model.num_timesteps)
 
     def _title(self) -> str:
         cfg = self.config.train

@@ -13,7 +13,9 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +36,7 @@ from agents_helpers import (
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import load_model
+from pic4rl_agents.callbacks import StopWhenSet
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.exploration import epsilon_at
 from pic4rl_agents.runs import find_resume
@@ -326,15 +329,42 @@ def test_a_malformed_flag_is_argparse_usage_error(capsys: pytest.CaptureFixture[
 # --- interrupted ----------------------------------------------------------------------------------
 
 
-def test_sigterm_is_an_interrupt_while_training() -> None:
-    """SIGTERM (``pic4rl-run`` or a scheduler stopping the trainer) raises KeyboardInterrupt,
-    which the trainer catches to save; the previous handler comes back afterwards."""
-    previous = signal.getsignal(signal.SIGTERM)
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signal_is_an_interrupt_while_training(signum: int) -> None:
+    """SIGTERM (``pic4rl-run`` or a scheduler stopping the trainer) and SIGINT raise
+    KeyboardInterrupt, which the trainer catches to save, and set its stop flag; the previous
+    handler comes back afterwards."""
+    previous = signal.getsignal(signum)
+    stop = threading.Event()
     with pytest.raises(KeyboardInterrupt):
-        with train._sigterm_as_interrupt():
-            os.kill(os.getpid(), signal.SIGTERM)
+        with train.stop_on_signal(stop):
+            os.kill(os.getpid(), signum)
             time.sleep(5)  # the handler runs at once; this is never reached in full
-    assert signal.getsignal(signal.SIGTERM) is previous
+    assert stop.is_set()
+    assert signal.getsignal(signum) is previous
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_stop_that_python_drops_still_ends_training() -> None:
+    """A signal that lands while a weakref callback runs: Python prints and drops its
+    KeyboardInterrupt ("Exception ignored in ..."), but the flag stays set and the first
+    callback of training ends ``learn`` at its next step."""
+    stop = threading.Event()
+
+    class Owner:
+        pass
+
+    def on_collect(_: object) -> None:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.5)  # the KeyboardInterrupt is raised here, and dropped
+
+    with train.stop_on_signal(stop):
+        owner = Owner()
+        ref = weakref.ref(owner, on_collect)
+        del owner  # runs on_collect; no exception leaves it
+    assert ref() is None and stop.is_set()
+    assert StopWhenSet(stop)._on_step() is False
+    assert StopWhenSet(threading.Event())._on_step() is True
 
 
 @pytest.mark.slow
