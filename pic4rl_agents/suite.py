@@ -38,7 +38,7 @@ from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.schema import read_yaml
 
 from .config import SIM_NODE
-from .testplan import DEFAULT_PAIRS
+from .testplan import DEFAULT_PAIRS, TestPlan, resolve_agents
 
 SUITE_KEYS = ("suite", "bags", "transport", "retries", "tasks")
 TASK_KEYS = ("name", "env", "agents", "baselines", "worlds", "robots", "pairs", "repetitions",
@@ -165,11 +165,17 @@ def _list(data: Mapping[str, Any], key: str, where: str, default: list[Any]) -> 
     return value
 
 
-def _agents(data: Mapping[str, Any], where: str, base: Path) -> list[tuple[str, str]]:
+def _agents(data: Mapping[str, Any], where: str, base: Path,
+            env: str) -> list[tuple[str, str]]:
     agents = data.get("agents", {})
     require(isinstance(agents, Mapping), f"{where}.agents", agents, "a mapping NAME: PATH")
     rows = [(_name(n, f"{where}.agents"), _path(p, f"{where}.agents.{n}", base))
             for n, p in agents.items()]
+    for name, path in rows:  # each agent as its cells will run it, checked before any runs
+        try:
+            resolve_agents(TestPlan(agents=(f"{name}={path}",), params_files=(env,)))
+        except ConfigError as err:
+            raise ConfigError(f"{where}.agents.{name}: {err}") from err
     for b in _list(data, "baselines", where, []):
         require(b in BASELINES, f"{where}.baselines", b, f"one of {', '.join(BASELINES)}")
         rows.append((b, ""))
@@ -192,7 +198,7 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
     reps = _count(data.get("repetitions", 1), f"{where}.repetitions")
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
     cells = []
-    for agent, path in _agents(data, where, base):
+    for agent, path in _agents(data, where, base, env):
         for world, variant in worlds:
             for robot in robots:
                 for pair_set in pairs:

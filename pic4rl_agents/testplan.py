@@ -8,14 +8,14 @@ files alone. All drive the same test episodes (``pic4rl_agents.tester`` says whi
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from pic4rl_bridge.baseline_config import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.baselines import BASELINES, check_fits
-from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.config import EnvConfig, agent_conflicts
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_sim import params_file
 
@@ -107,9 +107,33 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         if not sep:
             name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
                 path.parent.name if path.suffix == ".zip" else path.name)
-        trained = run_config(own, [str(config)]).origin if config else "no config beside it"
+        trained = "no config beside it"
+        if config:
+            own_run = run_config(own, [str(config)])
+            check_trained(f"--agent {path}", config, own_run.env, run.env,
+                          plan.params_files, plan.env_overrides)
+            trained = own_run.origin
         specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
     return specs
+
+
+def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
+                  params_files: Sequence[str], overrides: Mapping[str, Any]) -> None:
+    """``ConfigError`` in one line when ``test`` changes a setting that shapes what the agent
+    observes or what its actions do (``pic4rl_bridge.config.agent_keys``): it names the key,
+    the value the params file or override gives, and the agent's own (from ``config``)."""
+    conflicts = agent_conflicts(trained, test)
+    if not conflicts:
+        return
+    key, mine, theirs = conflicts[0]
+    source = "-p/--env-kwargs" if key in overrides else next(
+        (f for f in reversed(params_files)
+         if key in params_file.read_sections(f, (ENV_NODE,))[ENV_NODE]), "the test env")
+    more = f" (also {', '.join(k for k, _, _ in conflicts[1:])})" if conflicts[1:] else ""
+    raise ConfigError(f"{agent}: {key}: {source} gives {theirs!r} but the agent was trained "
+                      f"with {mine!r} ({config}){more}; a test env must not change what an "
+                      f"agent observes or how it acts: remove {key} there or set it to "
+                      f"{mine!r}")
 
 
 def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
