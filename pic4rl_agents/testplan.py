@@ -192,7 +192,11 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
     overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
     from pic4rl_sim.params import SimParams
 
-    sim = spec.run.env.sim_params
+    env = spec.run.env
+    if not env.simulated:
+        return replace(spec, run=spec.run.replace(env={**overrides, "episodes.file": ""}),
+                       episode_set=_without_sim(plan, pairs))
+    sim = env.sim_params
     world = sim.get("world", SimParams.world), sim.get("world_variant", SimParams.world_variant)
     if pairs is None and world == DEFAULT_PAIRS_WORLD:
         pairs = str(DEFAULT_PAIRS)
@@ -210,3 +214,16 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
         episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
                        else "pairs file") + f" {pairs}"
     return replace(spec, run=spec.run.replace(env=overrides), episode_set=episode_set)
+
+
+def _without_sim(plan: TestPlan, pairs: str | None) -> str:
+    """The episodes of a run without a simulator (``EnvConfig.simulated``: a real robot), in
+    words; drawn pairs and pairs files, which only a simulator can set up, are refused."""
+    given = (f"--random {plan.random}" if plan.random else f"--pairs {plan.pairs}"
+             if plan.pairs else f"episodes.file {pairs}" if pairs else "")
+    if given:
+        raise ConfigError(f"{given}: a run without a simulator (transport ros, ros.sim_node "
+                          "'') cannot set starts and goals; the operator sends each goal on "
+                          "topics.goal")
+    return (f"{plan.n_episodes} episodes without a simulator: each goal from the operator on "
+            "topics.goal, no world facts recorded")
