@@ -195,6 +195,7 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
     robots = [_name(r, f"{where}.robots") for r in _list(data, "robots", where, [])] or [
         str(sim.get("robot", ""))]
     pairs = [_pair_set(p, f"{where}.pairs", base) for p in _list(data, "pairs", where, ["paper"])]
+    _check_pair_worlds(pairs, worlds, sim, f"{where}.pairs")
     reps = _count(data.get("repetitions", 1), f"{where}.repetitions")
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
     cells = []
@@ -209,6 +210,23 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
                                           path, world, variant, robot, pair_set, rep,
                                           seed + rep, transport))
     return cells
+
+
+def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None]],
+                       sim: Mapping[str, Any], where: str) -> None:
+    """A pairs file that records its world runs only there: ``ConfigError`` naming the file,
+    its world and the task's other one."""
+    from pic4rl_bridge.episodes import load_goals_and_poses
+    from pic4rl_sim.params import SimParams
+
+    for pair_set in (p for p in pairs if p.file):
+        drawn = load_goals_and_poses(pair_set.file).world
+        for world, variant in worlds:
+            if variant is None:
+                variant = sim.get("world_variant", SimParams.world_variant)
+            name = f"{world or sim.get('world', SimParams.world)}:{variant}"
+            require(not drawn or drawn == name, where, pair_set.label,
+                    f"pairs of the task's world {name}: {pair_set.file} was drawn in {drawn}")
 
 
 def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite:
