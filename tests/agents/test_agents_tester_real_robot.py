@@ -58,3 +58,19 @@ def test_a_run_without_a_simulator_records_no_world_facts(tmp_path: Path, domain
         assert facts.goal is not None
         straight = math.dist(facts.start[:2], facts.goal)
         assert row.metrics.optimal_path_m == pytest.approx(straight, abs=1e-6)
+
+
+@pytest.mark.bad_input
+@pytest.mark.parametrize(("flags", "kwargs", "given"), [
+    (["--random", "3"], [], "--random 3"),
+    ([], ["episodes.file:p.json"], "episodes.file p.json")])
+def test_drawn_or_filed_pairs_are_refused_without_a_simulator(
+        tmp_path: Path, flags: list[str], kwargs: list[str], given: str) -> None:
+    """Only a simulator can put the robot at a start: one line, exit 2, nothing driven."""
+    code, out, err = run_tester(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path), *flags,
+                                 "--env-kwargs", *REAL, *kwargs], domain=0)
+    assert code == 2 and out == ""
+    assert err.splitlines() == [
+        f"pic4rl-test: {given}: a run without a simulator (transport ros, ros.sim_node '') "
+        "cannot set starts and goals; the operator sends each goal on topics.goal"]
+    assert not list(tmp_path.iterdir())
