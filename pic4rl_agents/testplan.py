@@ -17,6 +17,8 @@ from pic4rl_bridge.baseline_config import BASELINES_NODE, BaselinesConfig, basel
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import EnvConfig, agent_conflicts
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.robot_info import RobotInfo
+from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim import params_file
 
 from . import runs
@@ -124,6 +126,11 @@ def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
     the value the params file or override gives, and the agent's own (from ``config``)."""
     conflicts = agent_conflicts(trained, test)
     if not conflicts:
+        mine, theirs = (_drive(Scenario(env).robot) for env in (trained, test))
+        if mine != theirs:  # the same keys, another robot or control period under them
+            raise ConfigError(f"{agent}: its test robot drives {theirs} but the agent was "
+                              f"trained on {mine} ({config}); an action must mean what it "
+                              "meant in training: test it on a robot as fast, at its period")
         return
     key, mine, theirs = conflicts[0]
     source = "-p/--env-kwargs" if key in overrides else next(
@@ -134,6 +141,13 @@ def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
                       f"with {mine!r} ({config}){more}; a test env must not change what an "
                       f"agent observes or how it acts: remove {key} there or set it to "
                       f"{mine!r}")
+
+
+def _drive(robot: RobotInfo) -> str:
+    """What an action means on ``robot``: its speed ranges and control period, in words."""
+    lateral = f", vy ≤ {robot.max_lateral_m_s:g} m/s" if robot.omni else ""
+    return (f"v in [{robot.min_linear_m_s:g}, {robot.max_linear_m_s:g}] m/s, "
+            f"|ω| ≤ {robot.max_angular_rad_s:g} rad/s{lateral} every {robot.control_dt_s:g} s")
 
 
 def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],

@@ -112,3 +112,22 @@ def test_the_table1_suite_gives_each_agent_its_trained_observation(tmp_path: Pat
         assert (trained[name].depth.width, trained[name].depth.height) == (40, 30)
     for name in ("sac_person_hybrid", "td3_person_hybrid"):
         assert trained[name].lidar.max_range_m == 5.0 and trained[name].person.control == "hybrid"
+
+
+@pytest.mark.bad_input
+def test_a_test_robot_that_changes_the_agents_speed_range_or_period_is_refused(
+        tmp_path: Path) -> None:
+    """The same keys, but a slower robot (the Burger's 0.22 m/s caps the agent's 0.5) or
+    another control period: the agent's actions would mean something else."""
+    for sim, theirs in (
+            ("robot:burger", "v in [0.1, 0.22] m/s, |ω| ≤ 1 rad/s every 0.1 s"),
+            ("control_dt_s:0.05", "v in [0.1, 0.5] m/s, |ω| ≤ 1 rad/s every 0.05 s")):
+        code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path),
+                              "--sim-kwargs", sim])
+        assert code == 2
+        assert err.splitlines() == [
+            f"pic4rl-test: --agent {TD3_LIDAR}: its test robot drives {theirs} but the agent was "
+            f"trained on v in [0.1, 0.5] m/s, |ω| ≤ 1 rad/s every 0.1 s "
+            f"({TD3_LIDAR / 'config.yaml'}); an action must mean what it meant in training: test "
+            "it on a robot as fast, at its period"]
+    assert not list(tmp_path.iterdir())
