@@ -11,6 +11,7 @@ drives pair k of the cell's pairs file), so no bag is duplicated or lost. A fini
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -102,8 +103,8 @@ def _pairs_from(pairs: GoalsAndPoses, first: int, folder: Path) -> None:
     """Write the pairs file whose pair i is the cell's pair ``first + i`` (cycling)."""
     n = len(pairs.goals)
     order = [(first + i) % n for i in range(n)]
-    rotated = GoalsAndPoses(pairs.initial_pose, tuple(pairs.goals[i] for i in order),
-                            tuple(pairs.poses[i] for i in order))
+    rotated = dataclasses.replace(pairs, goals=tuple(pairs.goals[i] for i in order),
+                                  poses=tuple(pairs.poses[i] for i in order))
     with atomic.replacing(_pairs_file(first, folder)) as tmp:
         save_goals_and_poses(rotated, tmp, overwrite=True)
 

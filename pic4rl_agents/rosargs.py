@@ -2,7 +2,9 @@
 
 There is no ``ros2 launch`` here, and our nodes read three sections of one params file (sim,
 nav_env, trainer), so the agents' commands read ``--params-file`` and ``-p`` themselves, with
-ROS's syntax, and hand everything else (``-r``, ``--log-level``) to ``rclpy.init``.
+ROS's syntax, and hand rcl's other ROS arguments (``-r``, ``--log-level``) to ``rclpy.init``.
+A segment runs to a lone ``--`` or to the end of the line, as in ROS; a command's own flag
+inside it is refused in one line (rcl would refuse it too).
 """
 
 from __future__ import annotations
@@ -37,8 +39,18 @@ class RosArgs:
         return out + self.rest
 
 
+#: rcl's other ROS arguments (besides ``--params-file`` and ``-p``): those taking a value,
+#: and the flags. Anything else inside ``--ros-args`` is refused, as rcl refuses it.
+ROS_VALUE_ARGS = ("-r", "--remap", "-e", "--enclave", "--log-level", "--log-file-name",
+                  "--log-config-file")
+ROS_FLAGS = tuple(f"--{state}-{logs}-logs" for state in ("enable", "disable")
+                  for logs in ("rosout", "stdout", "external-lib"))
+
+
 def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
-    """``argv`` without its ``--ros-args ... [--]`` segments, and what those segments held."""
+    """``argv`` without its ``--ros-args ... [--]`` segments, and what those segments held; a
+    segment holds ROS arguments only (a command's flag there, such as ``--no-progress``
+    after ``--params-file FILE``, is a ``ConfigError``, never silently dropped)."""
     plain: list[str] = []
     ros = RosArgs()
     i, inside = 0, False
@@ -64,11 +76,15 @@ def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
             except yaml.YAMLError as err:
                 raise ConfigError(f"{arg} {argv[i + 1]}: the value is not valid YAML") from err
             i += 1
-        else:
+        elif arg in ROS_VALUE_ARGS or arg in ROS_FLAGS:
             ros.rest.append(arg)
-            if arg in ("-r", "--remap", "--log-level", "-e", "--enclave") and i + 1 < len(argv):
+            if arg in ROS_VALUE_ARGS and i + 1 < len(argv):
                 ros.rest.append(argv[i + 1])
                 i += 1
+        else:
+            raise ConfigError(f"{arg}: not a ROS argument, but inside --ros-args (which runs to "
+                              "a lone -- or to the end of the line); give the command's own "
+                              "flags before --ros-args or after --")
         i += 1
     return plain, ros
 

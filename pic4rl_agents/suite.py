@@ -38,7 +38,7 @@ from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.schema import read_yaml
 
 from .config import SIM_NODE
-from .testplan import DEFAULT_PAIRS
+from .testplan import DEFAULT_PAIRS, TestPlan, resolve_agents
 
 SUITE_KEYS = ("suite", "bags", "transport", "retries", "tasks")
 TASK_KEYS = ("name", "env", "agents", "baselines", "worlds", "robots", "pairs", "repetitions",
@@ -165,11 +165,17 @@ def _list(data: Mapping[str, Any], key: str, where: str, default: list[Any]) -> 
     return value
 
 
-def _agents(data: Mapping[str, Any], where: str, base: Path) -> list[tuple[str, str]]:
+def _agents(data: Mapping[str, Any], where: str, base: Path,
+            env: str) -> list[tuple[str, str]]:
     agents = data.get("agents", {})
     require(isinstance(agents, Mapping), f"{where}.agents", agents, "a mapping NAME: PATH")
     rows = [(_name(n, f"{where}.agents"), _path(p, f"{where}.agents.{n}", base))
             for n, p in agents.items()]
+    for name, path in rows:  # each agent as its cells will run it, checked before any runs
+        try:
+            resolve_agents(TestPlan(agents=(f"{name}={path}",), params_files=(env,)))
+        except ConfigError as err:
+            raise ConfigError(f"{where}.agents.{name}: {err}") from err
     for b in _list(data, "baselines", where, []):
         require(b in BASELINES, f"{where}.baselines", b, f"one of {', '.join(BASELINES)}")
         rows.append((b, ""))
@@ -189,10 +195,11 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
     robots = [_name(r, f"{where}.robots") for r in _list(data, "robots", where, [])] or [
         str(sim.get("robot", ""))]
     pairs = [_pair_set(p, f"{where}.pairs", base) for p in _list(data, "pairs", where, ["paper"])]
+    _check_pair_worlds(pairs, worlds, sim, f"{where}.pairs")
     reps = _count(data.get("repetitions", 1), f"{where}.repetitions")
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
     cells = []
-    for agent, path in _agents(data, where, base):
+    for agent, path in _agents(data, where, base, env):
         for world, variant in worlds:
             for robot in robots:
                 for pair_set in pairs:
@@ -203,6 +210,23 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
                                           path, world, variant, robot, pair_set, rep,
                                           seed + rep, transport))
     return cells
+
+
+def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None]],
+                       sim: Mapping[str, Any], where: str) -> None:
+    """A pairs file that records its world runs only there: ``ConfigError`` naming the file,
+    its world and the task's other one."""
+    from pic4rl_bridge.episodes import load_goals_and_poses
+    from pic4rl_sim.params import SimParams
+
+    for pair_set in (p for p in pairs if p.file):
+        drawn = load_goals_and_poses(pair_set.file).world
+        for world, variant in worlds:
+            if variant is None:
+                variant = sim.get("world_variant", SimParams.world_variant)
+            name = f"{world or sim.get('world', SimParams.world)}:{variant}"
+            require(not drawn or drawn == name, where, pair_set.label,
+                    f"pairs of the task's world {name}: {pair_set.file} was drawn in {drawn}")
 
 
 def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite:

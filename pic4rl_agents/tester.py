@@ -43,6 +43,7 @@ from pic4rl_bridge.baseline_config import PREFIX as BASELINES_PREFIX
 from pic4rl_bridge.baseline_config import baselines_config_from_params
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
+from pic4rl_bridge.task_registry import TASKS
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic
@@ -112,6 +113,7 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
 
     env = NavEnv(spec.run.env)
     outcomes: list[str] = []
+    headline, words = TASKS[spec.run.env.task].headline
     try:
         policy = Policy(spec, env)
         bar = tqdm(range(episodes), desc=spec.name, unit="episode", disable=not progress)
@@ -123,26 +125,44 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
                 obs, _, terminated, truncated, info = env.step(policy.act(obs, env))
                 done = terminated or truncated
             outcomes.append(str(info.get("outcome")))
-            bar.set_postfix(goals=f"{outcomes.count('goal')}/{len(outcomes)}")
+            bar.set_postfix({words: f"{outcomes.count(headline)}/{len(outcomes)}"})
     finally:
         env.close()
     return outcomes
 
 
-def judge(run_dir: Path, *, with_std: bool) -> tuple[pd.DataFrame, tuple[str, ...]]:
-    """The metrics table of every bag under ``run_dir`` (grouped by agent) and the errors of
-    the bags that could not be judged; the per-episode CSV and the table (markdown) are
-    written into ``run_dir``."""
+def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) -> str:
+    """The test's table: the episodes per outcome, the task's headline first (a task without
+    a goal shows no goals and no success rate), SPL where a row has it, then Table 1's."""
+    from pic4rl_metrics.report import OUTCOME_COUNTS, render_comparison
+    from pic4rl_metrics.results import table_columns
+
+    headline, words = TASKS[task].headline
+    key = "n_success" if headline == "goal" else f"n_{headline}"
+    counts = {key: words, **{k: v for k, v in OUTCOME_COUNTS.items()
+                             if k != key and (headline == "goal" or k != "n_success")}}
+    columns = [c for c in table_columns(table) if headline == "goal" or c != "success"]
+    if headline == "goal" and "spl_mean" in table.columns and table["spl_mean"].notna().any():
+        columns.insert(1, "spl")
+    return render_comparison(table, fmt, columns=columns, with_std=with_std, counts=counts)
+
+
+def judge(run_dir: Path, task: str, *,
+          with_std: bool) -> tuple[pd.DataFrame, tuple[str, ...]]:
+    """The metrics table of every bag under ``run_dir`` (grouped by agent; ``task``: the
+    agents' task, whose trajectory columns average its successful episodes, or all of them
+    for a task without a goal) and the errors of the bags that could not be judged; the
+    per-episode CSV and the table (markdown) are written into ``run_dir``."""
     from pic4rl_metrics.aggregate import aggregate
     from pic4rl_metrics.batch import compute
-    from pic4rl_metrics.report import render_comparison, render_episodes
-    from pic4rl_metrics.results import table_columns
+    from pic4rl_metrics.report import render_episodes
 
     result = compute([run_dir])
     atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
-    table = aggregate(result.frame, by="agent")
-    atomic.write_text(run_dir / "table.md", render_comparison(
-        table, "markdown", columns=table_columns(table), with_std=with_std))
+    table = aggregate(result.frame, by="agent",
+                      over="success" if TASKS[task].headline[0] == "goal" else "all")
+    atomic.write_text(run_dir / "table.md",
+                      render_table(table, task, "markdown", with_std=with_std))
     return table, tuple(str(failed.error) for failed in result.failed)
 
 
@@ -171,9 +191,10 @@ def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestR
     for spec in specs:
         outcomes[spec.name] = run_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
                                         progress=plan.progress)
-        log.info("%s: %d/%d goals", spec.name, outcomes[spec.name].count("goal"),
-                 len(outcomes[spec.name]))
-    table, failed = judge(run_dir, with_std=plan.with_std)
+        headline, words = TASKS[spec.run.env.task].headline
+        log.info("%s: %d/%d %s", spec.name, outcomes[spec.name].count(headline),
+                 len(outcomes[spec.name]), words)
+    table, failed = judge(run_dir, specs[0].run.env.task, with_std=plan.with_std)
     videos: tuple[str, ...] = ()
     if plan.video:
         from pic4rl_metrics.video_batch import render_videos
@@ -248,9 +269,6 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
-    from pic4rl_metrics.report import render_comparison
-    from pic4rl_metrics.results import table_columns
-
     argv = list(sys.argv[1:] if argv is None else argv)
     # Started in the background by a shell, SIGINT arrives ignored; pic4rl-run's must count.
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -275,8 +293,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     for error in result.failed:
         print(f"error: {error}", file=sys.stderr)
-    text = render_comparison(result.table, args.format, columns=table_columns(result.table),
-                             with_std=plan.with_std)
+    text = render_table(result.table, agents[0].run.env.task, args.format,
+                        with_std=plan.with_std)
     sys.stdout.write(text if text.endswith("\n") else text + "\n")
     print(f"bags: {result.run_dir}", file=sys.stderr)
     if result.videos:

@@ -8,15 +8,17 @@ files alone. All drive the same test episodes (``pic4rl_agents.tester`` says whi
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from pic4rl_bridge.baseline_config import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.baselines import BASELINES, check_fits
-from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.config import EnvConfig, agent_conflicts
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.robot_info import RobotInfo
+from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim import params_file
 
 from . import runs
@@ -107,9 +109,45 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         if not sep:
             name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
                 path.parent.name if path.suffix == ".zip" else path.name)
-        trained = run_config(own, [str(config)]).origin if config else "no config beside it"
+        trained = "no config beside it"
+        if config:
+            own_run = run_config(own, [str(config)])
+            check_trained(f"--agent {path}", config, own_run.env, run.env,
+                          plan.params_files, plan.env_overrides)
+            trained = own_run.origin
         specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
     return specs
+
+
+def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
+                  params_files: Sequence[str], overrides: Mapping[str, Any]) -> None:
+    """``ConfigError`` in one line when ``test`` changes a setting that shapes what the agent
+    observes or what its actions do (``pic4rl_bridge.config.agent_keys``): it names the key,
+    the value the params file or override gives, and the agent's own (from ``config``)."""
+    conflicts = agent_conflicts(trained, test)
+    if not conflicts:
+        mine, theirs = (_drive(Scenario(env).robot) for env in (trained, test))
+        if mine != theirs:  # the same keys, another robot or control period under them
+            raise ConfigError(f"{agent}: its test robot drives {theirs} but the agent was "
+                              f"trained on {mine} ({config}); an action must mean what it "
+                              "meant in training: test it on a robot as fast, at its period")
+        return
+    key, mine, theirs = conflicts[0]
+    source = "-p/--env-kwargs" if key in overrides else next(
+        (f for f in reversed(params_files)
+         if key in params_file.read_sections(f, (ENV_NODE,))[ENV_NODE]), "the test env")
+    more = f" (also {', '.join(k for k, _, _ in conflicts[1:])})" if conflicts[1:] else ""
+    raise ConfigError(f"{agent}: {key}: {source} gives {theirs!r} but the agent was trained "
+                      f"with {mine!r} ({config}){more}; a test env must not change what an "
+                      f"agent observes or how it acts: remove {key} there or set it to "
+                      f"{mine!r}")
+
+
+def _drive(robot: RobotInfo) -> str:
+    """What an action means on ``robot``: its speed ranges and control period, in words."""
+    lateral = f", vy ≤ {robot.max_lateral_m_s:g} m/s" if robot.omni else ""
+    return (f"v in [{robot.min_linear_m_s:g}, {robot.max_linear_m_s:g}] m/s, "
+            f"|ω| ≤ {robot.max_angular_rad_s:g} rad/s{lateral} every {robot.control_dt_s:g} s")
 
 
 def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
@@ -168,7 +206,11 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
     overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
     from pic4rl_sim.params import SimParams
 
-    sim = spec.run.env.sim_params
+    env = spec.run.env
+    if not env.simulated:
+        return replace(spec, run=spec.run.replace(env={**overrides, "episodes.file": ""}),
+                       episode_set=_without_sim(plan, pairs))
+    sim = env.sim_params
     world = sim.get("world", SimParams.world), sim.get("world_variant", SimParams.world_variant)
     if pairs is None and world == DEFAULT_PAIRS_WORLD:
         pairs = str(DEFAULT_PAIRS)
@@ -186,3 +228,16 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
         episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
                        else "pairs file") + f" {pairs}"
     return replace(spec, run=spec.run.replace(env=overrides), episode_set=episode_set)
+
+
+def _without_sim(plan: TestPlan, pairs: str | None) -> str:
+    """The episodes of a run without a simulator (``EnvConfig.simulated``: a real robot), in
+    words; drawn pairs and pairs files, which only a simulator can set up, are refused."""
+    given = (f"--random {plan.random}" if plan.random else f"--pairs {plan.pairs}"
+             if plan.pairs else f"episodes.file {pairs}" if pairs else "")
+    if given:
+        raise ConfigError(f"{given}: a run without a simulator (transport ros, ros.sim_node "
+                          "'') cannot set starts and goals; the operator sends each goal on "
+                          "topics.goal")
+    return (f"{plan.n_episodes} episodes without a simulator: each goal from the operator on "
+            "topics.goal, no world facts recorded")

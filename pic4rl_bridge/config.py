@@ -254,6 +254,13 @@ class EnvConfig:
             "min_linear_m_s", self.min_linear_m_s,
             f"a finite speed <= max_linear_m_s={self.max_linear_m_s}")
 
+    @property
+    def simulated(self) -> bool:
+        """Whether the env drives a pic4rl simulator: in process, or a sim node over ROS
+        (``ros.sim_node``). Only then do the ``sim:`` section's world and its facts apply;
+        ``transport: ros`` with ``ros.sim_node: ""`` is a real robot (or another simulator)."""
+        return self.transport == TransportName.INPROCESS.value or bool(self.ros.sim_node)
+
     def to_params(self) -> dict[str, Any]:
         """The flat dotted parameters of this config (``sim_params`` left out)."""
         return to_params(self)
@@ -262,6 +269,29 @@ class EnvConfig:
         """A copy with dotted ``overrides`` applied (``{"reward.goal": 500.0}``)."""
         params = {**self.to_params(), **overrides}
         return env_config_from_params(params, sim_params=self.sim_params)
+
+
+#: The settings that shape what a trained agent observes and what its actions do: with the
+#: section of its ``sensor`` (``lidar.*`` or ``depth.*``), ``agent_keys`` gives them. A test
+#: takes them from the agent's own config; ``pic4rl-test`` and ``pic4rl-bench`` refuse an env
+#: file or override that contradicts one (``agent_conflicts``). Another ``task`` or ``sensor``
+#: gives other spaces, which the model's own space check refuses.
+AGENT_KEYS = ("normalize_observations", "goal_input", "plan_lookahead_m", "max_linear_m_s",
+              "min_linear_m_s", "max_angular_rad_s", "max_lateral_m_s", "person.")
+
+
+def agent_keys(config: EnvConfig) -> tuple[str, ...]:
+    """The dotted names of ``AGENT_KEYS`` (a name ending in a dot is a section) and of the
+    section of ``config``'s sensor."""
+    wanted = (*AGENT_KEYS, f"{config.sensor}.")
+    return tuple(k for k in config.to_params()
+                 if any(k == w or (w.endswith(".") and k.startswith(w)) for w in wanted))
+
+
+def agent_conflicts(trained: EnvConfig, test: EnvConfig) -> list[tuple[str, Any, Any]]:
+    """``(key, trained value, test value)`` of every ``agent_keys`` setting ``test`` changes."""
+    mine, theirs = trained.to_params(), test.to_params()
+    return [(k, mine[k], theirs[k]) for k in agent_keys(trained) if mine[k] != theirs[k]]
 
 
 def env_config_from_params(params: Mapping[str, Any], *,

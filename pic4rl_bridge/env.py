@@ -30,7 +30,8 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
-from .episodes import EpisodeSchedule, PairSampler, load_goals_and_poses, resolve_pair_kind
+from .episodes import (EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses,
+                       resolve_pair_kind)
 from .errors import BridgeError, ConfigError, EpisodeRejected
 from .frame import SensorFrame
 from .env_recording import EnvRecording, episode_facts
@@ -148,6 +149,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.action_space = self.task.action_space
         pairs = (load_goals_and_poses(self.config.episodes.file)
                  if self.config.episodes.file else None)
+        if pairs is not None:  # drawn in this world, every start free for this robot
+            check_pairs(pairs, self.config.episodes.file, self.scenario)
         self._pairs = pairs
         self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs,
                                          ordered=self.config.episodes.ordered)

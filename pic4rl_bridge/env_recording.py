@@ -17,14 +17,19 @@ from .episodes import PairSampler
 from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .robot_info import RobotInfo
+from .scenario import robot_of
 from .tasks.base import EpisodeContext
 from .transport import RawMessage, Transport
 
 
 def run_params(config: EnvConfig) -> dict[str, Any]:
-    """The run's config as a params file: loads back with ``load_env_config``."""
+    """The run's config as a params file: loads back with ``load_env_config``. A run without
+    a simulator (``EnvConfig.simulated``) has no ``sim:`` section: it names its robot."""
+    env = config.to_params()
+    if not config.simulated:
+        return {"nav_env": {"ros__parameters": {**env, "robot": robot_of(config)}}}
     return {"sim": {"ros__parameters": dict(config.sim_params)},
-            "nav_env": {"ros__parameters": config.to_params()}}
+            "nav_env": {"ros__parameters": env}}
 
 
 class EnvRecording:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import logging
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -30,6 +31,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import (
     PAIR_KINDS,
     PairKind,
+    check_free,
     check_pair_filter,
     sample_pairs,
     sample_start_goal,
@@ -46,16 +48,21 @@ if TYPE_CHECKING:
     from .scenario import Scenario
 
 _SEED_END = 2**31 - 1
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
 class GoalsAndPoses:
     """A goals-and-poses file: pair ``i`` starts at ``poses[i]`` and ends at ``goals[i]`` (m, rad);
-    ``initial_pose`` is the starting episodes' start (``None``: the file has none)."""
+    ``initial_pose`` is the starting episodes' start (``None``: the file has none); ``world``
+    (``kind:variant``) and ``robot_radius_m`` (the robot's bounding radius) say where and for
+    whom the pairs were drawn (empty and ``None`` in a file that does not say)."""
 
     initial_pose: Pose2D | None
     goals: tuple[tuple[float, float], ...]
     poses: tuple[Pose2D, ...]
+    world: str = ""
+    robot_radius_m: float | None = None
 
 
 def _numbers(path: Path, key: str, value: Any, expected: str, size: int) -> tuple[float, ...]:
@@ -97,12 +104,44 @@ def load_goals_and_poses(path: str | Path) -> GoalsAndPoses:
     if len(goals) != len(poses):
         raise ConfigError(f"{path}: 'goals' has {len(goals)} entries but 'poses' has "
                           f"{len(poses)}; expected one pose per goal")
-    initial = data.get("initial_pose")
+    initial, world = data.get("initial_pose"), data.get("world", "")
+    if not isinstance(world, str) or (world and ":" not in world):
+        raise ConfigError(f"{path}: world: {world!r} is invalid; expected 'kind:variant'")
+    radius = data.get("robot_radius_m")
     return GoalsAndPoses(
         initial_pose=None if initial is None else Pose2D(
             *_numbers(path, "initial_pose", initial, "[x, y, yaw]", 3)),
         goals=tuple((g[0], g[1]) for g in goals),
-        poses=tuple(Pose2D(*p) for p in poses))
+        poses=tuple(Pose2D(*p) for p in poses), world=world,
+        robot_radius_m=None if radius is None else _numbers(
+            path, "robot_radius_m", [radius], "a radius in metres", 1)[0])
+
+
+def check_pairs(pairs: GoalsAndPoses, path: str, scenario: Scenario) -> None:
+    """``ConfigError`` in one line when the pairs of file ``path`` were drawn in another
+    world than ``scenario``'s or a start is in collision there (closer to an obstacle than the
+    robot's bounding radius, the simulator's own rule); a warning when the file records no
+    world, or was drawn for a smaller robot. Nothing to check without a simulated world."""
+    world, world_name = scenario.world, scenario.world_name
+    robot_radius_m = scenario.robot.footprint.bounding_radius_m
+    if world is None:
+        return
+    if not pairs.world:
+        log.warning("%s: the file records no world; its pairs are taken to be in %s", path,
+                    world_name)
+    elif pairs.world != world_name:
+        raise ConfigError(f"{path}: its pairs were drawn in world {pairs.world} but this env "
+                          f"runs {world_name}; give the sim that world (e.g. --sim-kwargs "
+                          f"world_variant:{pairs.world.rpartition(':')[2]}) or pairs of it")
+    if pairs.robot_radius_m is not None and robot_radius_m > pairs.robot_radius_m + 1e-3:
+        log.warning("%s: its pairs were drawn for a robot of radius %.3f m; this one's is "
+                    "%.3f m", path, pairs.robot_radius_m, robot_radius_m)
+    for i, pose in enumerate(pairs.poses):
+        try:
+            check_free(world, (pose.x, pose.y), clearance_m=robot_radius_m, what=f"poses[{i}]")
+        except SimError as err:
+            raise ConfigError(f"{path}: {err}: that start is in collision for this robot "
+                              f"(radius {robot_radius_m:.3f} m)") from err
 
 
 class EpisodeSchedule:
@@ -194,6 +233,10 @@ def save_goals_and_poses(pairs: GoalsAndPoses, path: str | Path, *, comment: str
     if path.exists() and not overwrite:
         raise ConfigError(f"{path}: exists; choose another name or pass overwrite=True")
     doc: dict[str, Any] = {"comment": comment} if comment else {}
+    if pairs.world:
+        doc["world"] = pairs.world
+    if pairs.robot_radius_m is not None:
+        doc["robot_radius_m"] = round(pairs.robot_radius_m, 4)
     if pairs.initial_pose is not None:
         doc["initial_pose"] = [round(v, 3) for v in pairs.initial_pose]
     doc["goals"] = [[round(x, 3), round(y, 3)] for x, y in pairs.goals]
@@ -231,8 +274,9 @@ class PairSampler:
     circumscribed radius, 5 cm cells) is built on first use and kept."""
 
     def __init__(self, world: WorldSpec, *, robot_radius_m: float, clearance_m: float,
-                 min_goal_distance_m: float) -> None:
+                 min_goal_distance_m: float, world_name: str = "") -> None:
         self.world = world
+        self.world_name = world_name  # kind:variant, recorded in the pairs files it draws
         self.robot_radius_m = robot_radius_m
         self.clearance_m = clearance_m
         self.min_goal_distance_m = min_goal_distance_m
@@ -247,7 +291,8 @@ class PairSampler:
         engine = scenario.sim.engine
         return cls(scenario.world, robot_radius_m=radius,
                    clearance_m=radius + engine.clearance_m,
-                   min_goal_distance_m=engine.min_goal_distance_m)
+                   min_goal_distance_m=engine.min_goal_distance_m,
+                   world_name=scenario.world_name)
 
     @property
     def planner(self) -> PathPlanner:
@@ -298,4 +343,5 @@ class PairSampler:
         except (SimError, ConfigError) as err:
             raise ConfigError(f"episodes: pairs of {kind}: {err}") from err
         return GoalsAndPoses(initial_pose, tuple(g for _, g in pairs),
-                             tuple(Pose2D(*s) for s, _ in pairs))
+                             tuple(Pose2D(*s) for s, _ in pairs), world=self.world_name,
+                             robot_radius_m=self.robot_radius_m)

@@ -24,13 +24,15 @@ if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section i
 
 
 class Scenario:
-    """The robot and world an env runs: from ``config.sim_params`` when present, else from
-    ``config.robot`` (a real robot: no world)."""
+    """The robot and world an env runs: from ``config.sim_params`` when the env drives a
+    simulator (``EnvConfig.simulated``), else from ``config.robot`` (a real robot: no world;
+    a sim section there, such as a trained agent's, gives only its robot and control period
+    when ``robot`` and ``control_dt_s`` are unset)."""
 
     def __init__(self, config: EnvConfig) -> None:
         self.config = config
         self.sim: SimConfig | None = None
-        if config.sim_params or config.transport == "inprocess":
+        if config.transport == "inprocess" or (config.sim_params and config.simulated):
             from pic4rl_sim.params import SimParams, build_config, parameter_table, resolve
 
             try:
@@ -45,16 +47,17 @@ class Scenario:
             self.spec: RobotSpec = self.sim.robot
             control_dt = self.sim.engine.control_dt_s
         else:
-            if not config.robot:
+            from pic4rl_sim.params import SimParams
+
+            robot = robot_of(config)
+            if not robot:
                 raise ConfigError("robot: '' is invalid; expected a robot name or YAML path "
                                   "when the config has no sim section")
             try:
-                self.spec = load_robot(config.robot)
+                self.spec = load_robot(robot)
             except (SimError, ConfigError) as err:
                 raise ConfigError(f"robot: {err}") from err
-            from pic4rl_sim.params import SimParams
-
-            control_dt = SimParams.control_dt_s
+            control_dt = float(config.sim_params.get("control_dt_s", SimParams.control_dt_s))
         self.robot = RobotInfo.of(self.spec, config, config.control_dt_s or control_dt)
 
     @cached_property
@@ -67,3 +70,12 @@ class Scenario:
         if self.sim is None:
             return ""
         return f"{self.sim.world.kind}:{self.sim.world.variant}"
+
+
+def robot_of(config: EnvConfig) -> str:
+    """The robot (a built-in name or a robot YAML) of an env without a simulator: ``robot``,
+    else its sim section's, else none (``""``)."""
+    from pic4rl_sim.params import SimParams
+
+    sim = config.sim_params
+    return config.robot or (str(sim.get("robot", SimParams.robot)) if sim else "")

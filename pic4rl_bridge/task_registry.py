@@ -134,7 +134,9 @@ class TaskSpec:
     class), if any; ``baselines``: the ``pic4rl-test --baseline`` names that drive it;
     ``build``: ``"module:function"`` making the task from ``(config, robot, world)``;
     ``uses_world``: it reads the simulated world (the vineyard's lanes); ``per_sensor``: its
-    bags' task fact names the sensor (``goToPose/lidar``)."""
+    bags' task fact names the sensor (``goToPose/lidar``); ``headline``: the outcome that is
+    the task's normal good end and its words in a test's table (personMonitoring has no goal:
+    its episodes should last the time budget, ``timeout``, without a collision)."""
 
     name: str
     env_ids: tuple[EnvId, ...]
@@ -145,6 +147,7 @@ class TaskSpec:
     section: tuple[str, type] | None = None
     uses_world: bool = False
     per_sensor: bool = False
+    headline: tuple[str, str] = ("goal", "goals")
 
     def __post_init__(self) -> None:
         for env in self.env_ids:
@@ -175,12 +178,14 @@ TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
              sensors=("depth",), reward=VineyardReward,
              build="pic4rl_bridge.tasks.vineyard:build",
              baselines=("centerline", "row_follower"),
-             section=("vineyard", VineyardConfig), uses_world=True),
+             section=("vineyard", VineyardConfig), uses_world=True,
+             headline=("goal", "row ends")),
     TaskSpec("personMonitoring",
              (EnvId("pic4rl/PersonMonitoring-v0", "lidar", {"robot": "omni", "world": "person"}),),
              sensors=("lidar",), reward=PersonReward,
              build="pic4rl_bridge.tasks.person:build",
-             baselines=("dwa_heading",), section=("person", PersonConfig)),
+             baselines=("dwa_heading",), section=("person", PersonConfig),
+             headline=("timeout", "full runs")),
 )}
 
 #: The task choice of ``nav_env``'s ``task`` key, one value per registered task.

@@ -33,6 +33,9 @@ COUNTED_OUTCOMES: tuple[str, ...] = (
     Outcome.COLLISION.value, Outcome.TIMEOUT.value, Outcome.DIVERGED.value,
     Outcome.ABORTED.value,
 )
+#: Event counts that a table gives as the number of episodes in which the event happened
+#: (``<metric>_episodes``), not as a mean per episode: "collisions" counts episodes.
+EPISODE_COUNTED: tuple[str, ...] = ("collision_count",)
 #: Episodes the trajectory-quality columns average over: the successful ones, or all.
 OVER_CHOICES: tuple[str, ...] = ("success", "all")
 #: Count columns of an aggregate, in the order they appear before the statistics:
@@ -89,7 +92,8 @@ def aggregate(
     ``"all"``), ``over``, then ``<m>_mean`` and ``<m>_std`` per metric. The std of a single
     value is NaN; a quality column of a group without a success is NaN. Index: the group
     name(s), in order of first appearance. Aborted episodes (cut short, no outcome) are out of
-    the success rate, unless ``count_aborted`` counts them as failures.
+    the success rate, unless ``count_aborted`` counts them as failures. Each metric of
+    ``EPISODE_COUNTED`` also gets ``<m>_episodes``: the episodes where it is above 0.
     """
     by_cols = _check_request(df, by, over)
     metrics = numeric_metric_columns(df)
@@ -120,10 +124,11 @@ def aggregate(
         arrays = [[key[i] for key in groups] for i in range(len(by_cols))]
         index = pd.MultiIndex.from_arrays(arrays, names=by_cols)
     stat_cols = [f"{m}_{s}" for m in metrics for s in ("mean", "std")]
-    out = pd.DataFrame(rows, index=index, columns=list(COUNT_COLUMNS) + stat_cols)
+    episode_cols = [f"{m}_episodes" for m in EPISODE_COUNTED if m in metrics]
+    out = pd.DataFrame(rows, index=index, columns=list(COUNT_COLUMNS) + stat_cols + episode_cols)
     int_cols = [
         "n_episodes", "n_failed", "n_judged", "n_success",
-        *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged",
+        *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", *episode_cols,
     ]
     return out.astype({c: "int64" for c in int_cols})
 
@@ -163,6 +168,8 @@ def _group_row(group: pd.DataFrame, outcomes: pd.Series, metrics: list[str],
         mean, std = (q_means, q_stds) if m in quality else (means, stds)
         row[f"{m}_mean"] = float(mean[m]) if len(group) else math.nan
         row[f"{m}_std"] = float(std[m]) if len(group) else math.nan
+        if m in EPISODE_COUNTED:
+            row[f"{m}_episodes"] = int((group[m] > 0).sum())
     return row
 
 

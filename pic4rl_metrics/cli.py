@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import re
 import sys
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -218,28 +219,27 @@ def _report_failures(result: MetricsResult) -> int:
 
 
 def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
-    from .plots import comparison_figure, episode_figure, save_figure  # matplotlib on demand
+    from .plots import (  # matplotlib on demand
+        by_world, comparison_figure, episode_figure, figure_names, save_figure)
 
     out: Path = args.out
-    for r in result.results:
-        if r.episode is None:
-            continue
-        name = Path(r.bag).name.removesuffix(".db3").removesuffix(".mcap")
-        target = out / f"{name}.png"
+    drawn = [r for r in result.results if r.episode is not None]
+    figures = [(out / f"{name}.png", lambda r=r: episode_figure(r.episode, r.metrics))
+               for name, r in zip(figure_names([r.bag for r in drawn]), drawn)]
+    worlds = by_world(result.episodes)
+    for world, episodes in worlds.items():  # one comparison per world, never overlaid
+        name = "comparison" if len(worlds) == 1 else "comparison_" + (
+            re.sub(r"[^\w.-]", "-", world) or "no-world")
+        if len(episodes) > 1:
+            figures.append((out / f"{name}.png", lambda e=episodes: comparison_figure(
+                e, group_by=args.by)))
+    for target, draw in figures:
         if target.exists():
             print(f"kept existing {target}", file=sys.stderr)
             continue
         with _writing(target):
-            save_figure(episode_figure(r.episode, r.metrics), target)
+            save_figure(draw(), target)
         print(f"wrote {target}", file=sys.stderr)
-    if len(result.episodes) > 1:
-        target = out / "comparison.png"
-        if target.exists():
-            print(f"kept existing {target}", file=sys.stderr)
-        else:
-            with _writing(target):
-                save_figure(comparison_figure(result.episodes, group_by=args.by), target)
-            print(f"wrote {target}", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -275,6 +275,33 @@ def comparison_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -
     return fig
 
 
+def figure_names(bags: Sequence[str]) -> list[str]:
+    """A file name (no suffix) per bag, unique among ``bags``: the bag's name, with as many of
+    its parent folders in front as it takes to tell it from the others
+    (``td3_lidar-episode_0000`` and ``sac_lidar-episode_0000``)."""
+    split = [[p for p in Path(b).parts if p not in ("/", "\\")] for b in bags]
+    for parts in split:
+        parts[-1] = parts[-1].removesuffix(".db3").removesuffix(".mcap")
+    depth = [1] * len(split)
+    while True:
+        names = ["-".join(parts[-d:]) for parts, d in zip(split, depth)]
+        taken = {n for n in names if names.count(n) > 1}
+        grow = [i for i, n in enumerate(names) if n in taken and depth[i] < len(split[i])]
+        if not grow:
+            return [n if n not in taken else f"{n}-{i}" for i, n in enumerate(names)]
+        for i in grow:
+            depth[i] += 1
+
+
+def by_world(episodes: Sequence[Episode]) -> dict[str, list[Episode]]:
+    """``episodes`` by their ``world`` fact (``""``: none recorded), in order: a comparison
+    never overlays the scans of two worlds."""
+    groups: dict[str, list[Episode]] = {}
+    for episode in episodes:
+        groups.setdefault(episode.facts.world or "", []).append(episode)
+    return groups
+
+
 def save_figure(fig: Figure, path: str | Path, *, overwrite: bool = False,
                 dpi: float = 150) -> Path:
     """Write ``fig`` (format from the suffix, PNG when none) and return its path.

@@ -17,7 +17,7 @@ from pathlib import PurePath
 import numpy as np
 import pandas as pd
 
-from .aggregate import DASH
+from .aggregate import DASH, EPISODE_COUNTED
 from .layouts import check_format, csv_text, fixed_width, latex_escape, markdown, tabular
 from .errors import ConfigError
 from .registry import METRICS
@@ -145,9 +145,22 @@ def _success_cell(value: object) -> str | None:
     return None if _is_missing(value) or value == DASH else str(value)
 
 
+#: The aggregate's outcome counts a comparison can show first (``counts``), by default label.
+OUTCOME_COUNTS: dict[str, str] = {"n_success": "goals", "n_collision": "collisions",
+                                  "n_timeout": "timeouts", "n_aborted": "aborted"}
+
+
+def _unit(col: str) -> str:
+    """A comparison column's unit: episodes for an ``EPISODE_COUNTED`` metric."""
+    return "episodes" if col in EPISODE_COUNTED else METRICS[col].unit
+
+
 def _comparison_cell(row: pd.Series, col: str, with_std: bool, pm: str) -> str | None:
     if col == "success":
         return _success_cell(row["success"])
+    if col in EPISODE_COUNTED:
+        value = row.get(f"{col}_episodes")
+        return None if _is_missing(value) else str(int(value))
     mean = _num(row[f"{col}_mean"])
     if mean is None or not with_std:
         return mean
@@ -192,8 +205,12 @@ def render_comparison(
     caption: str | None = None,
     label: str | None = None,
     with_std: bool = False,
+    counts: dict[str, str] | None = None,
 ) -> str:
-    """One row per group of ``agg`` (from ``aggregate``), one column per metric in ``columns``.
+    """One row per group of ``agg`` (from ``aggregate``), one column per metric in ``columns``,
+    after the outcome counts ``counts`` names (aggregate column → label, e.g.
+    ``OUTCOME_COUNTS``: episodes per outcome). An ``EPISODE_COUNTED`` metric's cell is the
+    number of episodes in which it happened.
 
     Cells are means with 2 decimals ("mean ± std" with ``with_std``); success is "n/total".
     table/markdown/csv carry labels and units ("time [s]"); latex is a ``table*`` with a label
@@ -209,18 +226,20 @@ def render_comparison(
     names = [_row_name(n) for n in agg.index]
     first = " / ".join(str(n) for n in agg.index.names if n is not None) or "agent"
     note = footnote(agg, columns)
+    counts = dict(counts or {})
     if fmt == "json":
         return _comparison_json(agg, names, first, columns, with_std=with_std,
-                                averaged=note is not None)
+                                averaged=note is not None, counts=counts)
 
     pm = r" $\pm$ " if fmt == "latex" else " ± "
     rows = [
-        [name, *(_comparison_cell(row, c, with_std, pm) for c in columns)]
+        [name, *(str(int(row[c])) for c in counts),
+         *(_comparison_cell(row, c, with_std, pm) for c in columns)]
         for name, (_, row) in zip(names, agg.iterrows())
     ]
-    labels = [plain_text(METRICS[c].label) for c in columns]
-    units = [f"[{plain_text(METRICS[c].unit)}]" for c in columns]
-    right = [False] + [True] * len(columns)
+    labels = [*counts.values(), *(plain_text(METRICS[c].label) for c in columns)]
+    units = [*(["[episodes]"] * len(counts)), *(f"[{plain_text(_unit(c))}]" for c in columns)]
+    right = [False] + [True] * len(labels)
     below = f"\n{note}\n" if note is not None else ""
     if fmt == "table":
         return fixed_width([[first, *labels], ["", *units]], rows, right) + below
@@ -233,18 +252,25 @@ def render_comparison(
             rows = [[*r, str(o), str(int(n))] for r, o, n in zip(rows, agg["over"], agg["n_averaged"])]
         return csv_text(header, rows)
 
-    return _comparison_latex(rows, columns, caption=caption, label=label, note=note)
+    headers = [["", *(latex_escape(c) for c in counts.values()),
+                *(METRICS[c].label for c in columns)],
+               ["", *(["[episodes]"] * len(counts)), *(f"[{_unit(c)}]" for c in columns)]]
+    return _comparison_latex(rows, headers, caption=caption, label=label, note=note)
 
 
 def _comparison_json(agg: pd.DataFrame, names: list[str], first: str, columns: list[str], *,
-                     with_std: bool, averaged: bool) -> str:
+                     with_std: bool, averaged: bool, counts: dict[str, str]) -> str:
     """``render_comparison``'s json: records with unrounded means, null for NaN."""
     records: list[dict[str, object]] = []
     for name, (_, row) in zip(names, agg.iterrows()):
         rec: dict[str, object] = {first: name}
+        rec.update({label: int(row[c]) for c, label in counts.items()})
         for col in columns:
             if col == "success":
                 rec[col] = _success_cell(row["success"])
+                continue
+            if col in EPISODE_COUNTED:
+                rec[col] = _json_value(row.get(f"{col}_episodes"))
                 continue
             rec[col] = _json_value(row[f"{col}_mean"])
             if with_std:
@@ -255,14 +281,10 @@ def _comparison_json(agg: pd.DataFrame, names: list[str], first: str, columns: l
     return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
 
 
-def _comparison_latex(rows: list[list[str]], columns: list[str], *, caption: str | None,
+def _comparison_latex(rows: list[list[str]], headers: list[list[str]], *, caption: str | None,
                       label: str | None, note: str | None) -> str:
     """``render_comparison``'s latex: a ``table*`` with a label row and a unit row."""
     tex_rows = [[latex_escape(r[0]), *r[1:]] for r in rows]
-    headers = [
-        ["", *(METRICS[c].label for c in columns)],
-        ["", *(f"[{METRICS[c].unit}]" for c in columns)],
-    ]
     lines = [r"\begin{table*}[ht]", r"\centering"]
     lines += [rf"\caption{{{caption}}}"] if caption is not None else []
     lines += [rf"\label{{{label}}}"] if label is not None else []

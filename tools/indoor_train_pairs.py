@@ -6,7 +6,8 @@ Pairs come from the env's own pair sampler (``pic4rl_bridge.episodes.PairSampler
 default world and robot (``SimParams``: indoor, world_variant 0, the Jackal's footprint plus the
 sim's clearance), each with a collision-free path and 1–6 m apart (the sim's least distance;
 the test pairs are 4–6 m): long enough to need avoidance, short enough that goals are reached
-while exploring. The seed is fixed, so the file is the same on every machine. The shipped file
+while exploring. The seed is fixed, so the file is the same on every machine. The file records
+its world (``indoor:0``) and the robot's radius, which the env checks before using it. The shipped file
 was drawn before the path check (the sim's own sampler, kept at 1–6 m, cm precision); it stays
 as the checkpoints were trained on it.
 """
@@ -34,7 +35,8 @@ def main(n_pairs: int = 1000, max_distance_m: float = 6.0, seed: int = 2026) -> 
     radius = load_robot(sim.robot).footprint.bounding_radius_m
     sampler = PairSampler(make_world(sim.world, seed=sim.world_variant), robot_radius_m=radius,
                           clearance_m=radius + sim.clearance_m,
-                          min_goal_distance_m=sim.min_goal_distance_m)
+                          min_goal_distance_m=sim.min_goal_distance_m,
+                          world_name=f"{sim.world}:{sim.world_variant}")
     pairs = sampler.goals_and_poses(n_pairs, seed=seed,
                                     kind=PairKind(max_distance_m=max_distance_m),
                                     initial_pose=Pose2D(0.0, -0.3, 0.0))

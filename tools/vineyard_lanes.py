@@ -7,16 +7,17 @@ PIC4rl-gym ``goals_and_poses`` JSON that ``pic4rl-test`` walks in order.
         --env-kwargs episodes.file:lanes.json
 
 The world is the recipe's vineyard with ``world_variant`` set to the variant (and, with
-``--straight``, ``bend_m`` 0): the same geometry ``--sim-kwargs`` gives the test's sim.
+``--straight``, ``bend_m`` 0): the same geometry ``--sim-kwargs`` gives the test's sim. The
+file records that world (``vineyard:<variant>``) and the robot's radius, which the env checks.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from pic4rl_agents.config import load_run_config
+from pic4rl_bridge.episodes import GoalsAndPoses, save_goals_and_poses
 from pic4rl_sim.params import build_world_choice, parameter_table, resolve
 from pic4rl_sim.engine.robot_specs import load_robot
 
@@ -32,15 +33,17 @@ def main(argv: list[str] | None = None) -> None:
     sim["world_variant"] = args.variant
     if args.straight:
         sim["world.vineyard.bend_m"] = 0.0
-    values = resolve(parameter_table(load_robot(sim.get("robot", "jackal"))), sim)
-    world = build_world_choice(values).build()
-    poses = [[round(p.x, 4), round(p.y, 4), round(p.yaw, 5)] for p in world.spawn_poses]
-    goals = [[round(x, 4), round(y, 4)] for x, y in world.goal_points]
-    doc = {"comment": f"every lane of vineyard variant {args.variant} of {args.recipe}"
-                      f"{' (straight rows)' if args.straight else ''}, start to end",
-           "initial_pose": poses[0], "goals": goals, "poses": poses}
-    args.out.write_text(json.dumps(doc))
-    print(f"wrote {len(goals)} lanes to {args.out}")
+    robot = load_robot(sim.get("robot", "jackal"))
+    choice = build_world_choice(resolve(parameter_table(robot), sim))
+    world = choice.build()
+    poses = tuple(world.spawn_poses)
+    lanes = GoalsAndPoses(poses[0], tuple(world.goal_points), poses,
+                          world=f"{choice.kind}:{choice.variant}",
+                          robot_radius_m=robot.footprint.bounding_radius_m)
+    save_goals_and_poses(lanes, args.out, overwrite=True, comment=(
+        f"every lane of vineyard variant {args.variant} of {args.recipe}"
+        f"{' (straight rows)' if args.straight else ''}, start to end"))
+    print(f"wrote {len(lanes.goals)} lanes to {args.out}")
 
 
 if __name__ == "__main__":

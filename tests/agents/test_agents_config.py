@@ -283,10 +283,29 @@ def test_other_ros_args_are_kept_with_their_values() -> None:
 
 def test_without_a_double_dash_the_segment_runs_to_the_end_and_may_repeat() -> None:
     plain, ros = split_ros_args(["--ros-args", "-p", "a:=1", "--", "--x", "--ros-args", "-p",
-                                 "b:=two", "--run", "y"])
+                                 "b:=two", "--log-level", "warn"])
     assert plain == ["--x"]
     assert ros.params == {"a": 1, "b": "two"}
-    assert ros.rest == ["--run", "y"]  # inside the segment: handed to rclpy, not to argparse
+    assert ros.rest == ["--log-level", "warn"]
+
+
+@pytest.mark.bad_input
+@pytest.mark.parametrize("command", ["test", "train"])
+def test_a_commands_flag_inside_ros_args_is_refused_in_one_line(
+        command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--no-progress`` after ``--params-file FILE`` is inside the ROS segment: refused (exit
+    2, one line saying where it belongs), never silently dropped; after ``--`` it counts."""
+    from pic4rl_agents import tester, train
+
+    main = tester.main if command == "test" else train.main
+    code = main(["--ros-args", "--params-file", "x.yaml", "--no-progress"])
+    assert code == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"pic4rl-{command}: --no-progress: not a ROS argument, but inside --ros-args (which "
+        "runs to a lone -- or to the end of the line); give the command's own flags before "
+        "--ros-args or after --"]
+    plain, _ = split_ros_args(["--ros-args", "--params-file", "x.yaml", "--", "--no-progress"])
+    assert plain == ["--no-progress"]
 
 
 @pytest.mark.parametrize(("argv", "message"), [

@@ -176,7 +176,7 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
 ])
 def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
-    code, out, err = run_main([*argv, "--bags", str(tmp_path / "bags"), "--no-progress"])
+    code, out, err = run_main(["--bags", str(tmp_path / "bags"), "--no-progress", *argv])
     assert code == 2
     assert err.startswith("pic4rl-test: ") and message.replace("{tmp}", str(tmp_path)) in err
     assert not (tmp_path / "bags").exists()
@@ -200,9 +200,9 @@ def test_bad_arguments_name_the_flag_not_the_params_file(tmp_path: Path, argv: l
                                                          line: str) -> None:
     """A bad command-line value is one line naming the flag it came from, not the params
     file; no bag is written."""
-    code, out, err = run_main(["--baseline", "proportional", *argv, "--bags",
-                               str(tmp_path / "bags"), "--no-progress", "--ros-args",
-                               "--params-file", str(LIDAR_TD3)])
+    code, out, err = run_main(["--baseline", "proportional", "--bags", str(tmp_path / "bags"),
+                               "--no-progress", *argv, "--ros-args", "--params-file",
+                               str(LIDAR_TD3)])
     assert code == 2 and out == ""
     assert err.startswith(f"pic4rl-test: {line}") and err.count("\n") == 1
     assert str(LIDAR_TD3) not in err

@@ -42,17 +42,21 @@ def _bags(root: Path) -> dict[str, float]:
 
 
 def test_a_suite_expands_to_its_cells(tmp_path: Path) -> None:
+    mine = json.loads(PAIRS.read_text())  # a user's pairs file: it records no world
+    del mine["world"], mine["robot_radius_m"]
+    (tmp_path / "mine.json").write_text(json.dumps(mine))
     suite = load_suite(_files(tmp_path, baselines=["dwa", "proportional"],
                               agents={"td3": str(REPO / "checkpoints" / "td3_lidar")},
                               worlds=["indoor:0", "indoor:1"], robots=["jackal"],
-                              pairs=["paper", {"random": 3, "kind": "any", "seed": 4}],
+                              pairs=[{"file": "mine.json"},
+                                     {"random": 3, "kind": "any", "seed": 4}],
                               repetitions=2, seed=10))
     assert len(suite.cells) == 3 * 2 * 1 * 2 * 2
     assert len({c.name for c in suite.cells}) == len(suite.cells)
     first = suite.cells[0]
     assert (first.agent, first.agent_path, first.world, first.variant) == (
         "td3", str(REPO / "checkpoints" / "td3_lidar"), "indoor", 0)
-    assert first.name == "goto-td3-indoor0-jackal-paper-r0"
+    assert first.name == "goto-td3-indoor0-jackal-file_mine-r0"
     assert [c.seed for c in suite.cells[:4]] == [10, 11, 10, 11]
     assert suite.cells[2].pairs.label == "random3_any_s4"
     assert suite.cells[-1].baseline == "proportional"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import pandas as pd
@@ -177,3 +178,25 @@ def test_wilson_interval_of_nothing_is_nan() -> None:
     from pic4rl_metrics.aggregate import wilson_interval
 
     assert all(math.isnan(v) for v in wilson_interval(0, 0))
+
+
+def test_collisions_count_the_episodes_with_a_collision(episodes: pd.DataFrame) -> None:
+    """Collision events 0, 3, 1 (td3_lidar) and 2, 0 (sac%depth): the comparison's
+    collisions are the episodes with one (2 and 1), not the mean events per episode (4/3);
+    the outcome counts shown first are episode counts."""
+    counted = episodes.assign(collision_count=[0, 2, 3, 0, NAN, 1])  # in row order
+    agg = aggregate(counted)
+    assert agg.loc["td3_lidar", "collision_count_episodes"] == 2
+    assert agg.loc["td3_lidar", "collision_count_mean"] == pytest.approx(4 / 3)
+    assert agg.loc["sac%depth", "collision_count_episodes"] == 1
+    counts = {"n_success": "goals", "n_collision": "collisions", "n_timeout": "timeouts"}
+    text = render_comparison(agg, "markdown", columns=["success", "collision_count"],
+                             counts=counts)
+    header, _, td3, sac = text.splitlines()[:4]
+    assert header.startswith("| agent | goals [episodes] | collisions [episodes] | timeouts "
+                             "[episodes] | success [n/total] | collisions [episodes] |")
+    assert td3 == "| td3_lidar | 2 | 1 | 0 | 2/3 | 2 |"
+    records = json.loads(render_comparison(agg, "json", columns=["collision_count"],
+                                           counts=counts))
+    assert records[0] == {"agent": "td3_lidar", "goals": 2, "collisions": 1, "timeouts": 0,
+                          "collision_count": 2}

@@ -370,6 +370,28 @@ def test_plot_writes_one_png_per_episode_and_keeps_existing(
     assert out == ""
 
 
+def test_plot_names_bags_that_share_a_name_apart_and_splits_worlds(
+    capsys, tmp_path: Path
+) -> None:
+    """Two agents' ``episode_0000`` in two worlds (one episode each in indoor:1, two in
+    indoor:0): four figures named by their agent's folder, none kept from this same run, and
+    one comparison per world holding more than one episode, never the worlds overlaid."""
+    fp = {"radius_m": 0.2}
+    for agent, world in (("td3", "indoor:0"), ("sac", "indoor:0"), ("dwa", "indoor:1")):
+        write_episode_bag(tmp_path / "run" / agent / "episode_0000", LINE, obstacles=WALL,
+                          goal=(5.0, 0.0), outcome="goal",
+                          facts={"agent": agent, "footprint": fp, "world": world})
+    out_dir = tmp_path / "figs"
+    code, _, err = _run(capsys, "plot", "--out", out_dir, tmp_path / "run")
+    assert code == 0, err
+    assert sorted(p.name for p in out_dir.iterdir()) == [
+        "comparison_indoor-0.png", "dwa-episode_0000.png", "sac-episode_0000.png",
+        "td3-episode_0000.png"]
+    assert "kept existing" not in err
+    for png in out_dir.iterdir():
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 # --- a run of several agents and the console script ---------------------------------------
 
 
