@@ -25,7 +25,7 @@ tr.error td{background:#fdecea}.maps{display:flex;flex-wrap:wrap;gap:12px}
 figure{margin:0;border:1px solid #ddd;padding:4px}figcaption{font-size:.85em;max-width:280px}
 .key span{display:inline-block;margin-right:12px}.sw{display:inline-block;width:11px;height:11px;
 margin-right:4px;vertical-align:middle}input.filter{width:28em;padding:3px}
-.scroll{max-height:70vh;overflow:auto}
+.scroll{max-height:70vh;overflow:auto}#inputs td,#errors td{white-space:normal;word-break:break-all}
 """
 
 _JS = """
@@ -156,8 +156,8 @@ def swatch(rgb: tuple[int, int, int], label: str) -> str:
 
 def page(title: str, sections: Sequence[tuple[str, str, str]], intro: str = "") -> str:
     """The whole page: a title, a table of contents, ``sections`` (id, heading, markup)."""
-    nav = "".join(f'<a href="#{sid}">{html.escape(head)}</a>' for sid, head, _ in sections)
-    body = "\n".join(f'<section id="{sid}"><h2>{html.escape(head)}</h2>\n{markup}</section>'
+    nav = "".join(f'<a href="#sec-{sid}">{html.escape(head)}</a>' for sid, head, _ in sections)
+    body = "\n".join(f'<section id="sec-{sid}"><h2>{html.escape(head)}</h2>\n{markup}</section>'
                      for sid, head, markup in sections)
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
             f'<meta name="viewport" content="width=device-width, initial-scale=1">'
