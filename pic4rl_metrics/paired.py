@@ -177,7 +177,8 @@ def paired_table(frame: pd.DataFrame, pairs: pd.Series,
                  references: Sequence[str] | None = None, *, n_boot: int = N_BOOT,
                  seed: int = 0) -> list[PairedDiff]:
     """Every agent against every reference (default: every pair of agents, once each, the
-    later one as the reference); ``ConfigError`` naming a reference with no episode."""
+    later one as the reference; two references against each other once); ``ConfigError``
+    naming a reference with no episode."""
     agents = agent_names(frame)
     if references is None:
         return [paired_diff(frame, pairs, a, r, n_boot=n_boot, seed=seed)
@@ -187,8 +188,13 @@ def paired_table(frame: pd.DataFrame, pairs: pd.Series,
             msg = (f"--paired/--reference {ref!r}: no episode of that agent; the agents are "
                    f"{', '.join(agents) or 'none'}")
             raise ConfigError(msg)
+    chosen: dict[frozenset[str], tuple[str, str]] = {}
+    for ref in references:  # two references against each other: once
+        for a in agents:
+            if a != ref:
+                chosen.setdefault(frozenset((a, ref)), (a, ref))
     return [paired_diff(frame, pairs, a, r, n_boot=n_boot, seed=seed)
-            for r in references for a in agents if a != r]
+            for a, r in chosen.values()]
 
 
 def seed_spread(frame: pd.DataFrame) -> pd.DataFrame:

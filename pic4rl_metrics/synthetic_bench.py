@@ -39,9 +39,10 @@ def pairs_in_arena(n: int, seed: int = 0) -> list[tuple[tuple[float, float], tup
 
 def write_benchmark(root: Path, rates: Mapping[str, float], *, pairs: int = 4, runs: int = 1,
                     seed: int = 0, n_beams: int = 90, speed_mps: float = 0.8,
-                    dt_s: float = 0.1) -> list[Path]:
+                    dt_s: float = 0.1, scan_every: int = 1) -> list[Path]:
     """Write the bags of ``rates`` (agent: success probability) on ``pairs`` pairs, ``runs``
-    times each, under ``root``; the bag directories. Outcomes are drawn from ``seed``."""
+    times each, under ``root``; the bag directories. Poses every ``dt_s``, a scan of
+    ``n_beams`` every ``scan_every``-th pose; outcomes drawn from ``seed``."""
     rng = np.random.default_rng(seed + 1)
     chosen = pairs_in_arena(pairs, seed)
     bags: list[Path] = []
@@ -63,5 +64,6 @@ def write_benchmark(root: Path, rates: Mapping[str, float], *, pairs: int = 4, r
                          "time_budget_s": float(track.t_s[-1])}
                 path = root / f"run{run}" / agent / f"episode_{k:04d}"
                 bags.append(write_episode_bag(path, track, obstacles=ARENA, n_beams=n_beams,
-                                              facts=facts, outcome=outcome))
+                                              scan_every=scan_every, facts=facts,
+                                              outcome=outcome))
     return bags
