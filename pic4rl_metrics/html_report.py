@@ -134,13 +134,15 @@ def _failures(frame: pd.DataFrame, names: pd.Series, sketches: dict[int, Sketch]
     parts = [_outcome_counts(frame, names), "<p class=note>Each agent's failed episodes end "
              "where the dot is (red: collision, orange: timeout, purple: diverged, grey: "
              "aborted), on the map the scans of every episode in that world build.</p>"]
-    worlds = frame["world"].fillna("?")
+    worlds, agent_of = frame["world"].fillna("?").to_dict(), names.to_dict()
+    by_world: dict[object, list[int]] = {}
+    for i in sketches:
+        by_world.setdefault(worlds[i], []).append(i)
     figures = []
-    for world in dict.fromkeys(worlds[list(sketches)]):
-        members = [i for i in sketches if worlds[i] == world]
-        for agent in dict.fromkeys(names[members]):
+    for world, members in by_world.items():
+        for agent in dict.fromkeys(agent_of[i] for i in members):
             failed = [sketches[i] for i in members
-                      if names[i] == agent and sketches[i].outcome != Outcome.GOAL.value]
+                      if agent_of[i] == agent and sketches[i].outcome != Outcome.GOAL.value]
             caption = f"<b>{html.escape(str(agent))}</b> in {html.escape(str(world))}: " \
                       f"{len(failed)} failed"
             figures.append(hp.figure(png_uri(failure_map([sketches[i] for i in members],
@@ -150,15 +152,21 @@ def _failures(frame: pd.DataFrame, names: pd.Series, sketches: dict[int, Sketch]
 
 def _pair_maps(frame: pd.DataFrame, names: pd.Series, pairs: pd.Series,
                sketches: dict[int, Sketch]) -> str:
-    agents = list(dict.fromkeys(names[list(sketches)]))
+    agent_of = names.to_dict()
+    agents = list(dict.fromkeys(agent_of[i] for i in sketches))
     colour = {a: PALETTE[i % len(PALETTE)] for i, a in enumerate(agents)}
     key = '<p class="key">' + "".join(hp.swatch(colour[a], str(a)) for a in agents) + "</p>"
-    labels = [p for p in dict.fromkeys(pairs[list(sketches)]) if p is not None]
+    by_pair: dict[str, list[int]] = {}
+    for i in sketches:
+        if pairs[i] is not None:
+            by_pair.setdefault(pairs[i], []).append(i)
+    labels = list(by_pair)
     figures = []
     for label in labels[:MAX_PAIR_MAPS]:
-        members = [i for i in sketches if pairs[i] == label]
-        drawn = [(sketches[i], colour[names[i]]) for i in members]
-        ends = ", ".join(f"{html.escape(str(names[i]))}: {sketches[i].outcome}" for i in members)
+        members = by_pair[label]
+        drawn = [(sketches[i], colour[agent_of[i]]) for i in members]
+        ends = ", ".join(f"{html.escape(str(agent_of[i]))}: {sketches[i].outcome}"
+                         for i in members)
         figures.append(hp.figure(png_uri(pair_map(drawn)),
                                  f"<b>{html.escape(label)}</b><br>{ends}", label))
     more = len(labels) - MAX_PAIR_MAPS
