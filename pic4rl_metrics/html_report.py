@@ -43,6 +43,8 @@ BOARD_MEANS = ("spl", "clearance_time_s", "path_length_m")
 #: The episode table's metric columns.
 EPISODE_COLUMNS = ("clearance_time_s", "path_length_m", "spl", "collision_count",
                    "obstacle_dist_min_m")
+#: Outcomes that are no failure: success, and an end nothing can judge (no goal known).
+_NOT_FAILED = (Outcome.GOAL.value, Outcome.UNKNOWN.value)
 #: At most this many start–goal pairs get a map (the rest are counted).
 MAX_PAIR_MAPS = 200
 #: Episodes' facts that change from episode to episode: left out of a run's setup hash.
@@ -138,16 +140,21 @@ def _failures(frame: pd.DataFrame, names: pd.Series, sketches: dict[int, Sketch]
     by_world: dict[object, list[int]] = {}
     for i in sketches:
         by_world.setdefault(worlds[i], []).append(i)
-    figures = []
+    figures: list[str] = []
+    clean: list[str] = []
     for world, members in by_world.items():
         for agent in dict.fromkeys(agent_of[i] for i in members):
             failed = [sketches[i] for i in members
-                      if agent_of[i] == agent and sketches[i].outcome != Outcome.GOAL.value]
+                      if agent_of[i] == agent and sketches[i].outcome not in _NOT_FAILED]
             caption = f"<b>{html.escape(str(agent))}</b> in {html.escape(str(world))}: " \
                       f"{len(failed)} failed"
+            if not failed:
+                clean.append(caption.replace(": 0 failed", ": no failed episode"))
+                continue
             figures.append(hp.figure(png_uri(failure_map([sketches[i] for i in members],
                                                          failed)), caption, f"{agent} failures"))
-    return "\n".join(parts) + f'<div class="maps">{"".join(figures)}</div>'
+    tail = f"<p>{'; '.join(clean)}.</p>" if clean else ""
+    return "\n".join(parts) + f'<div class="maps">{"".join(figures)}</div>' + tail
 
 
 def _pair_maps(frame: pd.DataFrame, names: pd.Series, pairs: pd.Series,
@@ -169,6 +176,9 @@ def _pair_maps(frame: pd.DataFrame, names: pd.Series, pairs: pd.Series,
                          for i in members)
         figures.append(hp.figure(png_uri(pair_map(drawn)),
                                  f"<b>{html.escape(label)}</b><br>{ends}", label))
+    if not labels:
+        return ("<p>No episode records its start–goal pair (the facts' start and goal, which "
+                "pic4rl's env writes; a topic map's facts for a real bag).</p>")
     more = len(labels) - MAX_PAIR_MAPS
     tail = f"<p class=note>{more} more pairs are not drawn.</p>" if more > 0 else ""
     note = ("<p class=note>Each start–goal pair: every agent's path in its colour, the start "

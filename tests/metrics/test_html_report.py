@@ -188,3 +188,23 @@ def test_an_existing_out_is_refused_without_force(bench_bags: Path, tmp_path: Pa
     assert out.read_text() == "the user's page"
     code, _, _ = _run(capsys, "report", bench_bags / "run0" / "dwa", "--out", out, "--force")
     assert code == 0 and out.read_text().startswith("<!DOCTYPE html>")
+
+
+def test_bags_without_a_pair_are_counted_and_drawn_in_no_pair(tmp_path: Path, capsys) -> None:
+    """Two agents' bags with no start or goal in their facts (as a real robot's log): no
+    couple, each counted as unpaired, and the pairs' section says why it is empty."""
+    from pic4rl_metrics.synthetic import straight_line, write_episode_bag
+
+    for agent in ("a", "b"):
+        write_episode_bag(tmp_path / "bags" / agent, straight_line(0.5, 4.0),
+                          facts={"agent": agent}, outcome="timeout")
+    out = tmp_path / "report.html"
+    code, _, _ = _run(capsys, "report", tmp_path / "bags", "--out", out)
+    assert code == 0
+    text = out.read_text()
+    p = _Page()
+    p.feed(text)
+    (row,) = p.rows["paired"][1:]
+    assert row[:5] == ["a", "b", "0", "0", "1 + 1"] and row[-1] == "not distinguishable at this n"
+    assert "Episodes without a start–goal pair in their facts: 2." in text
+    assert "No episode records its start–goal pair" in text
