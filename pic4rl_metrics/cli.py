@@ -1,4 +1,5 @@
-"""``pic4rl-metrics``: compute, compare, plot and watch (``video``) navigation metrics from bags.
+"""``pic4rl-metrics``: compute, compare, plot, watch (``video``) and report (one HTML page)
+navigation metrics from bags.
 
 Results go to stdout (or ``--out``); progress, warnings and errors go to stderr. The exit
 code is 1 when any bag failed (after all bags were judged and reported), 2 on bad usage.

@@ -1,5 +1,5 @@
-"""A synthetic benchmark's bags: agents × start–goal pairs × runs in one walled arena, each agent
-succeeding at a chosen rate, for the report's tests and its benchmark script.
+"""A synthetic benchmark's bags: agents × start–goal pairs × runs in one walled arena, each
+agent succeeding at a chosen rate, for the report's tests and its benchmark script.
 
 Every agent drives every pair once per run, from the pair's start to its goal by a detour of
 its own (so the maps tell the agents apart); a success reaches the goal, a failure stops part
