@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -257,9 +258,10 @@ def render_paired(result: MetricsResult, references: Sequence[str], fmt: str, *,
         return json.dumps([paired_record(d) for d in diffs], indent=2, allow_nan=False) + "\n"
     text = render_rows(PAIRED_COLUMNS, [paired_cells(d) for d in diffs], fmt)
     if fmt in ("table", "markdown"):
-        text += (f"\nOn episodes sharing a start–goal pair and world; difference: success "
-                 f"minus the reference's; CI: percentile bootstrap over pairs ({n_boot} "
-                 "resamples); b, c: couples only the agent / only the reference succeeded in; "
-                 "McNemar p: exact, two-sided; unpaired: agent + reference episodes without a "
-                 "partner, left out.\n")
+        note = (f"On episodes sharing a start–goal pair and world; difference: success minus "
+                f"the reference's; CI: percentile bootstrap over pairs ({n_boot} resamples); "
+                "b, c: couples only the agent / only the reference succeeded in; McNemar p: "
+                f"exact, two-sided; {NOT_DISTINGUISHABLE} unless p < {ALPHA} and the CI "
+                "excludes 0; unpaired: agent + reference episodes without a partner, left out.")
+        text += "\n" + textwrap.fill(note, 96) + "\n"
     return text
