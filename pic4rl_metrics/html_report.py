@@ -245,10 +245,10 @@ def _inputs(result: MetricsResult, names: pd.Series, inputs: Sequence[str]) -> s
             [hp.text("pic4rl version"), hp.text(tool)],
             [hp.text("written"), hp.text(datetime.now(timezone.utc).strftime(
                 "%Y-%m-%d %H:%M:%S UTC"))]]
-    note = ("<p class=note>config: sha256 (first 12 hex digits) of each config*.yaml beside the "
-            "bags; setup: of the facts an agent's run shares across its episodes (robot, world, "
-            "task, tolerances, footprint, budget); more than one means the run mixed "
-            "set-ups.</p>")
+    note = ("<p class=note>config: sha256 (first 12 hex digits) of each config*.yaml in the "
+            "bags' folders and those above them; setup: of the facts an agent's run shares "
+            "across its episodes (robot, world, task, tolerances, footprint, budget); more "
+            "than one means the run mixed set-ups.</p>")
     return note + hp.table("inputs", ["what", "value"], rows)
 
 
