@@ -5,6 +5,7 @@ no network, and its bad inputs. The page in a real browser: ``test_report_browse
 from __future__ import annotations
 
 import base64
+import hashlib
 import re
 import shutil
 from html.parser import HTMLParser
@@ -138,6 +139,7 @@ def test_a_video_beside_a_bag_is_linked(bench_bags: Path, tmp_path: Path, capsys
     bags = tmp_path / "bags"
     shutil.copytree(bench_bags / "run0" / "dwa", bags / "dwa")
     (bags / "dwa" / "episode_0001.mp4").write_bytes(b"not really a video")
+    (bags / "config.yaml").write_text("agent: dwa\n")  # the run's config, as the recorder's
     out = tmp_path / "out" / "report.html"
     out.parent.mkdir()
     code, _, _ = _run(capsys, "report", bags, "--out", out)
@@ -145,6 +147,9 @@ def test_a_video_beside_a_bag_is_linked(bench_bags: Path, tmp_path: Path, capsys
     p = _Page()
     p.feed(out.read_text())
     assert [h for cls, h in p.links if cls == "video"] == ["../bags/dwa/episode_0001.mp4"]
+    inputs = dict(row for row in p.rows["inputs"][1:])
+    digest = hashlib.sha256(b"agent: dwa\n").hexdigest()[:12]
+    assert inputs[f"config {bags / 'config.yaml'}"] == digest
 
 
 @pytest.mark.bad_input
