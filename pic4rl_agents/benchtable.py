@@ -17,7 +17,9 @@ from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
 from pic4rl_metrics.aggregate import aggregate, wilson_interval
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.batch import MetricsResult, compute
+from pic4rl_metrics.html_report import write_report
+from pic4rl_metrics.paired import agent_names
 from pic4rl_metrics.plots import save_figure
 from pic4rl_metrics.registry import METRICS
 from pic4rl_metrics.layouts import render_rows
@@ -29,6 +31,7 @@ from .suite import Cell, Suite
 ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
 METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
 TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
+REPORT = "report.html"  # the suite's page, beside its tables
 
 
 @dataclass(frozen=True)
@@ -43,12 +46,14 @@ def _num(value: object) -> str | None:
     return None if value is None or pd.isna(value) else f"{float(value):.2f}"
 
 
-def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[str, ...]]:
-    """Every cell's episodes with the cell's row keys, and the errors of unjudged bags."""
+def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[str, ...],
+                                                         MetricsResult | None]:
+    """Every cell's episodes with the cell's row keys, the errors of unjudged bags, and the
+    metrics' result (None when no cell has bags)."""
     folders = [suite.root / c.name / c.agent for c in cells]
     folders = [f for f in folders if f.is_dir()]
     if not folders:
-        return pd.DataFrame(columns=[*ROW_KEYS, "success"]), ()
+        return pd.DataFrame(columns=[*ROW_KEYS, "success"]), (), None
     result = compute(folders, jobs=0)  # one process per core: the pass runs on the driver
     frame = result.frame
     by_name = {c.name: c for c in cells}
@@ -56,7 +61,7 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
             for b in frame["bag"]]
     keys = pd.DataFrame(rows, index=frame.index, columns=list(ROW_KEYS))
     frame = pd.concat([keys, frame.drop(columns=[c for c in ROW_KEYS if c in frame])], axis=1)
-    return frame, tuple(str(f.error) for f in result.failed)
+    return frame, tuple(str(f.error) for f in result.failed), result
 
 
 def _row(key: Mapping[str, str], stats: pd.Series | None, error: str) -> list[str | None]:
@@ -71,11 +76,13 @@ def _row(key: Mapping[str, str], stats: pd.Series | None, error: str) -> list[st
             f"failed: {error}" if error else "ok"]
 
 
-def build_rows(suite: Suite, errors: Mapping[str, str]) -> tuple[
+def build_rows(suite: Suite, errors: Mapping[str, str],
+               judged: tuple[pd.DataFrame, tuple[str, ...], object] | None = None) -> tuple[
         tuple[str, ...], list[list[str | None]], tuple[str, ...]]:
     """The table's header and rows (in the suite's order) and the unjudged bags' errors;
-    ``errors``: the failed cells' errors by cell name."""
-    frame, bad = _judged(suite, suite.cells)
+    ``errors``: the failed cells' errors by cell name; ``judged``: ``_judged``'s, when the
+    caller judged the bags already."""
+    frame, bad, _ = judged if judged is not None else _judged(suite, suite.cells)
     agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
     header = (*ROW_KEYS, "n", "success", "success 95% CI",
               *(f"{plain_text(METRICS[c].label)} [{plain_text(METRICS[c].unit)}]"
@@ -144,13 +151,26 @@ def comparison_figure(task: str, header: Sequence[str],
     return fig
 
 
+def _report(suite: Suite, result: MetricsResult) -> Path:
+    """``report.html``: the suite's page (``pic4rl_metrics.html_report``), every agent
+    compared with each of the suite's baselines that has episodes (else every pair)."""
+    present = set(agent_names(result.frame))
+    baselines = [b for b in dict.fromkeys(c.baseline for c in suite.cells) if b in present]
+    return write_report(result, suite.root / REPORT, overwrite=True,
+                        references=baselines or None, inputs=[str(suite.path)],
+                        title=f"{suite.name}: pic4rl-bench report")
+
+
 def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
-    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX), leaderboards and
-    comparison figures (``comparison_<task>.png``) into the suite's bags folder, each
-    atomically."""
-    header, rows, bad = build_rows(suite, errors)
+    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX), its page
+    (``report.html``), leaderboards and comparison figures (``comparison_<task>.png``) into
+    the suite's bags folder, each atomically."""
+    judged = _judged(suite, suite.cells)
+    header, rows, bad = build_rows(suite, errors, judged)
     files = [atomic.write_text(suite.root / name, render_rows(header, rows, fmt))
              for fmt, name in TABLE_FORMATS.items()]
+    if judged[2] is not None:
+        files.append(_report(suite, judged[2]))
     files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
               for task, text in leaderboards(header, rows).items()]
     files += [save_figure(comparison_figure(task, header, rows),

@@ -1,4 +1,5 @@
-"""``pic4rl-metrics``: compute, compare, plot and watch (``video``) navigation metrics from bags.
+"""``pic4rl-metrics``: compute, compare, plot, watch (``video``) and report (one HTML page)
+navigation metrics from bags.
 
 Results go to stdout (or ``--out``); progress, warnings and errors go to stderr. The exit
 code is 1 when any bag failed (after all bags were judged and reported), 2 on bad usage.
@@ -21,7 +22,9 @@ from .batch import MetricsResult, compute
 from .contract import EpisodeFacts, parse_facts
 from .errors import ConfigError, MetricsError, OutputError
 from .registry import METRICS, REGISTRY
+from .inputs import discover
 from .layouts import FORMATS
+from .paired import render_paired
 from .report import EPISODE_VIEW, render_comparison, render_episodes
 from .results import METRIC_COLUMNS, table_columns
 from .roles import ROLES, Role
@@ -127,6 +130,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--count-aborted", action="store_true",
                    help="count aborted episodes (cut short, no outcome recorded) as failures "
                         "in the success rate; by default they are counted apart (n_aborted)")
+    p.add_argument("--paired", action="append", metavar="REF",
+                   help="instead of the table: every agent against REF on shared start-goal "
+                        "pairs (success difference, bootstrap interval, McNemar's p); repeat "
+                        "for several references")
+    p = sub.add_parser("report", help="one self-contained HTML page: leaderboard, paired "
+                                      "comparisons, failures, maps, every episode")
+    _add_input_options(p)
+    p.add_argument("--out", "-o", type=Path, required=True, help="the HTML file to write")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--reference", action="append", metavar="AGENT",
+                   help="compare every agent with this one (repeat for several; default: "
+                        "every pair of agents)")
+    p.add_argument("--title", default="pic4rl benchmark report", help="the page's title")
     p = sub.add_parser("plot", help="a figure per episode and a comparison figure")
     _add_input_options(p)
     p.add_argument("--out", "-o", type=Path, required=True, help="directory for the PNG files")
@@ -204,6 +220,16 @@ def _writing(path: Path) -> Iterator[None]:
                           f"{err.strerror or err}") from err
 
 
+def _check_report_inputs(args: argparse.Namespace) -> None:
+    """``report``: refuse an existing ``--out`` (without ``--force``) and inputs that hold no
+    bag at all before any bag is read."""
+    if args.out.exists() and not args.force:
+        raise ConfigError(f"--out {str(args.out)!r} exists; pass --force to replace it")
+    if not discover(args.bags).bags:
+        raise ConfigError(f"report: no bag in {' '.join(map(str, args.bags))}; expected "
+                          "rosbag2 directories, .db3/.mcap or .bag files, or folders of them")
+
+
 def _report_failures(result: MetricsResult) -> int:
     for failed in result.failed:
         print(f"error: {failed.error}", file=sys.stderr)
@@ -248,10 +274,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "video":
             return run_video_command(args, *_inputs(args))
+        if args.command == "report":
+            _check_report_inputs(args)
         result = _run(args)
         if args.command == "compute":
             shown = _shown(result, list(EPISODE_VIEW), numeric=False)
             _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
+        elif args.command == "compare" and args.paired:
+            _emit(render_paired(result, args.paired, args.format), args.out, args.force)
+        elif args.command == "report":
+            from .html_report import write_report  # matplotlib and Pillow on demand
+
+            write_report(result, args.out, overwrite=args.force, references=args.reference,
+                         inputs=[str(b) for b in args.bags], title=args.title)
+            print(f"wrote {args.out}", file=sys.stderr)
         elif args.command == "compare":
             table = aggregate(result.frame, by=args.by, over=args.over,
                               count_aborted=args.count_aborted)

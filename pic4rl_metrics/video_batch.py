@@ -21,6 +21,7 @@ from .batch import BagResult, judge_bag, resolve_jobs, run_parallel
 from .contract import EpisodeFacts
 from .errors import ConfigError, MetricsError, OutputError
 from .inputs import discover
+from .paired import pair_key
 from .topics import TopicMap
 from .video import EpisodeScene, VideoOptions, extent, union
 
@@ -182,15 +183,6 @@ def side_by_side(scenes: Sequence[EpisodeScene], columns: int = 3) -> Iterator[n
         blank = np.full_like(last[0], 255)
         cells = [*last, *[blank] * (n_rows * n_cols - len(last))]
         yield np.vstack([np.hstack(cells[r * n_cols:(r + 1) * n_cols]) for r in range(n_rows)])
-
-
-def pair_key(result: BagResult) -> tuple[float, ...] | None:
-    """The start–goal pair of a judged bag, to the centimetre (None: no goal or start)."""
-    ep = result.episode
-    if ep is None or ep.facts.goal is None:
-        return None
-    start = ep.facts.start[:2] if ep.facts.start is not None else (ep.pose.x[0], ep.pose.y[0])
-    return tuple(round(float(v), 2) for v in (*start, *ep.facts.goal))
 
 
 def _pairs(judged: Sequence[BagResult]) -> list[list[BagResult]]:

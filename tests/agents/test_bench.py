@@ -104,6 +104,10 @@ def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) 
     for name in ("results.csv", "results.md", "results.tex", "leaderboard_goto.md"):
         assert (suite.root / name).is_file()
     assert (suite.root / "comparison_goto.png").read_bytes().startswith(b"\x89PNG")
+    page = (suite.root / "report.html").read_text()  # the suite's page, its baselines paired
+    assert "<h2>Paired comparisons</h2>" in page
+    assert page.count("<td>dwa</td><td>proportional</td>") == 1
+    assert page.count('class="bag"') == 8
     before, text = _bags(suite.root), (suite.root / "results.md").read_text()
     assert len(before) == 4 * 2 * 2  # 4 cells x 2 episodes x (.db3, metadata.yaml)
     again = bench.run_suite(suite, workers=2, local=True, progress=False)

@@ -21,7 +21,7 @@ def test_importing_the_package_cli_plots_and_videos_pulls_in_no_heavy_module() -
     code = (
         "import json, sys\n"
         "import pic4rl_metrics, pic4rl_metrics.cli, pic4rl_metrics.plots\n"
-        "import pic4rl_metrics.video, pic4rl_metrics.video_batch\n"
+        "import pic4rl_metrics.video, pic4rl_metrics.video_batch, pic4rl_metrics.html_report\n"
         "pic4rl_metrics.video_batch.ffmpeg_writer()\n"
         f"heavy = {HEAVY!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
