@@ -183,6 +183,9 @@ class RosConfig:
                              range=POSITIVE)
     operator_timeout_s: float = param(0.0, doc="real robot: wait this long for a new goal; 0 = "
                                       "forever", unit="s", range=NON_NEGATIVE)
+    max_sensor_age_s: float = param(0.0, doc="rate mode: a needed topic silent this long stops "
+                                    "the robot and aborts the episode; 0: 5 control periods",
+                                    unit="s", range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)
