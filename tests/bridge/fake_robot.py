@@ -4,7 +4,8 @@ robot's drivers and its operator would.
 
 Usage: ``python fake_robot.py [--scan TOPIC:ANGLE_MIN:INCREMENT:BEAMS]... [--silence-after N]
 [--scan-qos best_effort|reliable] [--no-odom]``. The robot starts at the origin heading +x,
-drives with the last ``cmd_vel`` (a unicycle), and sees a round room of radius 5 m with three
+drives with the last ``cmd_vel`` (a unicycle; ``--no-odom``: its odometry is advertised but
+never published), and sees a round room of radius 5 m with three
 thin posts (``POSTS``) from its LiDAR at ``MOUNT`` (the Jackal's). Every scan topic stops for
 good once ``N`` commands have come (a LiDAR that dies mid-episode). The goal ``GOAL`` goes out
 on ``goal_pose`` twice a second with one stamp (one operator goal). Prints ``READY``.

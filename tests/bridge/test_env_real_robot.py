@@ -123,16 +123,26 @@ def test_a_scan_that_goes_silent_stops_the_robot_and_aborts_the_episode(
 
 
 @pytest.mark.bad_input
-@pytest.mark.parametrize("overrides, expected", [
-    ({"ros.sensor_qos": "reliable"},
+@pytest.mark.parametrize("robot_args, overrides, expected", [
+    ([], {"ros.sensor_qos": "reliable"},
      r"topic /scan \(topics\.scan; 1 publisher\(s\) offering best effort, volatile: none "
      r"matches this env's reliable subscription \(ros\.sensor_qos: best_effort for a "
      r"sensor\)\): nothing within 3 s"),
-    ({"topics.scan": "laser"}, r"topic /laser \(topics\.scan; no publisher\): nothing within 3 s"),
+    ([], {"topics.scan": "laser"},
+     r"topic /laser \(topics\.scan; no publisher\): nothing within 3 s"),
+    (["--no-odom"], {}, r"topic /odom \(topics\.pose; 1 publisher\(s\) offering reliable, "
+     r"volatile\): nothing within 3 s"),  # advertised, silent
+    (["--no-odom"], {"ros.step_mode": "lockstep"},
+     r"topic /odom \(topics\.pose; 1 publisher\(s\) offering reliable, volatile\): nothing "
+     r"within 3 s"),
+    ([], {"ros.step_mode": "lockstep", "topics.scan": "laser"},
+     r"topic /laser \(topics\.scan; no publisher\): nothing within 3 s"),
 ])
-def test_a_missing_sensor_is_named_alone_with_its_publishers_qos(domain, robot, overrides,
-                                                                   expected):
-    robot(domain, "--scan", FULL)
+def test_a_missing_sensor_is_named_alone_with_its_publishers_qos(domain, robot, robot_args,
+                                                                   overrides, expected):
+    """Only the silent topic, in rate and lockstep stepping, with what the graph says of its
+    publishers; the topics that did send are not named."""
+    robot(domain, "--scan", FULL, *robot_args)
     env = real_robot_env(domain, **{"ros.timeout_s": 3.0, **overrides})
     try:
         with pytest.raises(TransportError) as err:
