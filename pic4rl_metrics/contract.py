@@ -41,7 +41,8 @@ CLOCK_TOPIC = "/clock"
 
 #: ``std_msgs/msg/String`` whose ``data`` is a JSON object with the keys of ``FACT_KEYS``.
 FACTS_TOPIC = "/episode/facts"
-#: ``std_msgs/msg/String``; ``data`` is a JSON object ``{"outcome": "goal"|"collision"|"timeout"|"diverged"|"aborted",
+#: ``std_msgs/msg/String``; ``data`` is a JSON object
+#: ``{"outcome": "goal"|"collision"|"timeout"|"diverged"|"aborted",
 #: "stamp_ns": <int, on the pose topic's header time base>}`` or just the outcome word.
 OUTCOME_TOPIC = "/episode/outcome"
 #: ``tf2_msgs/msg/TFMessage``: a real bag's moving transforms, where ``--pose-frames`` reads

@@ -65,7 +65,8 @@ def cast(angles: np.ndarray, yaw: float = 0.0) -> np.ndarray:
     ux, uy = np.cos(theta), np.sin(theta)
     out = np.full(theta.shape, 5.0)
     for distance, bearing in ((1.0, 35.0), (2.0, -65.0), (1.5, 175.0)):
-        cx, cy = distance * math.cos(math.radians(bearing)), distance * math.sin(math.radians(bearing))
+        rad = math.radians(bearing)
+        cx, cy = distance * math.cos(rad), distance * math.sin(rad)
         along = ux * cx + uy * cy
         miss2 = cx * cx + cy * cy - along * along
         hit = (along > 0) & (miss2 <= 0.02 ** 2)
