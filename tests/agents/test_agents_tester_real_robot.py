@@ -58,7 +58,7 @@ def test_a_lidar_that_dies_mid_episode_is_one_line_and_an_aborted_episode(tmp_pa
     said = [line for line in err.splitlines() if "aborted" in line and "/scan" in line]
     assert len(said) == 1, err
     assert said[0].startswith("episode 0 aborted, the robot stopped: topic /scan: no message "
-                              "for 0."), said[0]
+                              "for "), said[0]
     (bag,) = (tmp_path / "bags" / "real" / "proportional").glob("episode_*")
     from pic4rl_metrics.batch import compute
 
