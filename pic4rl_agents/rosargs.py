@@ -90,7 +90,14 @@ def split_ros_args(argv: Sequence[str]) -> tuple[list[str], RosArgs]:
 
 
 def no_sim_hint(command: str, env: EnvConfig | None) -> str:
-    """What to tell a user whose ROS env heard no sim (``command``: train or test)."""
+    """What to tell a user whose ROS env heard nothing (``command``: train or test): to start
+    a sim, or, when no sim is configured (``ros.sim_node`` empty: a real robot), to check the
+    robot's topics."""
+    if env is not None and not env.ros.sim_node:
+        return (f"  Is the robot publishing in ROS domain {ros_domain(env)}? Check the topic "
+                "names (ros2 topic list, ros2 topic info -v NAME) and map each with "
+                "-p topics.<key>:=NAME (topics.pose, topics.scan, ...), or its QoS with "
+                "-p ros.sensor_qos:=reliable|best_effort")
     return (f"  Is a sim answering in ROS domain {ros_domain(env)}? Start one with the same "
             f"params file (pic4rl-sim --ros-args --params-file FILE), or use pic4rl-run "
             f"{command}, or -p transport:=inprocess")

@@ -32,6 +32,7 @@ from pic4rl_sim.schema import (
     NON_NEGATIVE,
     POSITIVE,
     ParamEnum,
+    Range,
     check,
     flatten,
     from_params,
@@ -89,11 +90,15 @@ class DepthEncoding(ParamEnum):
 
 @dataclass(frozen=True)
 class LidarObsConfig:
-    """The LiDAR observation: ``beams`` sectors, each the minimum range in it, clipped."""
+    """The LiDAR observation: ``beams`` sectors of equal width over ``fov_deg`` centred on the
+    robot's forward axis, each the minimum range of the beams pointing into it, clipped."""
 
     beams: int = param(36, doc="sectors of the observation, each the minimum range in it",
                        range=POSITIVE)
     max_range_m: float = param(10.0, doc="ranges clipped here", unit="m", range=POSITIVE)
+    fov_deg: float = param(360.0, doc="the sectors' span, centred on the robot's forward axis "
+                           "(sector 0 starts at -fov_deg / 2)", unit="deg",
+                           range=Range(0.0, 360.0, lo_open=True))
 
 
 @dataclass(frozen=True)
@@ -178,6 +183,9 @@ class RosConfig:
                              range=POSITIVE)
     operator_timeout_s: float = param(0.0, doc="real robot: wait this long for a new goal; 0 = "
                                       "forever", unit="s", range=NON_NEGATIVE)
+    max_sensor_age_s: float = param(0.0, doc="rate mode: a needed topic silent this long stops "
+                                    "the robot and aborts the episode; 0: 5 control periods",
+                                    unit="s", range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)

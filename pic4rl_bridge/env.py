@@ -4,9 +4,9 @@ One config file (``sim:`` and ``nav_env:`` sections) says which task, robot, wor
 the task turns decoded sensor frames into observations, rewards and outcomes; the transport
 moves the robot; the recorder, when on, writes each episode to its own bag under
 ``<bags_dir>/<run>/<episode>/``. ``terminated`` is goal or collision, ``truncated`` the time
-limit (``episode_max_steps``) or a simulator whose physics diverged (``info["outcome"]`` is
-``diverged``, ``info["reason"]`` says why; its bag's outcome too); ``info["reward_terms"]``
-holds each scaled reward term.
+limit (``episode_max_steps``), a simulator whose physics diverged (outcome ``diverged``) or a
+needed topic gone silent (``aborted``, the robot stopped; ``ros.max_sensor_age_s``):
+``info["reason"]`` and the bag say why. ``info["reward_terms"]`` holds each scaled term.
 
 ``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (start,
 goal, sensor noise) and, with the same actions, the same observations and rewards through
@@ -32,7 +32,7 @@ from pic4rl_sim.engine.sampling import PairKind
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
 from .episodes import (EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses,
                        resolve_pair_kind)
-from .errors import BridgeError, ConfigError, EpisodeRejected
+from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
 from .frame import SensorFrame
 from .env_recording import EnvRecording, episode_facts
 from .scenario import Scenario
@@ -291,10 +291,13 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             raise BridgeError("step() after the episode ended: call reset() first")
         action = np.clip(np.asarray(action, dtype=np.float32).reshape(self.action_space.shape),
                          -1.0, 1.0)
-        frame = self.transport.step(self.task.command_at(action, self._frame))
+        try:
+            frame, stale = self.transport.step(self.task.command_at(action, self._frame)), None
+        except StaleSensor as err:  # the robot was stopped: the episode ends where it was
+            frame, stale = self._frame, str(err)
         judgement = self.task.judge(self._frame, frame, self._context, self._streak)
-        fault = self.transport.fault
-        if fault is not None:  # the robot was put back at its start: nothing to judge
+        fault = stale or self.transport.fault
+        if fault is not None:  # put back at its start, or blind: nothing to judge
             judgement = dataclasses.replace(
                 judgement, terms=dict.fromkeys(judgement.terms, 0.0), outcome=None)
         self._frame, self._streak, self._last_action = frame, judgement.collision_streak, action
@@ -304,16 +307,17 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         terminated = judgement.outcome is not None
         truncated = not terminated and (fault is not None
                                         or self._steps >= self.config.episode_max_steps)
-        outcome = judgement.outcome or (Outcome.DIVERGED if fault is not None
+        outcome = judgement.outcome or (Outcome.ABORTED if stale else Outcome.DIVERGED if fault
                                         else Outcome.TIMEOUT if truncated else None)
         obs = self.task.observe(frame, self._context, action)
         info = judgement.info(self._steps, outcome)
         if fault is not None:
             info["reason"] = fault
-            log.error("episode %d ended: %s", self._episode - 1, fault)
+            log.error("episode %d %s: %s", self._episode - 1,
+                      "aborted, the robot stopped" if stale else "ended", fault)
         if outcome is not None:
             self._done = True
-            self._end_bag(outcome)
+            self._end_bag(outcome, stale)
         return obs, judgement.reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
@@ -343,7 +347,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             recording=self._recording, index=self._episode, sampler=self._sampler,
             task_facts=self.task.facts(context))
 
-    def _end_bag(self, outcome: Outcome | None) -> None:
+    def _end_bag(self, outcome: Outcome | None, reason: str | None = None) -> None:
         if getattr(self, "_recording", None) is not None:
             stamp = self._frame.stamp_ns if self._frame is not None else 0
-            self._recording.end(self.transport, outcome, stamp)
+            self._recording.end(self.transport, outcome, stamp, reason)

@@ -58,8 +58,10 @@ class EnvRecording:
             bag.write(raw)
         transport.tap = bag.write
 
-    def end(self, transport: Transport, outcome: Outcome | None, stamp_ns: int) -> None:
-        """Close the episode's bag: with its outcome, or, cut short, without one."""
+    def end(self, transport: Transport, outcome: Outcome | None, stamp_ns: int,
+            reason: str | None = None) -> None:
+        """Close the episode's bag: with its outcome (and the ``reason`` the env cut it short),
+        or, cut short by its caller, without one."""
         bag, self.bag = self.bag, None
         if bag is None:
             return
@@ -68,7 +70,7 @@ class EnvRecording:
         if outcome is None:
             bag.abort()
         else:
-            bag.close(outcome, stamp_ns)
+            bag.close(outcome, stamp_ns, reason)
 
 
 def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,

@@ -13,7 +13,7 @@ from pic4rl_metrics.errors import ConfigError
 from pic4rl_sim.errors import require, unknown_key
 
 __all__ = ["BridgeError", "ConfigError", "EpisodeRejected", "RecorderError", "SimConflict",
-           "TransportError", "require", "unknown_key"]
+           "StaleSensor", "TransportError", "require", "unknown_key"]
 
 
 class BridgeError(Exception):
@@ -22,6 +22,11 @@ class BridgeError(Exception):
 
 class TransportError(BridgeError):
     """The robot or simulator did not answer: a missing service, a silent topic, a bad message."""
+
+
+class StaleSensor(TransportError):
+    """A topic the task needs went silent mid-episode (``ros.max_sensor_age_s``): the robot was
+    stopped, and the env aborts the episode with this message as its reason."""
 
 
 class SimConflict(BridgeError):

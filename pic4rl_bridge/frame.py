@@ -40,6 +40,12 @@ class ScanData:
         """Beam angles (rad) in the scan's frame."""
         return self.angle_min_rad + self.angle_increment_rad * np.arange(len(self.ranges))
 
+    def base_angles(self) -> np.ndarray:
+        """Beam directions (rad, not wrapped) in the robot's base frame: ``angles()`` turned by
+        the mount's yaw. ``pic4rl_bridge.tasks.collision.scan_points`` places the returns
+        along the same directions, from the mount's position."""
+        return self.angles() + self.mount.yaw
+
 
 @dataclass(frozen=True, init=False)
 class SensorFrame:

@@ -113,13 +113,14 @@ class EpisodeBag:
         with _as_recorder_error():
             self._bag.write_facts(self._facts, stamp_ns)
 
-    def close(self, outcome: Outcome | str, stamp_ns: int) -> Path:
-        """End the episode: publish the ``outcome`` (one of the contract's ``OUTCOMES``) at
-        ``stamp_ns`` (ns), store every fact and the outcome in ``custom_data``, write
-        ``metadata.yaml``; return the bag directory."""
+    def close(self, outcome: Outcome | str, stamp_ns: int, reason: str | None = None) -> Path:
+        """End the episode: publish the ``outcome`` (one of the contract's
+        ``WRITTEN_OUTCOMES``) at ``stamp_ns`` (ns), store every fact, the outcome and the
+        ``reason`` it was cut short (if any) in ``custom_data``, write ``metadata.yaml``;
+        return the bag directory."""
         with _as_recorder_error():
             word = self._bag.write_outcome(outcome, stamp_ns)
-            self._bag.close(replace(self._facts, outcome=word))
+            self._bag.close(replace(self._facts, outcome=word, end_reason=reason))
         log.info("episode bag %s: %s, %d messages", self.path, word.value,
                  sum(self.counts.values()))
         return self.path

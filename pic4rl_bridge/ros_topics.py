@@ -3,13 +3,17 @@ frame's sensors a task needs (``pic4rl_bridge.sensors``), and the topics only re
 
 Types and QoS come from the sim's interface table (``pic4rl_sim.interfaces``): a topic is
 matched as the sim node offers it, keeping ``BRIDGE_HISTORY`` messages so the recorder sees
-each; and the messages the transport reads stamps from and publishes (commands).
+each; and the messages the transport reads stamps from and publishes (commands). Also what
+the transport says of its topics: one gone silent in rate mode (``stale``), and those a wait
+heard nothing from, with their publishers' QoS (``silent``).
 """
 
 from __future__ import annotations
 
+import math
 import struct
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +31,8 @@ from pic4rl_sim.interfaces import (
     QosSettings,
     bridge_qos,
 )
+from pic4rl_sim.node.ros_interfaces import ros_type, settings_of, starts_with_stamp
+from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
 
 from . import decode
@@ -65,15 +71,47 @@ def command_message(command: Twist2D, stamped: bool, stamp_ns: int) -> Twist | T
 
 
 class Topic:
-    """One raw subscription: the latest decoded message and its stamp."""
+    """One raw subscription: the latest decoded message, its stamp and arrival time."""
 
     def __init__(self, name: str, type_name: str) -> None:
         self.name, self.type_name = name, type_name
         self.msg: Any = None
         self.stamp_ns = -1
+        self.received_s = -math.inf  # time.monotonic() of the latest message
+        self.qos = QosSettings()  # the subscription's
         self.count = 0
         self.recorded = False
         self.episodic = False  # published once per episode (goal, plan), not every step
+
+
+def receiver(entry: Topic, needed: bool,
+             deliver: Callable[[Topic, bytes, int], None]) -> Callable[[bytes], None]:
+    """A raw subscription's callback: keeps ``entry``'s latest message (decoded when frames
+    need it or its stamp cannot be read from the CDR bytes), stamp and arrival time, and
+    hands a recorded one's bytes and stamp to ``deliver``."""
+    kind = ros_type(entry.type_name)
+    decode_all = needed or not starts_with_stamp(kind)
+
+    def on_message(data: bytes) -> None:
+        if decode_all:
+            entry.msg = deserialize_message(data, kind)
+            stamp = stamp_of(entry.msg)
+        else:  # recorded only: the stamp straight from the CDR bytes, nothing decoded
+            stamp = cdr_stamp(data)
+        stamp = time.time_ns() if stamp is None else stamp
+        entry.stamp_ns, entry.received_s = stamp, time.monotonic()
+        entry.count += 1
+        if entry.recorded:
+            deliver(entry, data, stamp)
+
+    return on_message
+
+
+def offered(node: Any, topic: str) -> QosSettings | None:
+    """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
+    DDS does not tell a remote publisher's history depth); ``None`` without one."""
+    infos = node.get_publishers_info_by_topic(topic)
+    return settings_of(infos[0].qos_profile) if infos else None
 
 
 @dataclass
@@ -151,3 +189,43 @@ def _add_recorded(config: EnvConfig, out: Wiring, sensor_qos: SensorQos,
                              if sim_topic.qos is QosKind.LATCHED
                              else _like(sim_topic, sensor_qos))
     out.recorded = {resolve(name) for name in config.record.topics}
+
+
+def stale(topics: Iterable[Topic], max_age_s: float, now_s: float) -> str | None:
+    """Why a rate-mode frame cannot be trusted: the first of ``topics`` whose latest message
+    arrived more than ``max_age_s`` before ``now_s`` (``time.monotonic()``), or ``None``."""
+    for topic in topics:
+        age = now_s - topic.received_s
+        if age > max_age_s:
+            return (f"topic {topic.name}: no message for {age:.2f} s "
+                    f"(ros.max_sensor_age_s {max_age_s:g} s)")
+    return None
+
+
+def silent(node: Any, topics: Iterable[Topic], keys: Mapping[str, str]) -> str:
+    """``topics`` (those that sent nothing a wait needed) named, each with its ``topics.*``
+    key (``keys``: topic → key) and what the ROS graph says of its publishers: none, or the
+    QoS they offer, and whether it matches this env's subscription."""
+    parts = []
+    for topic in topics:
+        key = f"topics.{keys[topic.name]}; " if topic.name in keys else ""
+        infos = node.get_publishers_info_by_topic(topic.name)
+        if not infos:
+            parts.append(f"{topic.name} ({key}no publisher)")
+            continue
+        offered = [settings_of(info.qos_profile) for info in infos]
+        words = sorted({_qos_words(q) for q in offered})
+        clash = ""
+        if topic.qos.reliable and not any(q.reliable for q in offered):
+            clash = (": none matches this env's reliable subscription (ros.sensor_qos: "
+                     "best_effort for a sensor)")
+        elif topic.qos.transient_local and not any(q.transient_local for q in offered):
+            clash = ": none matches this env's transient-local subscription"
+        parts.append(f"{topic.name} ({key}{len(infos)} publisher(s) offering "
+                     f"{' / '.join(words)}{clash})")
+    return f"topic{'s' if len(parts) > 1 else ''} {', '.join(parts)}"
+
+
+def _qos_words(qos: QosSettings) -> str:
+    return (f"{'reliable' if qos.reliable else 'best effort'}, "
+            f"{'transient local' if qos.transient_local else 'volatile'}")

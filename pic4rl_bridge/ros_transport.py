@@ -14,7 +14,9 @@ Subscriptions are raw: each message arrives as the CDR bytes on the wire, goes t
 
 Steps: ``lockstep`` publishes the command and waits for the sensor set it causes (the sync
 topic, scan or depth image, with a newer stamp, and every other needed topic at that stamp);
-``rate`` publishes, waits one control period of wall time, and takes the latest messages.
+``rate`` publishes, waits one control period of wall time, and takes the latest messages; a
+needed topic silent longer than ``ros.max_sensor_age_s`` stops the robot (zero ``cmd_vel``)
+and raises ``StaleSensor``, which the env turns into an aborted episode.
 With our sim node, a step also waits for the sim's status of that step on ``diagnostics``: an
 ERROR (the physics diverged; the robot is back at its start) becomes the transport's ``fault``.
 """
@@ -32,7 +34,7 @@ from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.context import Context
 from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import serialize_message
 from std_srvs.srv import Empty
 
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
@@ -40,17 +42,15 @@ from pic4rl_sim.interfaces import QosKind, bridge_qos
 from pic4rl_sim.node.ros_interfaces import (
     profile,
     ros_type,
-    settings_of,
-    starts_with_stamp,
     type_name,
 )
 
 from . import decode
 from .config import EnvConfig, StepMode
-from .errors import EpisodeRejected, TransportError
+from .errors import EpisodeRejected, StaleSensor, TransportError
 from .frame import SensorFrame
 from .ros_sim import check_one_sim, episode_request, subscribe_status
-from .ros_topics import Topic, cdr_stamp, command_message, stamp_of, wiring
+from .ros_topics import Topic, command_message, offered, receiver, silent, stale, wiring
 from .scenario import Scenario
 from .sensors import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
@@ -69,6 +69,7 @@ class RosTransport(Transport):
         self._mode = StepMode(config.ros.step_mode)
         self._timeout_s = config.ros.timeout_s
         self._dt_s = scenario.robot.control_dt_s
+        self._max_age_s = config.ros.max_sensor_age_s or 5.0 * self._dt_s
         self._lidar_mount = scenario.robot.lidar_mount or Pose2D(0.0, 0.0, 0.0)
         self._world_name = scenario.world_name
         self._own_context: Context | None = None
@@ -118,39 +119,26 @@ class RosTransport(Transport):
         resolve = self.node.resolve_topic_name
         for topic, (kind, qos) in wired.wanted.items():
             entry = Topic(topic, kind)
+            entry.qos = qos
             entry.recorded = resolve(topic) in wired.recorded
             entry.episodic = topic in wired.episodic
             needed = topic in self._roles.values()
             sub = self.node.create_subscription(ros_type(kind), topic,
-                                                self._callback(entry, needed), profile(qos),
-                                                raw=True)
+                                                receiver(entry, needed, self._deliver),
+                                                profile(qos), raw=True)
             entry.name = sub.topic_name
             self._topics[topic] = entry
 
-    def _callback(self, entry: Topic, needed: bool) -> Callable[[bytes], None]:
-        """Stores the latest message of a topic frames need (decoded) or of one recorded only
-        (just its stamp), and hands it to the tap once it belongs to the episode."""
-        kind = ros_type(entry.type_name)
-        decode_all = needed or not starts_with_stamp(kind)
-
-        def on_message(data: bytes) -> None:
-            if decode_all:
-                entry.msg = deserialize_message(data, kind)
-                stamp = stamp_of(entry.msg)
-            else:  # recorded only: the stamp straight from the CDR bytes, nothing decoded
-                stamp = cdr_stamp(data)
-            stamp = time.time_ns() if stamp is None else stamp
-            entry.stamp_ns = stamp
-            entry.count += 1
-            if self.tap is None or not entry.recorded:
-                return
-            raw = RawMessage(entry.name, entry.type_name, data, self._bag_time(stamp))
-            if self._t0_ns is None:
-                self._pending.append((stamp, raw))
-            elif stamp >= self._t0_ns:
-                self.tap(raw)
-
-        return on_message
+    def _deliver(self, entry: Topic, data: bytes, stamp: int) -> None:
+        """Hands a recorded message to the tap once it belongs to the episode (held while a
+        reset waits for the episode's first stamp)."""
+        if self.tap is None:
+            return
+        raw = RawMessage(entry.name, entry.type_name, data, self._bag_time(stamp))
+        if self._t0_ns is None:
+            self._pending.append((stamp, raw))
+        elif stamp >= self._t0_ns:
+            self.tap(raw)
 
     def _bag_time(self, stamp_ns: int) -> int:
         """Sim time in lockstep (what ``rosbag2 record --use-sim-time`` writes), else the
@@ -159,7 +147,10 @@ class RosTransport(Transport):
 
     # -- waiting --------------------------------------------------------------------------
 
-    def _spin_until(self, done: Callable[[], bool], timeout_s: float | None, what: str) -> None:
+    def _spin_until(self, done: Callable[[], bool], timeout_s: float | None,
+                    what: str | Callable[[], str]) -> None:
+        """Spin until ``done()``; past ``timeout_s``, ``TransportError`` saying ``what`` (or
+        what it returns then) heard nothing."""
         deadline = None if timeout_s is None else time.monotonic() + timeout_s
         while not done():
             if self._closed:
@@ -167,6 +158,7 @@ class RosTransport(Transport):
             remaining = 1.0 if deadline is None else deadline - time.monotonic()
             if remaining <= 0:
                 self._check_one_sim()  # two sims out of step time out: say so, not "no sim"
+                what = what if isinstance(what, str) else what()
                 raise TransportError(f"{what}: nothing within {timeout_s:g} s")
             self._executor.spin_once(timeout_sec=min(remaining, 1.0))
 
@@ -269,26 +261,39 @@ class RosTransport(Transport):
         self.fault = reasons[0] if reasons else None
         return frame
 
+    def _needed(self) -> list[Topic]:
+        """The topics every frame needs: the pose and the task's sensors sent every step."""
+        return [self._topics[t] for role, t in self._roles.items()
+                if role != "goal" and role not in self._once]
+
+    def _check_fresh(self) -> None:
+        """Rate mode: stop the robot and raise ``StaleSensor`` if a needed topic went silent."""
+        reason = stale(self._needed(), self._max_age_s, time.monotonic())
+        if reason is not None:
+            self.step_command(Twist2D())
+            raise StaleSensor(reason)
+
     def _next_frame(self, after_ns: int, *, inclusive: bool) -> SensorFrame:
         """In lockstep, the first full set of needed messages stamped after ``after_ns`` (at
-        it when ``inclusive``); in rate mode, the latest messages."""
-        needed = [self._topics[t] for role, t in self._roles.items()
-                  if role != "goal" and role not in self._once]
-        sync = self._topics[self._sync_topic]
+        it when ``inclusive``); in rate mode, the latest messages, if none is stale. Silence
+        names the topics that sent nothing, with their publishers' QoS."""
+        needed, sync = self._needed(), self._topics[self._sync_topic]
         if self._mode is StepMode.LOCKSTEP:
             status = self._status if self._status_live and not inclusive else None  # a step's
 
-            def ready() -> bool:
+            def late() -> list[Topic]:
                 s = sync.stamp_ns
-                fresh = s >= after_ns if inclusive else s > after_ns
-                return fresh and all(t.stamp_ns >= s for t in needed) and (
-                    status is None or status.stamp_ns >= s)
-            what = f"topic {sync.name}: a message stamped after {after_ns} ns"
+                if not (s >= after_ns if inclusive else s > after_ns):
+                    return [sync]
+                return [t for t in (*needed, *([status] if status else [])) if t.stamp_ns < s]
         else:
-            def ready() -> bool:
-                return all(t.msg is not None for t in needed)
-            what = f"topics {', '.join(t.name for t in needed)}: a first message"
-        self._spin_until(ready, self._timeout_s, what)
+            def late() -> list[Topic]:
+                return [t for t in needed if t.msg is None]
+        keys = {self._topics[t].name: role for role, t in self._roles.items()}
+        self._spin_until(lambda: not late(), self._timeout_s,
+                         lambda: silent(self.node, late(), keys))
+        if self._mode is StepMode.RATE:
+            self._check_fresh()
         return self._frame(sync.stamp_ns)
 
     def _frame(self, stamp_ns: int) -> SensorFrame:
@@ -314,12 +319,7 @@ class RosTransport(Transport):
         return last[1]
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
-        """The QoS the topic's first publisher offers, as the ROS graph reports it (depth 0:
-        DDS does not tell a remote publisher's history depth)."""
-        infos = self.node.get_publishers_info_by_topic(topic)
-        if not infos:
-            return None
-        return settings_of(infos[0].qos_profile)
+        return offered(self.node, topic)
 
     def flush(self) -> None:
         """Lockstep: wait (briefly) until every recorded topic has reached the last frame's

@@ -36,7 +36,7 @@ from rosbags.rosbag2 import Writer, WriterError
 from .contract import (
     FACTS_TOPIC,
     OUTCOME_TOPIC,
-    OUTCOMES,
+    WRITTEN_OUTCOMES,
     ROS_DISTRO,
     STORAGES,
     EpisodeFacts,
@@ -162,12 +162,12 @@ class BagWriter:
             self.commit()
 
     def write_outcome(self, outcome: Outcome | str, stamp_ns: int) -> Outcome:
-        """Publish ``outcome`` (one of the contract's ``OUTCOMES``) and its time (ns) on
-        ``/episode/outcome``; return it."""
+        """Publish ``outcome`` (one of the contract's ``WRITTEN_OUTCOMES``) and its time (ns)
+        on ``/episode/outcome``; return it."""
         word = plain(outcome)
-        if word not in OUTCOMES:
+        if word not in WRITTEN_OUTCOMES:
             raise OutputError(f"{self.path}: outcome {outcome!r} is not one of "
-                              f"{', '.join(OUTCOMES)}")
+                              f"{', '.join(WRITTEN_OUTCOMES)}")
         self.write(OUTCOME_TOPIC, STRING, string_cdr(outcome_event(word, stamp_ns)), stamp_ns)
         return Outcome(word)
 

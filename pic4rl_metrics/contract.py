@@ -41,7 +41,8 @@ CLOCK_TOPIC = "/clock"
 
 #: ``std_msgs/msg/String`` whose ``data`` is a JSON object with the keys of ``FACT_KEYS``.
 FACTS_TOPIC = "/episode/facts"
-#: ``std_msgs/msg/String``; ``data`` is a JSON object ``{"outcome": "goal"|"collision"|"timeout"|"diverged",
+#: ``std_msgs/msg/String``; ``data`` is a JSON object
+#: ``{"outcome": "goal"|"collision"|"timeout"|"diverged"|"aborted",
 #: "stamp_ns": <int, on the pose topic's header time base>}`` or just the outcome word.
 OUTCOME_TOPIC = "/episode/outcome"
 #: ``tf2_msgs/msg/TFMessage``: a real bag's moving transforms, where ``--pose-frames`` reads
@@ -65,8 +66,9 @@ def typestore() -> Typestore:
 
 class Outcome(str, Enum):
     """How an episode ended. ``DIVERGED``: the physics diverged and the episode was cut (not a
-    success, not a collision). ``ABORTED``: no outcome was recorded and the episode is shorter
-    than its time budget (the sim or the tester died mid-episode): not the agent's timeout.
+    success, not a collision). ``ABORTED``: cut short for a reason not the agent's: the env
+    recorded it (a sensor went silent; ``end_reason`` says which), or no outcome was recorded
+    and the episode is shorter than its time budget (the sim or the tester died mid-episode).
     ``UNKNOWN`` when nothing recorded it and it cannot be inferred."""
 
     GOAL = "goal"
@@ -87,9 +89,11 @@ class Outcome(str, Enum):
             raise ConfigError(msg) from err
 
 
-#: The outcome words a writer records (``ABORTED`` and ``UNKNOWN`` are only the reader's
-#: verdicts).
+#: The outcome words of an episode that ran its course (the agent's or the physics' end).
 OUTCOMES = tuple(o.value for o in Outcome if o not in (Outcome.ABORTED, Outcome.UNKNOWN))
+#: The outcome words a writer records: those, and ``aborted`` with an ``end_reason``
+#: (``UNKNOWN`` is only the reader's verdict).
+WRITTEN_OUTCOMES = (*OUTCOMES, Outcome.ABORTED.value)
 #: Outcomes that say nothing of the agent: out of the success rate's denominator.
 UNJUDGED = (Outcome.ABORTED, Outcome.UNKNOWN)
 
@@ -153,6 +157,8 @@ class EpisodeFacts:
     #: Person monitoring: the camera's horizontal field of view (rad), centred on the heading.
     camera_fov_rad: float | None = _fact(decode.positive)
     outcome: Outcome | None = _fact(_outcome)
+    #: Why the env cut the episode short (an ``aborted`` outcome), in words.
+    end_reason: str | None = _fact(decode.text)
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
     extra: Mapping[str, str] = field(default_factory=dict)

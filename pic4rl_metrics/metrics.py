@@ -247,6 +247,9 @@ def data_warnings(d: Derived) -> list[str]:
                 f"{name}: {what} up to {worst:.3g} {unit} in {int(bad.sum())} sample(s), beyond "
                 f"{limit:g} {unit}: physically impossible (damaged bag?); metrics kept as read"
             )
+    if d.facts.outcome is Outcome.ABORTED:
+        out.append(f"aborted by the recorder ({d.facts.end_reason or 'no reason given'}): "
+                   "out of the success rate")
     if d.cut_short and d.outcome is Outcome.ABORTED:
         out.append(f"no outcome recorded and {d.duration_s:.1f} s of its "
                    f"{d.facts.time_budget_s:g} s budget: judged aborted (cut short), out of the "

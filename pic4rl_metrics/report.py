@@ -189,11 +189,13 @@ def _over_note(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
 
 
 def _aborted_note(agg: pd.DataFrame) -> str | None:
-    """Aborted episodes (cut short, no outcome) per row, when any: they are not in "success"."""
+    """Aborted episodes (cut short: no outcome, or a sensor gone silent) per row, when any:
+    they are not in "success"."""
     if "n_aborted" not in agg.columns or not agg["n_aborted"].any():
         return None
     counts = ", ".join(str(int(n)) for n in agg["n_aborted"])
-    return (f"Aborted (cut short with no outcome recorded): n = {counts}; in the success "
+    return (f"Aborted (cut short: no outcome recorded, or a sensor went silent): n = {counts}; "
+            "in the success "
             "rate only with --count-aborted, as failures.")
 
 

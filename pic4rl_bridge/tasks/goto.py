@@ -166,7 +166,7 @@ class GoToPoseLidar(_GoToPose):
         if frame.scan is None:
             raise ValueError("goToPose (lidar): the frame has no scan")
         lidar = self.config.lidar
-        sectors = lidar_sectors(frame.scan.ranges, lidar.beams, lidar.max_range_m)
+        sectors = lidar_sectors(frame.scan, lidar)
         if self.config.normalize_observations:
             sectors /= np.float32(lidar.max_range_m)
         return np.concatenate((sectors, self._goal_vector(frame, context, last_action)))

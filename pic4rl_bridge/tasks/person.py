@@ -81,7 +81,7 @@ class PersonMonitoringTask(Task):
         if frame.scan is None:
             raise ValueError("personMonitoring: the frame has no scan")
         lidar = self.config.lidar
-        sectors = lidar_sectors(frame.scan.ranges, lidar.beams, lidar.max_range_m)
+        sectors = lidar_sectors(frame.scan, lidar)
         distance, bearing = _person(frame)
         assert frame.person is not None  # _person checked it
         walking = math.remainder(frame.person.yaw - frame.pose.yaw, math.tau)

@@ -4,13 +4,17 @@ Sampling draws candidates in batches and tests each batch with one ``clearance``
 episode reset costs about a millisecond. Results depend only on the world and the rng state.
 Pairs of a kind (``PAIR_KINDS``) also bound the straight-line distance and the detour, the
 shortest collision-free path over the straight line (``paths``): a path search per candidate
-pair (tens of milliseconds), run only when a path check is asked for.
+pair (tens of milliseconds), run only when a path check is asked for. In a world with a
+walking person a start also keeps its clearance from where the person walks in the episode's
+first ``PERSON_CLEAR_S`` seconds: a person walking into the robot as the episode starts would
+be a collision of the world's making, not the agent's.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,7 +22,7 @@ import numpy as np
 from ..errors import WorldError, require
 from .engine_config import EngineConfig
 from .geometry import Pose2D
-from .world_spec import WorldSpec
+from .world_spec import PersonSpec, WorldSpec
 
 if TYPE_CHECKING:
     from .paths import PathPlanner
@@ -26,6 +30,9 @@ if TYPE_CHECKING:
 BATCH = 256
 MAX_PATH_CHECKS = 400  # path searches per sampled pair before giving up
 _MIN_GOAL_DISTANCE_M = EngineConfig.min_goal_distance_m  # the sim's own least distance
+#: A sampled start keeps its clearance (plus the person's radius) from everywhere a world's
+#: person walks from the episode's start to this time (s).
+PERSON_CLEAR_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -67,15 +74,28 @@ PAIR_KINDS: dict[str, PairKind] = {
 }
 
 
-def _valid(world: WorldSpec, xy: np.ndarray, clearance_m: float) -> np.ndarray:
-    """Which points of ``xy`` lie ``clearance_m`` inside the bounds and from every obstacle."""
+def _valid(world: WorldSpec, xy: np.ndarray, clearance_m: float, *,
+           start: bool = False) -> np.ndarray:
+    """Which points of ``xy`` lie ``clearance_m`` inside the bounds and from every obstacle;
+    a ``start`` also as far (plus the person's radius) from the person's first
+    ``PERSON_CLEAR_S`` seconds of walk."""
     xmin, ymin, xmax, ymax = world.bounds
     inside = ((xy[:, 0] >= xmin + clearance_m) & (xy[:, 0] <= xmax - clearance_m)
               & (xy[:, 1] >= ymin + clearance_m) & (xy[:, 1] <= ymax - clearance_m))
     ok = np.zeros(len(xy), dtype=bool)
     if inside.any():
         ok[inside] = world.clearance(xy[inside]) >= clearance_m
+    if start and world.person is not None and ok.any():
+        walk = _early_walk(world.person)
+        gap = np.hypot(xy[ok, None, 0] - walk[None, :, 0], xy[ok, None, 1] - walk[None, :, 1])
+        ok[ok] = gap.min(axis=1) >= clearance_m + world.person.radius_m
     return ok
+
+
+@cache
+def _early_walk(person: PersonSpec) -> np.ndarray:
+    """Where ``person`` walks in an episode's first ``PERSON_CLEAR_S`` seconds (k × 2, m)."""
+    return person.positions(PERSON_CLEAR_S)
 
 
 def sample_start_goal(world: WorldSpec, rng: np.random.Generator, *, clearance_m: float,
@@ -145,7 +165,7 @@ class _PairSearch:
         """A spawn and the goal of its own lane, lanes in a random order."""
         lanes = rng.permutation(len(spawn_xy))
         d = np.hypot(*(goal_xy[lanes] - spawn_xy[lanes]).T)
-        ok = (_valid(self.world, spawn_xy[lanes], self.clearance_m)
+        ok = (_valid(self.world, spawn_xy[lanes], self.clearance_m, start=True)
               & _valid(self.world, goal_xy[lanes], self.clearance_m)
               & (d >= self.min_distance_m) & (d <= self.max_distance_m))
         found = self.first_fit(spawn_xy, goal_xy, np.repeat(lanes[ok], 2).reshape(-1, 2))
@@ -158,7 +178,8 @@ class _PairSearch:
               max_tries: int) -> tuple[Pose2D, tuple[float, float]] | None:
         """A pair from the fixed candidates (in a random order) or points drawn in rounds."""
         world, clearance_m = self.world, self.clearance_m
-        starts = _shuffled_valid(world, rng, spawn_xy, clearance_m)  # None: drawn each round
+        starts = _shuffled_valid(world, rng, spawn_xy, clearance_m,  # None: drawn each round
+                                 start=True)
         goals = _shuffled_valid(world, rng, goal_xy, clearance_m)
         xmin, ymin, xmax, ymax = world.bounds
         low = (xmin + clearance_m, ymin + clearance_m)
@@ -169,7 +190,8 @@ class _PairSearch:
         while drawn < max_tries and low[0] <= high[0] and low[1] <= high[1]:
             n = min(BATCH, max_tries - drawn)
             drawn += n * ((starts is None) + (goals is None))
-            s_xy, s_index = starts or (_draw(world, rng, low, high, n, clearance_m), None)
+            s_xy, s_index = starts or (_draw(world, rng, low, high, n, clearance_m, start=True),
+                                       None)
             g_xy, _ = goals or (_draw(world, rng, low, high, n, clearance_m), None)
             rows, cols = np.nonzero(self.apart(s_xy, g_xy))
             if self.planner is not None and len(rows):  # each start's first two goals first
@@ -213,20 +235,23 @@ def sample_pairs(world: WorldSpec, count: int, rng: np.random.Generator, *, clea
 
 
 def _draw(world: WorldSpec, rng: np.random.Generator, low: tuple[float, float],
-          high: tuple[float, float], n: int, clearance_m: float) -> np.ndarray:
-    """The valid ones of ``n`` points drawn uniformly in the rectangle ``low``-``high``."""
+          high: tuple[float, float], n: int, clearance_m: float, *,
+          start: bool = False) -> np.ndarray:
+    """The valid ones (``_valid``) of ``n`` points drawn uniformly in the rectangle
+    ``low``-``high``."""
     xy = rng.uniform(low, high, (n, 2))
-    return xy[_valid(world, xy, clearance_m)]
+    return xy[_valid(world, xy, clearance_m, start=start)]
 
 
 def _shuffled_valid(world: WorldSpec, rng: np.random.Generator, xy: np.ndarray,
-                    clearance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
-    """The valid points of a fixed candidate list and their indices, in random order; None
-    for an empty list (points are then drawn)."""
+                    clearance_m: float, *,
+                    start: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+    """The valid points (``_valid``) of a fixed candidate list and their indices, in random
+    order; None for an empty list (points are then drawn)."""
     if not len(xy):
         return None
     order = rng.permutation(len(xy))
-    order = order[_valid(world, xy[order], clearance_m)]
+    order = order[_valid(world, xy[order], clearance_m, start=start)]
     return xy[order], order
 
 

@@ -92,6 +92,11 @@ class PersonSpec:
         return Pose2D(float(p[0]), float(p[1]), yaw), (float(u[0] * speeds[i]),
                                                         float(u[1] * speeds[i]))
 
+    def positions(self, until_s: float, step_s: float = 0.02) -> np.ndarray:
+        """Where the person is (k × 2, m) every ``step_s`` from time 0 to ``until_s``."""
+        times = np.arange(0.0, until_s + 0.5 * step_s, step_s)
+        return np.array([self.pose_at(float(t))[0][:2] for t in times]).reshape(-1, 2)
+
 
 @dataclass(frozen=True)
 class WorldSpec:

@@ -264,6 +264,22 @@ def test_an_unknown_outcome_is_refused(tmp_path: Path) -> None:
     bag.abort()
 
 
+def test_an_aborted_episode_keeps_its_outcome_and_reason(tmp_path: Path) -> None:
+    """The env's abort (a sensor went silent): outcome ``aborted`` and its ``end_reason`` in
+    ``custom_data``, which the reader decodes; ``unknown`` stays the reader's alone."""
+    with pytest.raises(RecorderError, match="'unknown' is not one of .*diverged, aborted"):
+        RunRecorder(tmp_path, "other").begin().close("unknown", T0_NS)
+    bag = RunRecorder(tmp_path, "run").begin()
+    bag.write(odometry("/odom", T0_NS, 0.0, 0.0))
+    bag.close("aborted", T0_NS, "topic /scan: no message for 0.61 s")
+    messages, custom, _ = read_bag(bag.path)
+    assert custom["outcome"] == "aborted"
+    assert custom["end_reason"] == "topic /scan: no message for 0.61 s"
+    facts, _ = parse_facts(custom, source="custom_data")
+    assert facts.outcome is Outcome.ABORTED and facts.end_reason == custom["end_reason"]
+    assert len(messages["/episode/outcome"]) == 1
+
+
 def test_abort_keeps_a_readable_bag_without_outcome(tmp_path: Path) -> None:
     with RunRecorder(tmp_path, "run").begin() as bag:
         record_line(bag, n=11, outcome=None)

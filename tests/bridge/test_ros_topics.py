@@ -8,7 +8,7 @@ from pic4rl_sim.interfaces import BRIDGE_HISTORY, DEPTH_IMAGE, PLAN, SCAN, QosSe
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.ros_topics import wiring
+from pic4rl_bridge.ros_topics import Topic, stale, wiring
 
 
 def resolve(name: str) -> str:
@@ -84,3 +84,13 @@ def test_a_recorded_only_topic_stamp_is_read_from_its_cdr_bytes() -> None:
         assert isinstance(stamp, Time)
         assert cdr_stamp(serialize_message(msg)) == 12_000_000_345, topic.name
     assert without == {"world/markers"}
+
+
+def test_a_topic_is_stale_past_the_bound_by_arrival_time() -> None:
+    odom, scan = Topic("/odom", "nav_msgs/msg/Odometry"), Topic("/scan", SCAN.type)
+    odom.received_s, scan.received_s = 10.0, 9.3
+    assert stale([odom, scan], 0.5, 10.1) == (
+        "topic /scan: no message for 0.80 s (ros.max_sensor_age_s 0.5 s)")
+    assert stale([odom, scan], 0.5, 9.7) is None
+    never = Topic("/depth", DEPTH_IMAGE.type)  # no message at all: infinitely old
+    assert stale([never], 0.5, 0.0).startswith("topic /depth: no message for inf s")

@@ -149,7 +149,8 @@ def test_aborted_episodes_are_counted_apart_and_out_of_the_success_rate(
     assert counted["success"] == "1/3" and counted["n_aborted"] == 1
     assert counted["success_mean"] == pytest.approx(1 / 3)
     text = render_comparison(aggregate(cut), "markdown")
-    assert "Aborted (cut short with no outcome recorded): n = 1, 0" in text
+    assert ("Aborted (cut short: no outcome recorded, or a sensor went silent): n = 1, 0"
+            in text)
 
 
 # --- Wilson interval --------------------------------------------------------------------------
