@@ -223,6 +223,16 @@ class OpenBag:
             if own:
                 yield own, reader.messages(connections=own)
 
+    def publishers(self, conn: Connection) -> int:
+        """How many publishers the bag recorded on ``conn``'s topic: its offered QoS profiles
+        (rosbag2: one per publisher the recorder saw), and the connections of its storage
+        file on that topic (ROS 1: one per publishing node)."""
+        reader = next(r for r in self._readers if any(c is conn for c in r.connections))
+        same = [c for c in reader.connections if c.topic == conn.topic]
+        nodes = {getattr(c.ext, "callerid", None) or c.id for c in same}
+        profiles = getattr(conn.ext, "offered_qos_profiles", None)
+        return max(len(nodes), len(profiles) if isinstance(profiles, list) else 0)
+
     def decoder(self, conn: Connection) -> Callable[[bytes, str], Any]:
         """The function decoding ``conn``'s raw messages (called with the data and the
         message type); ``BagError`` naming the type that no definition covers."""

@@ -161,7 +161,8 @@ def _run(args: argparse.Namespace) -> MetricsResult:
     topic_map, facts, given = _inputs(args)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
-                   jobs=args.jobs, progress=progress, metrics=args.metrics)
+                   jobs=args.jobs, progress=progress, metrics=args.metrics,
+                   full_scans=args.command == "plot")
 
 
 def _shown(result: MetricsResult, default: Sequence[str], *, numeric: bool) -> list[str]:

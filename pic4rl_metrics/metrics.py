@@ -132,8 +132,9 @@ _register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), qual
 
 @_register("scan_range_mean_m", "m", "mean scan range", ("scan",), quality=True)
 def _scan_range_mean(d: Derived) -> float:
-    valid = _finite(d.valid_ranges)
-    return float(valid.mean()) if valid.size else NAN
+    s = d.scan_summary  # type: ignore[union-attr]
+    count = int(s.n_valid.sum())  # type: ignore[union-attr]
+    return float(s.range_sum_m.sum() / count) if count else NAN  # type: ignore[union-attr]
 
 
 @_register("collision_count", "count", "collisions", ("scan", "footprint"))

@@ -129,7 +129,8 @@ class _Reading:
 
     def judge(self, bag: Path) -> BagResult:
         """The bag's episode and outcome (no other metric), or its error."""
-        return judge_bag(bag, self.topic_map, self.facts, self.given, metrics=("outcome",))
+        return judge_bag(bag, self.topic_map, self.facts, self.given, metrics=("outcome",),
+                         full_scans=True)
 
 
 @dataclass(frozen=True)
