@@ -38,7 +38,7 @@ from rosbags.typesys.store import Typestore
 
 from .contract import typestore
 from .errors import BagError
-from .inputs import COMPRESSED_SUFFIX, ROS1_SUFFIX, is_bag_file, split_parts
+from .inputs import COMPRESSED_SUFFIX, ROS1_SUFFIX, is_bag_file, special, split_parts
 
 if sys.version_info >= (3, 14):
     from compression import zstd
@@ -171,7 +171,13 @@ class OpenBag:
         self._stack.close()
 
     def _parts(self) -> list[Path]:
-        """Storage files (or the rosbag2 directory) that make up the bag."""
+        """Storage files (or the rosbag2 directory) that make up the bag; ``BagError`` for a
+        storage file that is no regular file (opening a FIFO waits for a writer forever)."""
+        for path in (self.path, *(self.path.iterdir() if self.path.is_dir() else ())):
+            kind = special(path)
+            if kind is not None and (path == self.path or is_bag_file(path)):
+                msg = f"{str(path)!r} is {kind}, not a regular file or directory; not read"
+                raise BagError(msg)
         if not self.path.is_dir():
             if not is_bag_file(self.path):
                 msg = f"{str(self.path)!r}: not a bag file (a rosbag2 storage file or a ROS 1 .bag)"

@@ -79,6 +79,8 @@ class MetricsResult:
 
     results: tuple[BagResult, ...]
     columns: tuple[str, ...] = COLUMNS
+    #: Warnings about inputs skipped (``inputs.Discovery.skipped``: a FIFO named ``x.db3``).
+    skipped: tuple[str, ...] = ()
 
     @cached_property
     def frame(self) -> pd.DataFrame:
@@ -163,7 +165,7 @@ def compute(
     work = [(bag, topic_map, facts, given, chosen, full_scans, progress and jobs == 1)
             for bag in found.bags]
     results = run_parallel(_judge_args, work, jobs=jobs, progress=progress, what="bags")
-    return MetricsResult(tuple(unmatched + results), result_columns(names))
+    return MetricsResult(tuple(unmatched + results), result_columns(names), found.skipped)
 
 
 def run_parallel(fn: Callable[[Any], Any], work: Sequence[Any], *, jobs: int, progress: bool,

@@ -207,7 +207,7 @@ def _writing(path: Path) -> Iterator[None]:
 def _report_failures(result: MetricsResult) -> int:
     for failed in result.failed:
         print(f"error: {failed.error}", file=sys.stderr)
-    for problem in REGISTRY.plugin_errors:
+    for problem in (*REGISTRY.plugin_errors, *result.skipped):
         print(f"warning: {problem}", file=sys.stderr)
     for ok in result.results:
         for warning in ok.warnings:

@@ -8,6 +8,7 @@ absent; an existing one is kept unless ``overwrite``. imageio-ffmpeg brings its 
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -23,6 +24,8 @@ from .errors import ConfigError, MetricsError, OutputError
 from .inputs import discover
 from .topics import TopicMap
 from .video import EpisodeScene, VideoOptions, extent, union
+
+log = logging.getLogger(__name__)
 
 #: The columns of the result table.
 VIDEO_COLUMNS = ("bag", "video", "frames", "duration_s", "error")
@@ -216,6 +219,8 @@ def render_videos(inputs: Iterable[str | Path], out: Path | None = None, *,
     ffmpeg_writer()  # a missing encoder is said once, before any work
     found = discover(inputs)
     rows = [VideoResult(item, error=f"{item!r}: {why}") for item, why in found.unmatched]
+    for note in found.skipped:
+        log.warning(note)
     names = video_names(list(found.bags))
     reading = _Reading(topic_map, facts, given)
     threads = 1 if jobs > 1 else 0
