@@ -54,7 +54,7 @@ _EXTRACTORS: dict[str, Callable[[Any, str], Any]] = {
 
 class _BagContents:
     """Raw samples of the mapped topics of one open bag: every topic but the scan in one pass
-    (``read``), then the scan, summarized as it is read with the episode's facts
+    (on opening), then the scan, summarized as it is read with the episode's facts
     (``read_scans``)."""
 
     def __init__(self, path: Path, bag: OpenBag, topic_map: TopicMap, progress: bool) -> None:

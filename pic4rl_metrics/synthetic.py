@@ -33,7 +33,7 @@ from .synthetic_tracks import (
 from .topics import normalize_topic
 
 __all__ = ["DEFAULT_T0_NS", "POSE_TYPES", "Obstacles", "Track", "cast_scan", "circle",
-           "from_waypoints", "speed_ramp", "straight_line", "write_episode_bag"]
+           "from_waypoints", "speed_ramp", "straight_line", "write_episode_bag", "write_long_bag"]
 
 #: Header stamp of ``t_s = 0`` (ns): 2023-11-14, far from zero so that no code can confuse
 #: stamps with durations.
