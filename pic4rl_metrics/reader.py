@@ -29,7 +29,7 @@ from .geometry import Mount
 from .roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from .scan_summary import ScanStream
 from .series import Episode, PoseSeries
-from .timebase import Samples, one_source, pose_series
+from .timebase import ONE_SOURCE_ROLES, Samples, one_source, pose_series
 from .topics import TopicMap, choose_topics
 
 
@@ -41,8 +41,6 @@ def _tf_extract(msg: Any, _msgtype: str) -> list[tf.Row]:
     return tf.tf_rows(msg)
 
 
-#: Roles whose topic one publisher feeds on one robot: more are two sources (``one_source``).
-ONE_SOURCE_ROLES = frozenset({"pose", "scan", "person"})
 #: Bags of at least this many messages show a progress bar when asked (about 20 min of a robot
 #: with 40 Hz scans and 50 Hz odometry).
 LONG_BAG_MESSAGES = 100_000

@@ -45,6 +45,11 @@ class Samples:
         self.topic = ""
 
 
+#: Roles whose topic one publisher feeds on one robot: more are two sources (``one_source``).
+#: Commands may have several (a joystick and a planner through a mux), transforms do.
+ONE_SOURCE_ROLES = frozenset({"pose", "scan", "person"})
+
+
 def one_source(topic: str, publishers: int) -> None:
     """Refuse a sensor topic that the bag records from more than one publisher."""
     if publishers > 1:
