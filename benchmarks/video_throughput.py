@@ -69,7 +69,7 @@ def ours(bag: Path, out: Path, seconds: float) -> float:
 
 def matplotlib_frames(bag: Path, seconds: float):  # noqa: ANN201 - a generator of frames
     """The plain way: one figure, its artists updated and the canvas redrawn every frame."""
-    ep = read_episode(bag)
+    ep = read_episode(bag, full_scans=True)
     t = (ep.pose.t_ns - ep.pose.t_ns[0]) / 1e9
     rows, sx, sy = scan_hits_world(ep)
     ts = (ep.scan.t_ns[rows] - ep.pose.t_ns[0]) / 1e9

@@ -18,7 +18,8 @@ from typing import Any
 _HOMES = {
     "BagResult": "batch", "MetricsResult": "batch", "compute": "batch", "judge_bag": "batch",
     "EpisodeFacts": "contract", "Outcome": "contract",
-    "BagError": "errors", "ConfigError": "errors", "EpisodeError": "errors",
+    "BagError": "errors", "ConfigError": "errors", "CorruptBagError": "errors",
+    "EpisodeError": "errors",
     "MetricsError": "errors", "TopicError": "errors",
     "Footprint": "geometry", "Derived": "derived", "compute_metrics": "metrics",
     "read_episode": "reader",
@@ -51,6 +52,7 @@ __all__ = [
     "BagResult",
     "Derived",
     "ConfigError",
+    "CorruptBagError",
     "Episode",
     "EpisodeError",
     "EpisodeFacts",

@@ -38,7 +38,7 @@ from rosbags.typesys.store import Typestore
 
 from .contract import typestore
 from .errors import BagError
-from .inputs import COMPRESSED_SUFFIX, ROS1_SUFFIX, is_bag_file, split_parts
+from .inputs import COMPRESSED_SUFFIX, ROS1_SUFFIX, is_bag_file, special, split_parts
 
 if sys.version_info >= (3, 14):
     from compression import zstd
@@ -171,7 +171,13 @@ class OpenBag:
         self._stack.close()
 
     def _parts(self) -> list[Path]:
-        """Storage files (or the rosbag2 directory) that make up the bag."""
+        """Storage files (or the rosbag2 directory) that make up the bag; ``BagError`` for a
+        storage file that is no regular file (opening a FIFO waits for a writer forever)."""
+        for path in (self.path, *(self.path.iterdir() if self.path.is_dir() else ())):
+            kind = special(path)
+            if kind is not None and (path == self.path or is_bag_file(path)):
+                msg = f"{str(path)!r} is {kind}, not a regular file or directory; not read"
+                raise BagError(msg)
         if not self.path.is_dir():
             if not is_bag_file(self.path):
                 msg = f"{str(self.path)!r}: not a bag file (a rosbag2 storage file or a ROS 1 .bag)"
@@ -222,6 +228,16 @@ class OpenBag:
             own = [c for c in reader.connections if any(c is w for w in connections)]
             if own:
                 yield own, reader.messages(connections=own)
+
+    def publishers(self, conn: Connection) -> int:
+        """How many publishers the bag recorded on ``conn``'s topic: its offered QoS profiles
+        (rosbag2: one per publisher the recorder saw), and the connections of its storage
+        file on that topic (ROS 1: one per publishing node)."""
+        reader = next(r for r in self._readers if any(c is conn for c in r.connections))
+        same = [c for c in reader.connections if c.topic == conn.topic]
+        nodes = {getattr(c.ext, "callerid", None) or c.id for c in same}
+        profiles = getattr(conn.ext, "offered_qos_profiles", None)
+        return max(len(nodes), len(profiles) if isinstance(profiles, list) else 0)
 
     def decoder(self, conn: Connection) -> Callable[[bytes, str], Any]:
         """The function decoding ``conn``'s raw messages (called with the data and the

@@ -79,6 +79,8 @@ class MetricsResult:
 
     results: tuple[BagResult, ...]
     columns: tuple[str, ...] = COLUMNS
+    #: Warnings about inputs skipped (``inputs.Discovery.skipped``: a FIFO named ``x.db3``).
+    skipped: tuple[str, ...] = ()
 
     @cached_property
     def frame(self) -> pd.DataFrame:
@@ -100,12 +102,16 @@ def judge_bag(
     facts: EpisodeFacts | None = None,
     given: frozenset[str] = frozenset(),
     metrics: Sequence[str] | None = None,
+    full_scans: bool = False,
+    progress: bool = False,
 ) -> BagResult:
     """Read and judge one bag (all metrics, or the named ones); every failure is caught and
-    described, never raised."""
+    described, never raised. ``full_scans``: the episode keeps every beam (plots, videos);
+    ``progress``: a bar on stderr while a long bag is read."""
     try:
         selected = REGISTRY.select(metrics)
-        episode = read_episode(bag, topic_map, facts, given)
+        episode = read_episode(bag, topic_map, facts, given, full_scans=full_scans,
+                               progress=progress)
         judged = compute_metrics(episode, selected, explicit=metrics is not None)
         return BagResult(str(bag), episode, judged)
     except MetricsError as err:
@@ -116,7 +122,8 @@ def judge_bag(
 
 
 def _judge_args(
-    args: tuple[Path, TopicMap | None, EpisodeFacts | None, frozenset[str], Sequence[str] | None],
+    args: tuple[Path, TopicMap | None, EpisodeFacts | None, frozenset[str], Sequence[str] | None,
+                bool, bool],
 ) -> BagResult:
     return judge_bag(*args)
 
@@ -138,12 +145,14 @@ def compute(
     jobs: int = 1,
     progress: bool = False,
     metrics: Sequence[str] | None = None,
+    full_scans: bool = False,
 ) -> MetricsResult:
     """Judge every bag named by ``inputs`` (see ``inputs.discover``), ``jobs`` at a time (0:
     one per core). ``metrics``: the columns to compute (default: every registered metric;
     ``outcome`` and ``success`` always), else ``topic_map.metrics``.
 
-    Inputs that name no bag become error rows too. ``progress`` shows a bar on stderr.
+    Inputs that name no bag become error rows too. ``progress`` shows a bar on stderr (and,
+    one bag at a time, one per long bag). ``full_scans``: the episodes keep every beam.
     Unknown metric names or a negative ``jobs`` raise ``ConfigError``.
     """
     jobs = resolve_jobs(jobs)
@@ -153,9 +162,10 @@ def compute(
     found = discover(inputs)
     unmatched = [BagResult(item, None, None, f"{item!r}: {why}") for item, why in found.unmatched]
     chosen = names if metrics is not None else None
-    work = [(bag, topic_map, facts, given, chosen) for bag in found.bags]
+    work = [(bag, topic_map, facts, given, chosen, full_scans, progress and jobs == 1)
+            for bag in found.bags]
     results = run_parallel(_judge_args, work, jobs=jobs, progress=progress, what="bags")
-    return MetricsResult(tuple(unmatched + results), result_columns(names))
+    return MetricsResult(tuple(unmatched + results), result_columns(names), found.skipped)
 
 
 def run_parallel(fn: Callable[[Any], Any], work: Sequence[Any], *, jobs: int, progress: bool,

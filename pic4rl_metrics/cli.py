@@ -178,7 +178,8 @@ def _run(args: argparse.Namespace) -> MetricsResult:
     topic_map, facts, given = _inputs(args)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
-                   jobs=args.jobs, progress=progress, metrics=args.metrics)
+                   jobs=args.jobs, progress=progress, metrics=args.metrics,
+                   full_scans=args.command == "plot")
 
 
 def _shown(result: MetricsResult, default: Sequence[str], *, numeric: bool) -> list[str]:
@@ -233,7 +234,7 @@ def _check_report_inputs(args: argparse.Namespace) -> None:
 def _report_failures(result: MetricsResult) -> int:
     for failed in result.failed:
         print(f"error: {failed.error}", file=sys.stderr)
-    for problem in REGISTRY.plugin_errors:
+    for problem in (*REGISTRY.plugin_errors, *result.skipped):
         print(f"warning: {problem}", file=sys.stderr)
     for ok in result.results:
         for warning in ok.warnings:

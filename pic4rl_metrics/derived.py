@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .contract import UNJUDGED, EpisodeFacts, Outcome
-from .geometry import Mount, distance_to_polyline
+from .geometry import distance_to_polyline
 from .kinematics import (
     Derivative,
     PathTurning,
@@ -27,8 +27,9 @@ from .kinematics import (
     velocity_series,
 )
 from .roles import SERIES_ROLES
-from .rows import lane_deviations
-from .series import Episode, ScanSeries
+from .rows import deviations
+from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
+from .series import Episode
 
 NAN = float("nan")
 #: Positions closer than this are merged before the path's turning is measured (m).
@@ -36,61 +37,14 @@ TURNING_STEP_M = 0.01
 #: An unrecorded end this far (fraction) or more before the time budget is ``ABORTED``: a
 #: timed-out episode's bag may lack its last step or two, a killed one lacks much more.
 ABORT_SLACK = 0.05
-#: The task whose bags without a centre line get row metrics fitted to the scan.
-ROW_TASK = "vineyard"
-
-
-def _row_min(values: np.ndarray) -> np.ndarray:
-    """Per row, the smallest finite value; NaN for a row without one (also for 0 columns)."""
-    low = np.min(np.where(np.isfinite(values), values, np.inf), axis=1, initial=np.inf)
-    return np.where(np.isinf(low), NAN, low)
-
-
-class ScanClearance(NamedTuple):
-    """Per-scan obstacle figures (m); NaN for a scan with no valid beam."""
-
-    nearest_m: np.ndarray  # nearest valid return (from the sensor)
-    range_mean_m: np.ndarray  # mean of valid returns
-    margin_m: np.ndarray  # signed distance of the nearest return to the footprint
-
-
-def scan_points(
-    scan: ScanSeries, mount: Mount, ranges: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Valid returns (``ranges``: ``scan.valid_ranges()``) as points in the base frame: x and
-    y (n_scans, n_beams), NaN elsewhere; the env's geometry
-    (``pic4rl_bridge.tasks.collision.scan_points``)."""
-    ranges = scan.valid_ranges() if ranges is None else ranges
-    angles = scan.angles
-    if len(angles) and (angles == angles[0]).all():
-        angles = angles[0]  # one scanner: the trigonometry once, not once per scan
-    fx, fy = ranges * np.cos(angles), ranges * np.sin(angles)
-    c, s = math.cos(mount.yaw_rad), math.sin(mount.yaw_rad)
-    return mount.x_m + c * fx - s * fy, mount.y_m + s * fx + c * fy
-
-
-def scan_clearance(
-    scan: ScanSeries, facts: EpisodeFacts, ranges: np.ndarray | None = None
-) -> ScanClearance:
-    """Nearest obstacle per scan, and its signed distance to the footprint when one is known
-    (scan points placed by ``facts.scan_mount``, the base origin when unknown)."""
-    ranges = scan.valid_ranges() if ranges is None else ranges
-    valid = np.isfinite(ranges)
-    count = valid.sum(axis=1)
-    with np.errstate(all="ignore"):
-        mean = np.where(count > 0, np.where(valid, ranges, 0).sum(axis=1) / count, NAN)
-    nearest = _row_min(ranges)
-    if facts.footprint is None:
-        return ScanClearance(nearest, mean, np.full(len(scan), NAN))
-    x, y = scan_points(scan, facts.scan_mount or Mount(), ranges)
-    margin = _row_min(facts.footprint.signed_distance_xy(x, y))
-    return ScanClearance(nearest, mean, margin)
 
 
 class Derived:
     """One episode and what its metrics share, each computed on first use."""
 
     def __init__(self, episode: Episode) -> None:
+        #: ``scan``: the episode's scans, whole (``ScanSeries``) or as the reader summarized
+        #: them (``ScanSummary``); the metrics read them through ``scan_summary``.
         self.episode = episode
         self.facts = episode.facts.with_defaults()
         self.pose = episode.pose
@@ -107,15 +61,22 @@ class Derived:
         return seconds(self.pose.t_ns)
 
     @cached_property
-    def valid_ranges(self) -> np.ndarray:
-        """The scans' valid returns (REP 117), NaN elsewhere."""
-        return self.scan.valid_ranges()  # type: ignore[union-attr]
+    def scan_summary(self) -> ScanSummary | None:
+        """What the metrics use of each scan: the reader's summary, else the summary of the
+        episode's whole scans (``scan_summary.summarize``)."""
+        scan = self.scan
+        if scan is None or isinstance(scan, ScanSummary) and scan.made_for(self.facts):
+            return scan
+        if isinstance(scan, ScanSummary):
+            msg = ("the scans were summarized for another footprint, LiDAR mount or task than "
+                   "the episode's facts; read the bag with full_scans=True")
+            raise ValueError(msg)
+        return summarize(scan, self.facts)
 
     @cached_property
     def clearance(self) -> ScanClearance | None:
-        if self.scan is None:
-            return None
-        return scan_clearance(self.scan, self.facts, self.valid_ranges)
+        s = self.scan_summary
+        return None if s is None else ScanClearance(s.nearest_m, s.range_mean_m, s.margin_m)
 
     @cached_property
     def collision(self) -> np.ndarray | None:
@@ -272,10 +233,9 @@ class Derived:
         if self.facts.row_centerline is not None:
             line = np.asarray(self.facts.row_centerline)
             return self.t_s, distance_to_polyline(self.pose.x, self.pose.y, line), "centerline"
-        if self.facts.task != ROW_TASK or self.scan is None:
+        if self.facts.task != ROW_TASK or self.scan_summary is None:
             return None
-        x, y = scan_points(self.scan, self.facts.scan_mount or Mount(), self.valid_ranges)
-        offsets = lane_deviations(x, y)
+        offsets = deviations(self.scan_summary.lanes)  # type: ignore[arg-type]
         seen = np.isfinite(offsets)
         if not seen.any():
             return None

@@ -15,6 +15,11 @@ class BagError(MetricsError):
     """A bag cannot be found, opened or decoded (corrupt, truncated, empty, unknown type)."""
 
 
+class CorruptBagError(BagError):
+    """A bag's stream holds two sources (two publishers of one sensor topic, header stamps
+    jumping back and forth): refused, never scored."""
+
+
 class TopicError(BagError):
     """A topic the metrics need is missing from a bag or has an unsupported type."""
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import glob
 import re
+import stat
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,10 +55,30 @@ def split_parts(directory: Path) -> list[Path]:
 
 @dataclass(frozen=True)
 class Discovery:
-    """Bags found (sorted, unique) and the inputs that named no bag, with the reason."""
+    """Bags found (sorted, unique), the inputs that named no bag with the reason, and the
+    warnings about what was skipped (neither a regular file nor a directory)."""
 
     bags: tuple[Path, ...]
     unmatched: tuple[tuple[str, str], ...]
+    skipped: tuple[str, ...] = ()
+
+
+def special(path: Path) -> str | None:
+    """What ``path`` is when it exists and is neither a regular file nor a directory (a FIFO,
+    a socket, a device), else None."""
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    kinds = ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"), (stat.S_ISCHR, "a device"),
+             (stat.S_ISBLK, "a device"))
+    return next((name for test, name in kinds if test(mode)), "not a regular file")
+
+
+def _skip_note(path: Path, kind: str) -> str:
+    return f"{str(path)!r} is {kind}, not a regular file or directory; skipped"
 
 
 def _listed_files(bag_dir: Path) -> set[str]:
@@ -83,21 +104,25 @@ def _bag_of_file(path: Path) -> Path:
     return path
 
 
-def _search_dir(root: Path) -> list[Path]:
+def _search_dir(root: Path, skipped: list[str]) -> list[Path]:
     """Bags under ``root``: every dir with ``metadata.yaml`` or a split bag's files, plus
-    unlisted storage files."""
+    unlisted storage files (what is neither a file nor a directory goes to ``skipped``)."""
     if _is_bag_dir(root) or split_parts(root):
         return [root]
     found: list[Path] = []
     for child in sorted(root.iterdir()):
-        if child.is_dir():
-            found.extend(_search_dir(child))
+        kind = special(child)
+        if kind is not None:
+            if is_bag_file(child):
+                skipped.append(_skip_note(child, kind))
+        elif child.is_dir():
+            found.extend(_search_dir(child, skipped))
         elif is_bag_file(child):
             found.append(child)
     return found
 
 
-def _expand(item: str) -> tuple[list[Path], str | None]:
+def _expand(item: str, skipped: list[str]) -> tuple[list[Path], str | None]:
     path = Path(item)
     if path.exists():
         candidates = [path]
@@ -110,8 +135,13 @@ def _expand(item: str) -> tuple[list[Path], str | None]:
 
     bags: list[Path] = []
     for candidate in candidates:
-        if candidate.is_dir():
-            bags.extend(_search_dir(candidate))
+        kind = special(candidate)
+        if kind is not None:
+            skipped.append(_skip_note(candidate, kind))
+            if len(candidates) == 1:
+                return [], None
+        elif candidate.is_dir():
+            bags.extend(_search_dir(candidate, skipped))
         elif candidate.name == METADATA:
             bags.append(candidate.parent)
         elif is_bag_file(candidate):
@@ -127,10 +157,11 @@ def discover(inputs: Iterable[str | Path]) -> Discovery:
     """Resolve inputs to bags, as the user named them; sorted, each bag once."""
     seen: dict[Path, Path] = {}
     unmatched: list[tuple[str, str]] = []
+    skipped: list[str] = []
     for item in inputs:
-        bags, reason = _expand(str(item))
+        bags, reason = _expand(str(item), skipped)
         if reason is not None:
             unmatched.append((str(item), reason))
         for bag in bags:
             seen.setdefault(bag.resolve(), bag)
-    return Discovery(tuple(sorted(seen.values())), tuple(unmatched))
+    return Discovery(tuple(sorted(seen.values())), tuple(unmatched), tuple(dict.fromkeys(skipped)))

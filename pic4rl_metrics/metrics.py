@@ -16,6 +16,7 @@ from .contract import Outcome
 from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
+from .timebase import PLAUSIBLE_SPEED_MPS
 from .series import Episode
 
 #: Below these the robot counts as standing still (m/s, rad/s).
@@ -26,8 +27,8 @@ STILL_YAW_RATE_RADPS = 0.05
 MIN_PATH_M = 0.01
 #: BARN challenge: actual time is clipped to [4, 8] x the optimal time.
 BARN_CLIP = (4.0, 8.0)
-#: Beyond these no ground robot moves: a series that exceeds one is flagged as damaged.
-PLAUSIBLE_SPEED_MPS = 20.0
+#: Beyond these (and ``timebase.PLAUSIBLE_SPEED_MPS``) no ground robot moves: a series that
+#: exceeds one is flagged as damaged.
 PLAUSIBLE_YAW_RATE_RADPS = 50.0
 PLAUSIBLE_ACC_MPS2 = 100.0
 
@@ -132,8 +133,9 @@ _register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), qual
 
 @_register("scan_range_mean_m", "m", "mean scan range", ("scan",), quality=True)
 def _scan_range_mean(d: Derived) -> float:
-    valid = _finite(d.valid_ranges)
-    return float(valid.mean()) if valid.size else NAN
+    s = d.scan_summary  # type: ignore[union-attr]
+    count = int(s.n_valid.sum())  # type: ignore[union-attr]
+    return float(s.range_sum_m.sum() / count) if count else NAN  # type: ignore[union-attr]
 
 
 @_register("collision_count", "count", "collisions", ("scan", "footprint"))

@@ -23,7 +23,7 @@ from .contract import EpisodeFacts, Outcome
 from .geometry import Mount
 from .errors import ConfigError
 from .kinematics import differentiate, seconds, velocity_series
-from .derived import scan_points
+from .scan_summary import scan_points
 from .registry import METRICS
 from .results import EpisodeMetrics
 from .series import Episode, ScanSeries
@@ -48,11 +48,16 @@ def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np
     Each scan is placed at the pose interpolated linearly at its stamp (yaw on the unwrapped
     angle), its beams by the LiDAR's mount (``facts.scan_mount``, the base origin when
     unknown); scans outside the pose time range are dropped rather than extrapolated. The
-    still plots and the episode videos build their map from these.
+    still plots and the episode videos build their map from these. The episode needs its
+    whole scans (``read_episode(..., full_scans=True)``), else ``ValueError``.
     """
     if every < 1:
         raise ValueError(f"every={every!r} must be >= 1")
     scan, pose = episode.scan, episode.pose
+    if scan is not None and not isinstance(scan, ScanSeries):
+        msg = (f"{str(episode.bag)!r}: its scans were kept as per-scan figures only; read it "
+               "with read_episode(..., full_scans=True) to draw their returns")
+        raise ValueError(msg)
     none = (np.zeros(0, dtype=np.intp), np.zeros((0, 0)), np.zeros((0, 0)))
     if scan is None or len(scan) == 0 or len(pose) == 0:
         return none

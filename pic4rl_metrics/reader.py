@@ -9,6 +9,7 @@ do not need it stay. The LiDAR's mount is read from ``/tf_static`` when the fact
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections import defaultdict
@@ -18,15 +19,17 @@ from typing import Any
 
 import numpy as np
 from rosbags.interfaces import Connection
+from tqdm import tqdm
 
 from . import tf
 from .bagfile import OpenBag, bag_errors
 from .contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
-from .errors import ConfigError, EpisodeError
+from .errors import ConfigError, CorruptBagError, EpisodeError
 from .geometry import Mount
 from .roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
-from .series import Episode
-from .timebase import Samples, pose_series
+from .scan_summary import ScanStream
+from .series import Episode, PoseSeries
+from .timebase import ONE_SOURCE_ROLES, Samples, one_source, pose_series
 from .topics import TopicMap, choose_topics
 
 
@@ -38,26 +41,51 @@ def _tf_extract(msg: Any, _msgtype: str) -> list[tf.Row]:
     return tf.tf_rows(msg)
 
 
+#: Bags of at least this many messages show a progress bar when asked (about 20 min of a robot
+#: with 40 Hz scans and 50 Hz odometry).
+LONG_BAG_MESSAGES = 100_000
+
 #: Per role, the payload kept of each message (a TFMessage's transforms whatever the role).
 _EXTRACTORS: dict[str, Callable[[Any, str], Any]] = {
     "pose": pose_row, **{role.name: role.extract for role in ROLES}}
 
 
 class _BagContents:
-    """Raw samples of the mapped topics of one bag, read in one pass."""
+    """Raw samples of the mapped topics of one open bag: every topic but the scan in one pass
+    (on opening), then the scan, summarized as it is read with the episode's facts
+    (``read_scans``)."""
 
-    def __init__(self, path: Path, topic_map: TopicMap) -> None:
+    def __init__(self, path: Path, bag: OpenBag, topic_map: TopicMap, progress: bool) -> None:
         self.path = path
         self.topics: dict[str, Samples] = defaultdict(Samples)
-        with bag_errors(path), OpenBag(path) as bag:
-            available = {c.topic: c.msgtype for c in bag.connections}
-            chosen = choose_topics(topic_map, available, repr(str(path)))
-            self.custom = bag.custom
-            self.pose_topic, self.notes = chosen.pose, list(chosen.notes)
-            conns = [c for c in bag.connections if c.topic in chosen.wanted]
-            self._read(bag, conns, chosen.wanted)
+        available = {c.topic: c.msgtype for c in bag.connections}
+        chosen = choose_topics(topic_map, available, repr(str(path)))
+        self.custom = bag.custom
+        self.pose_topic, self.notes = chosen.pose, list(chosen.notes)
+        self.wanted = chosen.wanted
+        conns = [c for c in bag.connections if c.topic in chosen.wanted]
+        self._scans = [c for c in conns if chosen.wanted[c.topic] == "scan"]
+        self.has_scan = False  # a scan message seen (by ``_frames``, when /tf_static is there)
+        total = sum(c.msgcount for c in conns)
+        self._bar = tqdm(total=total, desc=path.name, unit="msg", leave=False,
+                         disable=not progress or total < LONG_BAG_MESSAGES)
+        for conn in conns:
+            if chosen.wanted[conn.topic] in ONE_SOURCE_ROLES and conn.msgtype != TF_MESSAGE:
+                one_source(conn.topic, bag.publishers(conn))
+        self._read(bag, [c for c in conns if c not in self._scans])
+        if self.topics["tf_static"].rows and self._scans:
+            self._frames(bag, conns)
 
-    def _read(self, bag: OpenBag, conns: list[Connection], wanted: dict[str, str]) -> None:
+    def read_scans(self, bag: OpenBag, facts: EpisodeFacts, full: bool) -> None:
+        """Read the scan topic, reduced to what the metrics use (``ScanStream``; whole scans
+        too when ``full``)."""
+        if self._scans:
+            self.topics["scan"].rows = ScanStream(facts, full=full)
+            self._read(bag, self._scans)
+        self._bar.close()
+
+    def _read(self, bag: OpenBag, conns: list[Connection]) -> None:
+        wanted, update = self.wanted, self._bar.update
         for own, messages in bag.streams(conns):  # one storage file at a time
             # Per connection, resolved once: decoder, extractor and the lists to append to.
             plan = {}
@@ -65,28 +93,31 @@ class _BagContents:
                 role = wanted[conn.topic]
                 extract = _tf_extract if conn.msgtype == TF_MESSAGE else _EXTRACTORS[role]
                 sample = self.topics[role]
+                sample.topic = conn.topic
                 plan[conn.id] = (
                     bag.decoder(conn), conn.msgtype, extract,
                     sample.stamp.append, sample.recv.append, sample.rows.append,
                 )
-            for conn, recv_ns, raw in messages:
+            n = 0
+            for n, (conn, recv_ns, raw) in enumerate(messages, 1):
                 decode, msgtype, extract, add_stamp, add_recv, add_row = plan[conn.id]
                 msg = decode(raw, msgtype)
                 header = getattr(msg, "header", None)
                 add_stamp(_stamp_ns(header) if header is not None else 0)
                 add_recv(recv_ns)
                 add_row(extract(msg, msgtype))
+                if not n % 4096:
+                    update(4096)
+            update(n % 4096)
         for role, conn in ((wanted[c.topic], c) for c in conns):
             if has_header(conn.msgtype):
                 self.topics[role].has_header = True
-        if self.topics["tf_static"].rows and self.topics["scan"].rows:
-            self._frames(bag, conns, wanted)
 
-    def _frames(self, bag: OpenBag, conns: list[Connection], wanted: dict[str, str]) -> None:
+    def _frames(self, bag: OpenBag, conns: list[Connection]) -> None:
         """The scan's frame and the robot's base frame (Odometry's child frame), from the
         first message of each, for placing the LiDAR with ``/tf_static``."""
         for conn in conns:
-            role = wanted[conn.topic]
+            role = self.wanted[conn.topic]
             if role not in ("scan", "pose") or conn.msgtype not in (LASER_SCAN, ODOMETRY):
                 continue
             for _, messages in bag.streams([conn]):
@@ -96,6 +127,7 @@ class _BagContents:
                 msg = bag.decoder(conn)(first[2], conn.msgtype)
                 frame = msg.header.frame_id if role == "scan" else msg.child_frame_id
                 self.topics[role].frame = frame.lstrip("/")
+                self.has_scan |= role == "scan"
                 break
 
 
@@ -137,7 +169,7 @@ def _facts(
             facts = facts.merged(
                 EpisodeFacts(outcome_stamp_ns=stamp), given=frozenset({"outcome_stamp_ns"})
             )
-    if facts.scan_mount is None and bag.topics["tf_static"].rows and bag.topics["scan"].rows:
+    if facts.scan_mount is None and bag.topics["tf_static"].rows and bag.has_scan:
         mount = _mount_from_tf(bag, warnings)
         if mount is not None:
             facts = facts.merged(EpisodeFacts(scan_mount=mount), given=frozenset({"scan_mount"}))
@@ -190,16 +222,43 @@ def read_episode(
     topic_map: TopicMap | None = None,
     facts: EpisodeFacts | None = None,
     given: frozenset[str] = frozenset(),
+    *,
+    full_scans: bool = False,
+    progress: bool = False,
 ) -> Episode:
     """Read the bag at ``path`` (see ``bagfile``) into an ``Episode``.
 
     ``facts``/``given``: values from the command line or a topic map, overriding the bag's.
-    Raises ``BagError``, ``TopicError`` or ``EpisodeError`` naming the bag and the problem.
+    The scan is kept as what the metrics use of it (``ScanSummary``); ``full_scans`` keeps
+    every beam (``ScanSeries``, for plots and videos). ``progress``: a bar on stderr for a
+    long bag. Raises ``BagError`` (``CorruptBagError`` for a bag mixing two sources),
+    ``TopicError`` or ``EpisodeError`` naming the bag and the problem.
     """
     path = Path(path)
     topic_map = topic_map or TopicMap()
-    bag = _BagContents(path, topic_map)
-    warnings: list[str] = list(bag.notes)
+    try:
+        with contextlib.ExitStack() as stack:
+            with bag_errors(path):
+                opened = stack.enter_context(OpenBag(path))
+                bag = _BagContents(path, opened, topic_map, progress)
+            warnings: list[str] = list(bag.notes)
+            pose, offset = _pose(bag, topic_map, warnings)
+            merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
+            with bag_errors(path):
+                bag.read_scans(opened, merged, full_scans)
+            inputs = {name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]
+                      for name, role in SERIES_ROLES.items()}
+    except CorruptBagError as err:
+        raise CorruptBagError(f"{str(path)!r}: {err}") from None
+    return Episode(bag=path, facts=merged, pose=pose, pose_topic=bag.pose_topic, inputs=inputs,
+                   warnings=tuple(warnings))
+
+
+def _pose(bag: _BagContents, topic_map: TopicMap,
+          warnings: list[str]) -> tuple[PoseSeries, int | None]:
+    """The pose series and its header-minus-receive offset (ns); ``EpisodeError`` for fewer
+    than two usable poses."""
+    path = bag.path
     if topic_map.pose_frames is not None:
         bag.topics["pose"] = _tf_pose(bag, topic_map.pose_frames, warnings)
     raw_pose = bag.topics["pose"]
@@ -216,13 +275,4 @@ def read_episode(
             "after dropping NaN and repeated stamps; at least 2 are needed"
         )
         raise EpisodeError(msg)
-    merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
-    return Episode(
-        bag=path,
-        facts=merged,
-        pose=pose,
-        pose_topic=bag.pose_topic,
-        inputs={name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]
-                for name, role in SERIES_ROLES.items()},
-        warnings=tuple(warnings),
-    )
+    return pose, offset

@@ -68,7 +68,12 @@ def fit_lane(x: np.ndarray, y: np.ndarray, width_m: float = math.nan,
     rows when both are seen; from one row and ``width_m`` (the last width seen) when the
     other is not; ``None`` otherwise."""
     x, y = np.asarray(x, dtype=np.float64).ravel(), np.asarray(y, dtype=np.float64).ravel()
-    left, right = fit_side(x, y, 1.0, window), fit_side(x, y, -1.0, window)
+    return _lane(fit_side(x, y, 1.0, window), fit_side(x, y, -1.0, window), width_m)
+
+
+def _lane(left: tuple[float, float] | None, right: tuple[float, float] | None,
+          width_m: float) -> LaneFit | None:
+    """The lane between the rows ``left`` and ``right`` (``fit_side``), see ``fit_lane``."""
     if left is not None and right is not None:
         slope = 0.5 * (left[1] + right[1])
         return LaneFit(0.5 * (left[0] + right[0]), math.atan(slope), left[0] - right[0])
@@ -78,16 +83,38 @@ def fit_lane(x: np.ndarray, y: np.ndarray, width_m: float = math.nan,
     return LaneFit(a - sign * 0.5 * width_m, math.atan(b), width_m)
 
 
+def lane_sides(x: np.ndarray, y: np.ndarray, window: LaneWindow = LaneWindow()) -> np.ndarray:
+    """Per scan (rows of ``x``, ``y``: its points in the base frame, NaN where a beam has no
+    return), the rows it sees: ``(a, b)`` of the left and the right one (``fit_side``), NaN
+    for a side not seen; (n, 4)."""
+    out = np.full((len(x), 4), math.nan)
+    for i in range(len(x)):
+        xi, yi = np.asarray(x[i], dtype=np.float64), np.asarray(y[i], dtype=np.float64)
+        for col, sign in ((0, 1.0), (2, -1.0)):
+            side = fit_side(xi, yi, sign, window)
+            if side is not None:
+                out[i, col:col + 2] = side
+    return out
+
+
+def deviations(sides: np.ndarray) -> np.ndarray:
+    """Per scan, from its ``lane_sides``, the robot's signed distance from the lane's middle
+    (m); NaN until both rows have been seen once, and where no row is seen."""
+    out = np.full(len(sides), math.nan)
+    width = math.nan
+    for i, (la, lb, ra, rb) in enumerate(sides.tolist()):
+        left = None if math.isnan(la) else (la, lb)
+        right = None if math.isnan(ra) else (ra, rb)
+        fit = _lane(left, right, width)
+        if fit is not None:
+            width = fit.width_m
+            out[i] = fit.deviation_m
+    return out
+
+
 def lane_deviations(x: np.ndarray, y: np.ndarray,
                     window: LaneWindow = LaneWindow()) -> np.ndarray:
     """Per scan (rows of ``x``, ``y``: its points in the base frame, NaN where a beam has no
     return), the robot's signed distance from the lane's middle (m); NaN until both rows have
     been seen once, and where no row is seen."""
-    out = np.full(len(x), math.nan)
-    width = math.nan
-    for i in range(len(x)):
-        fit = fit_lane(x[i], y[i], width, window)
-        if fit is not None:
-            width = fit.width_m
-            out[i] = fit.deviation_m
-    return out
+    return deviations(lane_sides(x, y, window))

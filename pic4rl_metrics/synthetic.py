@@ -33,7 +33,7 @@ from .synthetic_tracks import (
 from .topics import normalize_topic
 
 __all__ = ["DEFAULT_T0_NS", "POSE_TYPES", "Obstacles", "Track", "cast_scan", "circle",
-           "from_waypoints", "speed_ramp", "straight_line", "write_episode_bag"]
+           "from_waypoints", "speed_ramp", "straight_line", "write_episode_bag", "write_long_bag"]
 
 #: Header stamp of ``t_s = 0`` (ns): 2023-11-14, far from zero so that no code can confuse
 #: stamps with durations.
@@ -223,3 +223,51 @@ def _write(path: Path, records: list[_Record], storage: str, receive_offset_ns: 
     for ns, _, topic, message in records:
         bag.write_message(topic, message, ns + receive_offset_ns)
     bag.close(values)
+
+
+def write_long_bag(path: Path, minutes: float, *, speed_mps: float = 0.5, odom_hz: float = 50.0,
+                   scan_hz: float = 40.0, n_beams: int = 720, wall_m: float = 2.0,
+                   footprint_radius_m: float = 0.2) -> Path:
+    """A long real-robot-shaped log, fast to write: odometry at ``odom_hz`` along +x at
+    ``speed_mps`` and scans at ``scan_hz`` whose every beam reads ``wall_m + 0.5 sin(t)``
+    (so the nearest obstacle is ``wall_m - 0.5`` and the footprint margin that less the
+    radius); facts carry the circular footprint. For the memory benchmark and its test."""
+    path = Path(path)
+    if path.exists():
+        msg = f"{str(path)!r} exists already; synthetic bags never overwrite"
+        raise FileExistsError(msg)
+    types, store = typestore().types, typestore()
+    odom_cls, scan_cls = types["nav_msgs/msg/Odometry"], types["sensor_msgs/msg/LaserScan"]
+    make = _Messages(straight_line(speed_mps, 1.0), np.zeros(1, dtype=np.int64))
+    odom_ns = DEFAULT_T0_NS + np.round(np.arange(int(minutes * 60 * odom_hz) + 1)
+                                       * 1e9 / odom_hz).astype(np.int64)
+    scan_ns = DEFAULT_T0_NS + np.round(np.arange(int(minutes * 60 * scan_hz) + 1)
+                                       * 1e9 / scan_hz).astype(np.int64)
+    inc = 2 * math.pi / n_beams
+    zeros, cov = np.zeros(0, dtype=np.float32), np.zeros(36)
+    twist = types["geometry_msgs/msg/TwistWithCovariance"](
+        types["geometry_msgs/msg/Twist"](types["geometry_msgs/msg/Vector3"](speed_mps, 0.0, 0.0),
+                                         types["geometry_msgs/msg/Vector3"](0.0, 0.0, 0.0)), cov)
+    bag = BagWriter(path)
+    bag.write_facts({"footprint": {"radius_m": footprint_radius_m}}, int(odom_ns[0]))
+    odom_t, scan_t = odom_ns.tolist(), scan_ns.tolist()
+    i = j = 0
+    while i < len(odom_t) or j < len(scan_t):
+        if j >= len(scan_t) or (i < len(odom_t) and odom_t[i] <= scan_t[j]):
+            ns, t_s = odom_t[i], (odom_t[i] - DEFAULT_T0_NS) * 1e-9
+            pose = types["geometry_msgs/msg/PoseWithCovariance"](make.pose(speed_mps * t_s, 0.0,
+                                                                           0.0), cov)
+            msg = odom_cls(make.header(ns, "odom"), "base_link", pose, twist)
+            bag.write("/odom", "nav_msgs/msg/Odometry",
+                      bytes(store.serialize_cdr(msg, "nav_msgs/msg/Odometry")), ns)
+            i += 1
+        else:
+            ns, t_s = scan_t[j], (scan_t[j] - DEFAULT_T0_NS) * 1e-9
+            ranges = np.full(n_beams, wall_m + 0.5 * math.sin(t_s), dtype=np.float32)
+            msg = scan_cls(make.header(ns, "base_scan"), -math.pi, math.pi - inc, inc, 0.0, 0.0,
+                           0.05, 10.0, ranges, zeros)
+            bag.write(contract.SCAN_TOPIC, "sensor_msgs/msg/LaserScan",
+                      bytes(store.serialize_cdr(msg, "sensor_msgs/msg/LaserScan")), ns)
+            j += 1
+    bag.close({"footprint": {"radius_m": footprint_radius_m}})
+    return path

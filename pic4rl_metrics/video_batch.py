@@ -8,6 +8,7 @@ absent; an existing one is kept unless ``overwrite``. imageio-ffmpeg brings its 
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -24,6 +25,8 @@ from .inputs import discover
 from .paired import pair_key
 from .topics import TopicMap
 from .video import EpisodeScene, VideoOptions, extent, union
+
+log = logging.getLogger(__name__)
 
 #: The columns of the result table.
 VIDEO_COLUMNS = ("bag", "video", "frames", "duration_s", "error")
@@ -130,7 +133,8 @@ class _Reading:
 
     def judge(self, bag: Path) -> BagResult:
         """The bag's episode and outcome (no other metric), or its error."""
-        return judge_bag(bag, self.topic_map, self.facts, self.given, metrics=("outcome",))
+        return judge_bag(bag, self.topic_map, self.facts, self.given, metrics=("outcome",),
+                         full_scans=True)
 
 
 @dataclass(frozen=True)
@@ -207,6 +211,8 @@ def render_videos(inputs: Iterable[str | Path], out: Path | None = None, *,
     ffmpeg_writer()  # a missing encoder is said once, before any work
     found = discover(inputs)
     rows = [VideoResult(item, error=f"{item!r}: {why}") for item, why in found.unmatched]
+    for note in found.skipped:
+        log.warning(note)
     names = video_names(list(found.bags))
     reading = _Reading(topic_map, facts, given)
     threads = 1 if jobs > 1 else 0

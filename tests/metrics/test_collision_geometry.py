@@ -17,7 +17,7 @@ from pic4rl_bridge.frame import ScanData
 from pic4rl_bridge.tasks.collision import footprint_clearance, scan_points
 from pic4rl_metrics import EpisodeFacts, Footprint, compute, read_episode
 from pic4rl_metrics.geometry import Mount
-from pic4rl_metrics.derived import scan_clearance
+from pic4rl_metrics.scan_summary import scan_clearance
 from pic4rl_metrics.series import ScanSeries
 from pic4rl_metrics.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
 from pic4rl_sim.engine.geometry import Pose2D
@@ -143,7 +143,7 @@ def test_recorded_episodes_flag_the_steps_the_env_flagged(tmp_path: Path) -> Non
     result = compute(bags)
     for bag, env_flags, outcome, (_, row) in zip(bags, flags, outcomes, result.frame.iterrows(),
                                                  strict=True):
-        episode = read_episode(bag)
+        episode = read_episode(bag, full_scans=True)
         assert episode.facts.scan_mount is not None
         margin = scan_clearance(episode.scan, episode.facts).margin_m
         judged = list(margin < episode.facts.collision_tolerance_m)

@@ -365,9 +365,12 @@ def test_rectangular_footprint_margins(
         facts={"footprint": footprint},
     )
     ep = read_episode(bag)
-    from pic4rl_metrics.derived import scan_clearance
+    from pic4rl_metrics.scan_summary import scan_clearance
 
-    margin = scan_clearance(ep.scan, ep.facts).margin_m
+    whole = read_episode(bag, full_scans=True)  # every beam kept: the same margins from them
+    np.testing.assert_array_equal(scan_clearance(whole.scan, whole.facts).margin_m,
+                                  ep.scan.margin_m)
+    margin = ep.scan.margin_m
     np.testing.assert_allclose(margin, min_margin, atol=F32)
     m = compute_metrics(ep)
     assert m.outcome == ("collision" if collides else "unknown")

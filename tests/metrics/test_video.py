@@ -43,7 +43,7 @@ def run_cli(argv: list[str]) -> tuple[int, str, str]:
 
 
 def test_the_robot_is_drawn_at_its_pose(tmp_path: Path) -> None:
-    episode = read_episode(bag(tmp_path / "ep"))
+    episode = read_episode(bag(tmp_path / "ep"), full_scans=True)
     scene = EpisodeScene(episode, VideoOptions(fps=10))
     frames = list(scene.frames())
     rr, cc = scene.map_box
@@ -66,7 +66,8 @@ def test_the_frame_count_is_the_playing_time_times_fps(
         tmp_path: Path, duration_s: float, fps: float, speed: float, expected: int) -> None:
     assert frame_count(duration_s, VideoOptions(fps=fps, speed=speed)) == expected
     if expected <= 120:
-        episode = read_episode(bag(tmp_path / "ep", duration_s=max(duration_s, 0.1)))
+        episode = read_episode(bag(tmp_path / "ep", duration_s=max(duration_s, 0.1)),
+                               full_scans=True)
         scene = EpisodeScene(episode, VideoOptions(fps=fps, speed=speed))
         assert sum(1 for _ in scene.frames()) == scene.n_frames
         assert scene.n_frames == max(1, round(scene.duration_s / speed * fps))
@@ -157,7 +158,7 @@ def test_a_real_robot_bag_renders() -> None:
     source = REAL_BAGS / "neato_obstacle_avoider"
     if not source.is_dir():
         pytest.skip("../shared/real_bags not found: real-robot bag tests not run")
-    episode = read_episode(source)
+    episode = read_episode(source, full_scans=True)
     scene = EpisodeScene(episode, VideoOptions(fps=2))
     assert scene.n_frames == round(scene.duration_s * 2) and scene.duration_s > 30
     frames = list(scene.frames())
