@@ -54,7 +54,8 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
     folders = [f for f in folders if f.is_dir()]
     if not folders:
         return pd.DataFrame(columns=[*ROW_KEYS, "success"]), (), None
-    result = compute(folders, jobs=0)  # one process per core: the pass runs on the driver
+    # one process per core (the pass runs on the driver); whole scans: the report draws returns
+    result = compute(folders, jobs=0, full_scans=True)
     frame = result.frame
     by_name = {c.name: c for c in cells}
     rows = [by_name[Path(str(b)).resolve().relative_to(suite.root.resolve()).parts[0]].row

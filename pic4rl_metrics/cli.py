@@ -179,7 +179,7 @@ def _run(args: argparse.Namespace) -> MetricsResult:
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
                    jobs=args.jobs, progress=progress, metrics=args.metrics,
-                   full_scans=args.command == "plot")
+                   full_scans=args.command in ("plot", "report"))  # their maps draw returns
 
 
 def _shown(result: MetricsResult, default: Sequence[str], *, numeric: bool) -> list[str]:
