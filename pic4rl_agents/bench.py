@@ -42,20 +42,20 @@ def _one_line(err: BaseException) -> str:
     return f"{type(err).__name__}: {text[0] if text else ''}"
 
 
-def _cell_process(cell: Cell, root: Path, index: int) -> None:
+def _cell_process(cell: Cell, root: Path) -> None:
     """A pool worker: one attempt at one cell; its error, if any, in ``<cell>/cell.error``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops its workers itself
     try:
-        benchcell.run_cell(cell, root, index=index)
+        benchcell.run_cell(cell, root)
     except Exception as err:  # noqa: BLE001 - any failure of a cell is reported, not raised
         atomic.write_text(benchcell.cell_dir(root, cell) / benchcell.ERROR, _one_line(err))
         os._exit(1)
 
 
-def _ray_cell(cell: Cell, root: str, index: int) -> str | None:
+def _ray_cell(cell: Cell, root: str) -> str | None:
     """A Ray task: one attempt at one cell; its error in one line, or None."""
     try:
-        benchcell.run_cell(cell, Path(root), index=index)
+        benchcell.run_cell(cell, Path(root))
     except Exception as err:  # noqa: BLE001 - returned to the driver, which retries
         return _one_line(err)
     return None
@@ -70,8 +70,8 @@ class LocalPool:
         self.root, self.workers = root, workers
         self._ctx = multiprocessing.get_context("fork")
 
-    def submit(self, cell: Cell, index: int) -> Any:
-        proc = self._ctx.Process(target=_cell_process, args=(cell, self.root, index),
+    def submit(self, cell: Cell) -> Any:
+        proc = self._ctx.Process(target=_cell_process, args=(cell, self.root),
                                  name=f"cell-{cell.name}", daemon=True)
         proc.start()
         return proc
@@ -109,8 +109,8 @@ class RayPool:
         self.name = f"Ray at {address}" if address else f"a local Ray of {workers} CPUs"
         self._task = ray.remote(num_cpus=1, max_retries=0)(_ray_cell)
 
-    def submit(self, cell: Cell, index: int) -> Any:
-        return self._task.remote(cell, str(self.root), index)
+    def submit(self, cell: Cell) -> Any:
+        return self._task.remote(cell, str(self.root))
 
     def ready(self, handles: Sequence[Any], timeout: float) -> list[Any]:
         done, _ = self._ray.wait(list(handles), num_returns=len(handles), timeout=timeout)
@@ -149,7 +149,7 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
     ``retries`` times; the errors of the cells that failed for good, by name."""
     from tqdm import tqdm
 
-    root, index = suite.root, {c.name: i for i, c in enumerate(suite.cells)}
+    root = suite.root
     todo = deque(c for c in suite.cells if not benchcell.state(root, c).done)
     total = {c.name: benchcell.expected_episodes(c) for c in suite.cells}
     counted = {c.name: total[c.name] for c in suite.cells if c not in todo}
@@ -165,7 +165,7 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
             while todo and len(running) < pool.workers:
                 cell = todo.popleft()
                 attempts[cell.name] += 1
-                running[pool.submit(cell, index[cell.name])] = cell
+                running[pool.submit(cell)] = cell
             for handle in pool.ready(list(running), POLL_S):
                 cell = running.pop(handle)
                 error = pool.error(handle, cell)
