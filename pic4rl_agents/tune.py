@@ -168,9 +168,11 @@ def _optimize_on_ray(settings: TuneSettings, n_jobs: int, options: dict[str, Any
     except ImportError as err:
         raise ConfigError("--address: Ray is not installed (pip install 'pic4rl[cluster]')") \
             from err
+    from . import raycluster
+
     shares = _shares(settings, n_jobs, options)
-    ray.init(address=address, num_cpus=n_jobs if address == "local" else None,
-             include_dashboard=False, logging_level="ERROR", log_to_driver=True)
+    raycluster.init(address, num_cpus=n_jobs if address == "local" else None,
+                    include_dashboard=False, logging_level="ERROR", log_to_driver=True)
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(_worker)
         ray.get([task.remote(settings, share) for share in shares])
