@@ -101,6 +101,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
 
 
 @pytest.mark.slow
+@pytest.mark.ray
 def test_trials_run_as_tasks_of_a_ray_cluster_sharing_the_study(tmp_path: Path) -> None:
     """``--address local``: a local Ray of 2 CPUs runs the 2 workers as tasks; both trials
     land in the one SQLite study, each with its own run directory."""

@@ -167,6 +167,7 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
     assert out.count("| goto | dwa |") == 2 and "failed" not in out
 
 
+@pytest.mark.ray
 def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     pytest.importorskip("ray")
     suite = load_suite(_files(tmp_path, baselines=["proportional", "dwa"],
