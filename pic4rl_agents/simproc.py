@@ -7,7 +7,8 @@ first; ``stop_group`` stops the sim after it) and dies with the process that sta
 domain that its retry, or another suite, takes next.
 
 ``domain_lease`` gives a cell a ROS domain that no other holder on this machine has, for as
-long as the cell runs: one lock file per domain under ``<tmp>/pic4rl-ros-domains/``, held with
+long as the cell runs: one lock file per domain under ``/tmp/pic4rl-ros-domains/`` (a fixed
+place, whatever ``TMPDIR`` says: DDS domains are the machine's), held with
 ``flock`` (the kernel drops it when its holder dies, SIGKILL included). The domains tried are
 those after the user's ``ROS_DOMAIN_ID`` (0 if unset), wrapping within 1-101 (DDS's usable
 ids with the default port mapping), the user's own never.
@@ -22,7 +23,6 @@ import os
 import signal
 import subprocess
 import sys
-import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
@@ -30,7 +30,7 @@ from pic4rl_bridge.errors import ConfigError
 
 #: The ROS domain ids a lease chooses from.
 DOMAIN_IDS = range(1, 102)
-LOCKS = Path(tempfile.gettempdir()) / "pic4rl-ros-domains"
+LOCKS = Path("/tmp/pic4rl-ros-domains")
 _PR_SET_PDEATHSIG = 1
 
 

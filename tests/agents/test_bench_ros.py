@@ -1,5 +1,6 @@
 """``transport: ros`` suites side by side: each cell holds a ROS domain of its own (never the
-user's), and a worker SIGKILLed mid-cell takes its sim with it; the retry finishes the cell."""
+user's), and a worker SIGKILLed mid-cell takes its sim with it (leaving no temporary folder);
+the retry finishes the cell."""
 
 from __future__ import annotations
 
@@ -54,8 +55,9 @@ def _domain_of(pid: int) -> int:
 
 def test_two_ros_suites_hold_their_own_domains_and_a_killed_worker_takes_its_sim(
         tmp_path: Path, domain: int) -> None:
+    (tmp_path / "tmp").mkdir()
     env = {**os.environ, "PYTHONPATH": str(REPO), "ROS_DOMAIN_ID": str(domain),
-           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "TMPDIR": str(tmp_path / "tmp")}
     procs = [subprocess.Popen([sys.executable, "-m", "pic4rl_agents.bench",
                                str(_suite(tmp_path / name, name)), "--local", "--workers", "1",
                                "--no-progress"], env=env, stdout=subprocess.PIPE,
@@ -87,6 +89,7 @@ def test_two_ros_suites_hold_their_own_domains_and_a_killed_worker_takes_its_sim
     assert "attempt 1 failed (worker died (exit code -9)); trying again" in outputs[0][1]
     for out, _ in outputs:
         assert "| goto | proportional |" in out and "| 6 |" in out
+    assert not list((tmp_path / "tmp").glob("pic4rl-bench-*"))  # no temporary folder left
 
 
 def test_a_lease_skips_held_domains_and_the_users_own(monkeypatch: pytest.MonkeyPatch) -> None:
