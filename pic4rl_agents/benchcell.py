@@ -148,8 +148,9 @@ def run_cell(cell: Cell, root: Path) -> str:
     folder.mkdir(parents=True, exist_ok=True)
     _set_aside(root, cell, current.unfinished)
     total, first = expected_episodes(cell), len(current.finished)
-    with domain_lease() if cell.transport == "ros" else contextlib.nullcontext(-1) as domain:
-        if first < total:
+    if first < total:
+        ros = cell.transport == "ros"
+        with domain_lease() if ros else contextlib.nullcontext(-1) as domain:
             _drive_from(cell, root, folder, first=first, total=total, domain=domain)
     (folder / ERROR).unlink(missing_ok=True)
     atomic.write_text(folder / DONE, json.dumps({"cell": cell.name, "episodes": total}) + "\n")
