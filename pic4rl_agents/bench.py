@@ -39,26 +39,45 @@ POLL_S = 0.5
 
 def _one_line(err: BaseException) -> str:
     text = str(err).strip().splitlines()
-    return f"{type(err).__name__}: {text[0] if text else ''}"
+    return f"{type(err).__name__}: {text[0]}" if text else f"{type(err).__name__} (no message)"
 
 
-def _cell_process(cell: Cell, root: Path, index: int) -> None:
+def _cell_process(cell: Cell, root: Path) -> None:
     """A pool worker: one attempt at one cell; its error, if any, in ``<cell>/cell.error``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops its workers itself
     try:
-        benchcell.run_cell(cell, root, index=index)
+        benchcell.run_cell(cell, root)
     except Exception as err:  # noqa: BLE001 - any failure of a cell is reported, not raised
         atomic.write_text(benchcell.cell_dir(root, cell) / benchcell.ERROR, _one_line(err))
         os._exit(1)
 
 
-def _ray_cell(cell: Cell, root: str, index: int) -> str | None:
+def _ray_cell(cell: Cell, root: str) -> str | None:
     """A Ray task: one attempt at one cell; its error in one line, or None."""
     try:
-        benchcell.run_cell(cell, Path(root), index=index)
+        benchcell.run_cell(cell, Path(root))
     except Exception as err:  # noqa: BLE001 - returned to the driver, which retries
         return _one_line(err)
     return None
+
+
+def _write_probe(root: str, name: str) -> str | None:
+    """Write ``<root>/<name>`` (where this process runs); why it cannot, or None."""
+    try:
+        Path(root).mkdir(parents=True, exist_ok=True)
+        atomic.write_text(Path(root) / name, name)
+    except OSError as err:
+        return f"{type(err).__name__}: {err.strerror or err}"
+    return None
+
+
+def check_bags(root: Path) -> None:
+    """``ConfigError`` naming the folder and the reason when this machine cannot write the
+    suite's bags folder, before any cell starts."""
+    error = _write_probe(str(root), ".pic4rl-bench-probe")
+    if error is not None:
+        raise ConfigError(f"--bags: cannot write the suite's folder {root} ({error})")
+    (root / ".pic4rl-bench-probe").unlink()
 
 
 class LocalPool:
@@ -70,8 +89,8 @@ class LocalPool:
         self.root, self.workers = root, workers
         self._ctx = multiprocessing.get_context("fork")
 
-    def submit(self, cell: Cell, index: int) -> Any:
-        proc = self._ctx.Process(target=_cell_process, args=(cell, self.root, index),
+    def submit(self, cell: Cell) -> Any:
+        proc = self._ctx.Process(target=_cell_process, args=(cell, self.root),
                                  name=f"cell-{cell.name}", daemon=True)
         proc.start()
         return proc
@@ -101,16 +120,46 @@ class RayPool:
     def __init__(self, root: Path, workers: int, address: str | None) -> None:
         import ray
 
+        from . import raycluster
+
         self._ray = ray
-        ray.init(address=address, num_cpus=None if address else workers,
-                 include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+        raycluster.init(address, num_cpus=None if address else workers,
+                        include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
         self.root = root
         self.workers = 10**6 if address else workers  # a cluster schedules by its own CPUs
         self.name = f"Ray at {address}" if address else f"a local Ray of {workers} CPUs"
         self._task = ray.remote(num_cpus=1, max_retries=0)(_ray_cell)
+        if address:
+            self.check_nodes()
 
-    def submit(self, cell: Cell, index: int) -> Any:
-        return self._task.remote(cell, str(self.root), index)
+    def check_nodes(self, timeout_s: float = 120.0) -> None:
+        """Every node of the cluster writes a file into the bags folder, and this machine
+        sees each: the cells' bags are written where each runs, never shipped back.
+        ``ConfigError`` naming the node otherwise."""
+        from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+        probe = self._ray.remote(num_cpus=0, max_retries=0)(_write_probe)
+        nodes = [n for n in self._ray.nodes() if n["Alive"]]
+        names = [f".pic4rl-bench-node-{n['NodeID'][:12]}" for n in nodes]
+        try:
+            errors = self._ray.get([probe.options(scheduling_strategy=(
+                NodeAffinitySchedulingStrategy(n["NodeID"], soft=False))).remote(
+                    str(self.root), name) for n, name in zip(nodes, names)], timeout=timeout_s)
+        except self._ray.exceptions.RayError as err:
+            raise ConfigError(f"--address: the cluster's {len(nodes)} nodes could not all "
+                              f"check the bags folder ({_one_line(err)})") from None
+        for node, name, error in zip(nodes, names, errors):
+            where = f"node {node['NodeManagerAddress']} ({node['NodeID'][:12]})"
+            if error is None and not (self.root / name).is_file():
+                error = "what it wrote is not in this machine's folder"
+            if error is not None:
+                raise ConfigError(f"--bags {self.root}: {where} cannot write the bags folder "
+                                  f"({error}); every node must see it at the same path (e.g. "
+                                  "NFS)")
+            (self.root / name).unlink()
+
+    def submit(self, cell: Cell) -> Any:
+        return self._task.remote(cell, str(self.root))
 
     def ready(self, handles: Sequence[Any], timeout: float) -> list[Any]:
         done, _ = self._ray.wait(list(handles), num_returns=len(handles), timeout=timeout)
@@ -149,7 +198,7 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
     ``retries`` times; the errors of the cells that failed for good, by name."""
     from tqdm import tqdm
 
-    root, index = suite.root, {c.name: i for i, c in enumerate(suite.cells)}
+    root = suite.root
     todo = deque(c for c in suite.cells if not benchcell.state(root, c).done)
     total = {c.name: benchcell.expected_episodes(c) for c in suite.cells}
     counted = {c.name: total[c.name] for c in suite.cells if c not in todo}
@@ -165,7 +214,7 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
             while todo and len(running) < pool.workers:
                 cell = todo.popleft()
                 attempts[cell.name] += 1
-                running[pool.submit(cell, index[cell.name])] = cell
+                running[pool.submit(cell)] = cell
             for handle in pool.ready(list(running), POLL_S):
                 cell = running.pop(handle)
                 error = pool.error(handle, cell)
@@ -194,7 +243,7 @@ def run_suite(suite: Suite, *, workers: int = 1, address: str | None = None,
               local: bool = False, retries: int | None = None,
               progress: bool = True) -> SuiteTable:
     """Run ``suite``'s unfinished cells and write its results; its table."""
-    suite.root.mkdir(parents=True, exist_ok=True)
+    check_bags(suite.root)
     pool = make_pool(suite.root, workers=workers, address=address, local=local)
     log.info("%d cells on %s", len(suite.cells), pool.name)
     failed = run_cells(suite, pool, retries=suite.retries if retries is None else retries,

@@ -6,17 +6,17 @@ A cell's bags are ``<suite root>/<cell>/<agent>/episode_NNNN/``. A bag is finish
 leaves one unfinished bag; the retry moves it, kept, to ``<suite root>/_unfinished/`` and
 drives the cell's episodes from that index on: the same pairs in the same order (episode k
 drives pair k of the cell's pairs file), so no bag is duplicated or lost. A finished cell gets
-``cell.json`` (written atomically); a rerun skips it.
+``cell.json`` (written atomically); a rerun skips it. A ``transport: ros`` cell holds a ROS
+domain of its own for its life (``simproc.domain_lease``) and starts its sim with the sim's
+params file ``<cell>/sim.yaml``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
-import subprocess
-import sys
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,8 +35,7 @@ DONE = "cell.json"  # a finished cell's marker
 ERROR = "cell.error"  # the last attempt's error, in one line
 PAIRS = "pairs.json"  # a random pair set, drawn once per cell
 UNFINISHED = "_unfinished"  # beside the cells: killed episodes' bags, kept out of the table
-#: ROS domains of sim-node cells: 1 + (cell index mod 100), so cells side by side never share.
-DOMAINS = 100
+SIM_PARAMS = "sim.yaml"  # a ros cell's sim node's params file
 
 
 @dataclass(frozen=True)
@@ -117,10 +116,11 @@ def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:
         os.replace(bag, target)
 
 
-def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int) -> None:
+def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: int,
+           domain: int) -> None:
     """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
     drives sim nodes."""
-    from .launch import stop_group
+    from .simproc import start_sim, stop_group
     from .tester import run_agent
 
     if cell.transport != "ros":
@@ -128,20 +128,20 @@ def _drive(spec: AgentSpec, cell: Cell, *, episodes: int, seed: int, domain: int
         return
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
            os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
-    with tempfile.TemporaryDirectory(prefix="pic4rl-bench-") as tmp:
-        sim_file = Path(tmp) / "sim.yaml"
-        sim_file.write_text(params_file.dump({"/**": spec.run.env.sim_params}))
-        sim = subprocess.Popen([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
-                                "--params-file", str(sim_file)], env=env, start_new_session=True)
-        try:
-            run_agent(spec, episodes=episodes, seed=seed, progress=False)
-        finally:
-            stop_group(sim, 10.0)
+    sim_file = atomic.write_text(folder / SIM_PARAMS,
+                                 params_file.dump({"/**": spec.run.env.sim_params}))
+    sim = start_sim(["--params-file", str(sim_file)], env)
+    try:
+        run_agent(spec, episodes=episodes, seed=seed, progress=False)
+    finally:
+        stop_group(sim, 10.0)
 
 
-def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
+def run_cell(cell: Cell, root: Path) -> str:
     """Drive what is missing of ``cell`` and mark it done; ``"skipped"`` when it was done
     already, else ``"done"``. Errors propagate (the caller retries)."""
+    from .simproc import domain_lease
+
     current = state(root, cell)
     if current.done:
         return "skipped"
@@ -149,21 +149,27 @@ def run_cell(cell: Cell, root: Path, *, index: int = 0) -> str:
     folder.mkdir(parents=True, exist_ok=True)
     _set_aside(root, cell, current.unfinished)
     total, first = expected_episodes(cell), len(current.finished)
-    domain = 1 + index % DOMAINS
     if first < total:
-        own_pairs = bool(cell.pairs.file or cell.pairs.random)
-        file = str(_pairs_file(first, folder)) if own_pairs else ""
-        # A resumed cell's episodes draw their simulator seeds from seed + first.
-        seed = cell.seed + first
-        spec = resolve_agents(_plan(cell, root, episodes=total - first, pairs=file,
-                                    domain=domain), folder)[0]  # its files, read once
-        pairs = _cell_pairs(cell, root, spec.run.env)
-        if pairs is not None:
-            _pairs_from(pairs, first, folder)
-        _drive(spec, cell, episodes=total - first, seed=seed, domain=domain)
+        ros = cell.transport == "ros"
+        with domain_lease() if ros else contextlib.nullcontext(-1) as domain:
+            _drive_from(cell, root, folder, first=first, total=total, domain=domain)
     (folder / ERROR).unlink(missing_ok=True)
     atomic.write_text(folder / DONE, json.dumps({"cell": cell.name, "episodes": total}) + "\n")
     return "done"
+
+
+def _drive_from(cell: Cell, root: Path, folder: Path, *, first: int, total: int,
+                domain: int) -> None:
+    """Drive the cell's episodes ``first`` to ``total - 1``."""
+    own_pairs = bool(cell.pairs.file or cell.pairs.random)
+    file = str(_pairs_file(first, folder)) if own_pairs else ""
+    # A resumed cell's episodes draw their simulator seeds from seed + first.
+    spec = resolve_agents(_plan(cell, root, episodes=total - first, pairs=file,
+                                domain=domain), folder)[0]  # its files, read once
+    pairs = _cell_pairs(cell, root, spec.run.env)
+    if pairs is not None:
+        _pairs_from(pairs, first, folder)
+    _drive(spec, cell, folder, episodes=total - first, seed=cell.seed + first, domain=domain)
 
 
 def expected_episodes(cell: Cell) -> int:

@@ -8,7 +8,8 @@ The command after ``train``/``test`` is ``pic4rl-train``'s or ``pic4rl-test``'s,
 with the env switched to the ROS 2 transport (``-p transport:=ros``). One ``pic4rl-sim`` is
 started per env with the run's ``sim:`` section (``n_envs > 1``: in namespaces ``env_0``,
 ``env_1``, ...), in the same ROS domain. Each process gets its own process group: Ctrl-C
-reaches the trainer first (it saves its model), then the sims are stopped.
+reaches the trainer first (it saves its model), then the sims are stopped; a launcher killed
+outright takes its sims with it (``pic4rl_agents.simproc``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from pic4rl_sim import params_file
 
 from .envs import env_namespace
 from .rosargs import RosArgs, split_ros_args
+from .simproc import start_sim, stop_group
 
 COMMANDS = {"train": "pic4rl_agents.train", "test": "pic4rl_agents.tester"}
 STOP_TIMEOUT_S = 30.0  # a trainer saving its replay buffer may need a while
@@ -47,20 +49,6 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
     from .testplan import first_env
 
     return first_env(build_plan(test_parser().parse_args(plain), ros)), 1
-
-
-def stop_group(proc: subprocess.Popen[bytes], timeout_s: float) -> int:
-    """SIGINT to ``proc``'s group, then SIGKILL if it lingers; its exit code."""
-    if proc.poll() is None:
-        try:
-            os.killpg(proc.pid, signal.SIGINT)
-            proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-        except ProcessLookupError:
-            proc.wait()
-    return proc.returncode
 
 
 def _usage() -> str:
@@ -96,9 +84,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sims: list[subprocess.Popen[bytes]] = []
         for rank in range(n_envs):
             namespace = env_namespace(run_env, rank, n_envs) or "/"
-            cmd = [sys.executable, "-m", "pic4rl_sim.node", "--ros-args", "--params-file",
-                   str(sim_file), "-r", f"__ns:={'/' + namespace.lstrip('/')}"]
-            sims.append(subprocess.Popen(cmd, env=env, start_new_session=True))
+            sims.append(start_sim(["--params-file", str(sim_file),
+                                   "-r", f"__ns:={'/' + namespace.lstrip('/')}"], env))
         child = subprocess.Popen([sys.executable, "-m", COMMANDS[command], *plain,
                                   *ros.as_args()], env=env, start_new_session=True)
         return _watch(command, child, sims)

@@ -107,10 +107,9 @@ class RunDir:
 
     @classmethod
     def new(cls, runs_dir: Path, name: str) -> RunDir:
-        """A fresh run folder ``<runs_dir>/<name>`` (``<name>-2``, ... when that is taken)."""
-        path = free_path(runs_dir / name)
-        path.mkdir(parents=True, exist_ok=True)
-        return cls(path)
+        """A fresh run folder ``<runs_dir>/<name>`` (``<name>-2``, ... when that is taken),
+        claimed atomically: two runs started at once never share one."""
+        return cls(atomic.claim_dir(runs_dir / name))
 
     @classmethod
     def resume(cls, path: Path) -> RunDir:

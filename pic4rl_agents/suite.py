@@ -1,7 +1,7 @@
 """A benchmark suite file (``pic4rl-bench SUITE.yaml``) and the cells it expands to.
 
     suite: table1                # bags under <bags>/<suite>/<cell>/
-    bags: bags                   # default bags
+    bags: bags                   # relative to the suite file; default ./bags
     transport: inprocess         # inprocess | ros (a sim node per cell, its own ROS domain)
     retries: 2                   # a failing cell is tried 1 + retries times
     tasks:                       # one cross product each; a case study is one more entry
@@ -252,5 +252,9 @@ def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite
         seen[cell.name] = seen.get(cell.name, 0) + 1
     twice = [n for n, k in seen.items() if k > 1]
     require(not twice, f"{path}: tasks", twice, "distinct cells (a task name or agent twice?)")
-    bags = Path(bags_dir if bags_dir is not None else data.get("bags", "bags")).absolute()
+    if bags_dir is None and "bags" in data:  # the file's, like its other paths: from it
+        require(isinstance(data["bags"], str) and bool(data["bags"]), f"{path}: bags",
+                data["bags"], "a directory path")
+        bags_dir = path.parent / data["bags"]
+    bags = Path("bags" if bags_dir is None else bags_dir).absolute()
     return Suite(name, path, bags, retries, tuple(cells))

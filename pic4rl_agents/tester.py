@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import shutil
 import signal
 import sys
 import time
@@ -180,20 +181,27 @@ def _check_video() -> None:
 def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestResult:
     """Drive every agent and baseline of ``plan`` (``agents``: as ``resolve_agents(plan)``
     gave them, when resolved already) on the same episodes, each recorded to a bag in a new
-    ``<bags>/<run>``, then judge the bags."""
+    ``<bags>/<run>`` (claimed atomically; removed again when an agent is refused before its
+    first episode), then judge the bags."""
     if plan.video:
         _check_video()
-    run_dir = runs.free_path(plan.bags_dir / (plan.run or time.strftime("test_%Y%m%d-%H%M%S")))
-    specs = [recorded(s, run_dir) for s in (agents or resolve_agents(plan))]
+    specs = list(agents or resolve_agents(plan))
+    run_dir = atomic.claim_dir(plan.bags_dir / (plan.run or time.strftime("test_%Y%m%d-%H%M%S")))
+    specs = [recorded(s, run_dir) for s in specs]
     episode_set = specs[-1].episode_set
     log.info("episodes: %s", episode_set)
     outcomes: dict[str, list[str]] = {}
-    for spec in specs:
-        outcomes[spec.name] = run_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
-                                        progress=plan.progress)
-        headline, words = TASKS[spec.run.env.task].headline
-        log.info("%s: %d/%d %s", spec.name, outcomes[spec.name].count(headline),
-                 len(outcomes[spec.name]), words)
+    try:
+        for spec in specs:
+            outcomes[spec.name] = run_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
+                                            progress=plan.progress)
+            headline, words = TASKS[spec.run.env.task].headline
+            log.info("%s: %d/%d %s", spec.name, outcomes[spec.name].count(headline),
+                     len(outcomes[spec.name]), words)
+    except BaseException:
+        if not any(run_dir.glob("*/episode_*")):  # refused before any episode: no trace
+            shutil.rmtree(run_dir, ignore_errors=True)
+        raise
     table, failed = judge(run_dir, specs[0].run.env.task, with_std=plan.with_std)
     videos: tuple[str, ...] = ()
     if plan.video:

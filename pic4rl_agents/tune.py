@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import logging
 import math
 import multiprocessing
 import sys
@@ -39,10 +38,9 @@ from .callbacks import SeededEvalCallback
 from .config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
 from .overrides import check_overrides, parse_overrides
 from .console import console_logging
-from .tune_settings import TuneSettings
-from .tune_summary import write_summary
-
-log = logging.getLogger(__name__)
+from .tune_settings import TrialSeeded, TuneSettings
+from .tune_space import Fixing
+from .tune_summary import log_trial, write_summary
 
 OBJECTIVES = ("success_rate", "mean_reward")
 
@@ -72,10 +70,11 @@ class TrialReport(BaseCallback):
 
 
 def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any]:
-    """The trial's trainer parameters: the algorithm's sampler, then ``fixed`` (which wins);
-    kept in the trial's user attribute ``hyperparams`` for the best params file."""
+    """The trial's trainer parameters: the algorithm's sampler (drawing none that ``fixed``
+    holds), then ``fixed`` (which wins); kept in the trial's user attribute ``hyperparams``
+    for the best params file and ``trials.csv``."""
     algorithm = base.train.algorithm
-    sampled = ALGORITHM_TABLE[algorithm].sampler(trial, base.train.n_envs)
+    sampled = ALGORITHM_TABLE[algorithm].sampler(Fixing(trial, fixed), base.train.n_envs)
     params = {**sampled, "algorithm": algorithm, **fixed}
     trial.set_user_attr("hyperparams", params)
     return params
@@ -108,28 +107,13 @@ def objective(trial: optuna.Trial, settings: TuneSettings) -> float:
     return float(last[settings.objective])
 
 
-def _log_trial(study: Any, trial: Any) -> None:
-    attrs = trial.user_attrs
-    state = trial.state.name.lower()
-    if "success_rate" in attrs:
-        what = (f"success {attrs['success_rate']:.2f}, reward {attrs['mean_reward']:.1f}, "
-                f"length {attrs['mean_length']:.0f} at {attrs['steps']:.0f} steps, "
-                f"{attrs['train_wall_s']:.0f} s")
-    else:
-        what = "no evaluation"
-    try:
-        best = f"; best so far: trial {study.best_trial.number} ({study.best_value:.3g})"
-    except ValueError:  # no completed trial yet
-        best = ""
-    log.info("trial %d %s: %s%s", trial.number, state, what, best)
-
-
 def create_study(settings: TuneSettings, *, pruner: str = "median", n_startup_trials: int = 5,
                  seed: int = 0) -> Any:
     """The study in ``settings.storage`` (created, or loaded when it exists: trials on
-    several machines share it): TPE sampler, and RL Zoo's median pruner (no pruning before
-    ``n_startup_trials`` trials completed, nor in the first third of a trial's evaluations)."""
-    sampler = optuna.samplers.TPESampler(n_startup_trials=n_startup_trials, seed=seed)
+    several machines share it): TPE seeded per trial (``TrialSeeded``: a resumed study draws
+    anew), and RL Zoo's median pruner (no pruning before ``n_startup_trials`` trials
+    completed, nor in the first third of a trial's evaluations)."""
+    sampler = TrialSeeded(seed, n_startup_trials)
     if pruner == "median":
         chosen: Any = optuna.pruners.MedianPruner(n_startup_trials=n_startup_trials,
                                                   n_warmup_steps=settings.n_evaluations // 3)
@@ -145,31 +129,37 @@ def optimize(settings: TuneSettings, *, n_trials: int, timeout_s: float | None =
     """Run ``n_trials`` trials in this process (fewer when ``timeout_s`` passes first); the
     summary is rewritten after each. A trial whose config is refused fails, and the next
     goes on."""
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    optuna.logging.set_verbosity(optuna.logging.ERROR)  # each trial's line is log_trial's
     study = create_study(settings, pruner=pruner, n_startup_trials=n_startup_trials, seed=seed)
 
     def after(study: Any, trial: Any) -> None:
-        _log_trial(study, trial)
+        log_trial(study, trial)
         write_summary(study, settings)
 
-    study.optimize(lambda trial: objective(trial, settings), n_trials=n_trials,
-                   timeout=timeout_s, catch=(ConfigError, BridgeError), callbacks=[after])
+    def run(trial: optuna.Trial) -> float:
+        try:
+            return objective(trial, settings)
+        except (ConfigError, BridgeError) as err:
+            trial.set_user_attr("error", str(err))
+            raise
+
+    study.optimize(run, n_trials=n_trials, timeout=timeout_s, catch=(ConfigError, BridgeError),
+                   callbacks=[after])
     return study
 
 
-def _shares(settings: TuneSettings, n_jobs: int, seed: int,
+def _shares(settings: TuneSettings, n_jobs: int,
             options: dict[str, Any]) -> list[dict[str, Any]]:
-    """Each worker's ``optimize`` options: the trials split among ``n_jobs`` workers, TPE
-    seeded per worker so that they do not sample alike. Creates the study first, once, before
-    the workers load it."""
+    """Each worker's ``optimize`` options: the trials split among ``n_jobs`` workers (their
+    trials' numbers, hence their draws, differ). Creates the study first, once, before the
+    workers load it."""
     create_study(settings)
     counts = [options["n_trials"] // n_jobs + (i < options["n_trials"] % n_jobs)
               for i in range(n_jobs)]
-    return [{**options, "n_trials": count, "seed": seed + i}
-            for i, count in enumerate(counts) if count > 0]
+    return [{**options, "n_trials": count} for count in counts if count > 0]
 
 
-def _optimize_on_ray(settings: TuneSettings, n_jobs: int, seed: int, options: dict[str, Any],
+def _optimize_on_ray(settings: TuneSettings, n_jobs: int, options: dict[str, Any],
                      address: str) -> Any:
     """The workers as Ray tasks (one CPU each) on the cluster at ``address``, sharing the
     study's storage; Ray is the ``cluster`` extra."""
@@ -178,9 +168,11 @@ def _optimize_on_ray(settings: TuneSettings, n_jobs: int, seed: int, options: di
     except ImportError as err:
         raise ConfigError("--address: Ray is not installed (pip install 'pic4rl[cluster]')") \
             from err
-    shares = _shares(settings, n_jobs, seed, options)
-    ray.init(address=address, num_cpus=n_jobs if address == "local" else None,
-             include_dashboard=False, logging_level="ERROR", log_to_driver=True)
+    from . import raycluster
+
+    shares = _shares(settings, n_jobs, options)
+    raycluster.init(address, num_cpus=n_jobs if address == "local" else None,
+                    include_dashboard=False, logging_level="ERROR", log_to_driver=True)
     try:
         task = ray.remote(num_cpus=1, max_retries=0)(_worker)
         ray.get([task.remote(settings, share) for share in shares])
@@ -200,6 +192,7 @@ def _console() -> Iterator[None]:
     stderr."""
     with console_logging(__name__, "pic4rl-tune: %(message)s", stream=sys.stdout), \
             console_logging("pic4rl_agents.tune_summary", "pic4rl-tune: %(message)s"), \
+            console_logging("pic4rl_agents.tune_settings", "pic4rl-tune: %(message)s"), \
             console_logging("pic4rl_agents.train", "pic4rl-train: %(message)s"):
         yield
 
@@ -237,7 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--pruner", choices=("median", "none"), default="median")
     parser.add_argument("--n-startup-trials", type=int, default=5,
                         help="trials before the pruner and TPE start (default 5)")
-    parser.add_argument("--seed", type=int, default=0, help="the sampler's seed")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="the sampler's seed (trial n draws from seed + n)")
     parser.add_argument("--hyperparams", nargs="+", default=[], metavar="KEY:VALUE",
                         help="trainer parameters fixed in every trial (they win over the "
                              "sampler's)")
@@ -285,26 +279,28 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _tune(args: argparse.Namespace) -> int:
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
     settings: TuneSettings | None = None
     try:
         settings = settings_from(args)
         options = {"n_trials": args.n_trials, "timeout_s": args.timeout, "pruner": args.pruner,
-                   "n_startup_trials": args.n_startup_trials}
+                   "n_startup_trials": args.n_startup_trials, "seed": args.seed}
         print(f"pic4rl-tune: study {settings.study_name!r} in {settings.study_dir} "
               f"({settings.storage}), {args.n_trials} trials of {settings.base.train.algorithm}"
               f", {args.n_jobs} job(s)", flush=True)
         started = time.perf_counter()
         if args.address:
-            study = _optimize_on_ray(settings, args.n_jobs, args.seed, options, args.address)
+            study = _optimize_on_ray(settings, args.n_jobs, options, args.address)
         elif args.n_jobs == 1:
-            study = optimize(settings, seed=args.seed, **options)
+            study = optimize(settings, **options)
         else:
             study = _optimize_in_processes(settings, args.n_jobs, args.seed, options)
     except KeyboardInterrupt:
-        print("\npic4rl-tune: interrupted", file=sys.stderr)
         if settings is not None:
-            write_summary(create_study(settings), settings, final=True)
+            with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C: the summary as is
+                write_summary(create_study(settings), settings, final=True)
+        where = f"; the summary is in {settings.study_dir}" if settings is not None else ""
+        print(f"pic4rl-tune: interrupted{where}", file=sys.stderr)
         return 130
     except (ConfigError, BridgeError) as err:
         print(f"pic4rl-tune: {err}", file=sys.stderr)
@@ -321,14 +317,13 @@ def _tune(args: argparse.Namespace) -> int:
     return 0
 
 
-def _optimize_in_processes(settings: TuneSettings, n_jobs: int, seed: int,
-                           options: dict[str, Any]) -> Any:
+def _optimize_in_processes(settings: TuneSettings, n_jobs: int, options: dict[str, Any]) -> Any:
     """``n_jobs`` processes, each running ``optimize`` on the shared storage (threads would
     share one interpreter lock: the env and SB3's loop are Python); trials are split among
-    them and TPE is seeded per worker so that they do not sample alike."""
+    them."""
     context = multiprocessing.get_context("spawn")
     workers = [context.Process(target=_worker, args=(settings, share))
-               for share in _shares(settings, n_jobs, seed, options)]
+               for share in _shares(settings, n_jobs, options)]
     for worker in workers:
         worker.start()
     try:

@@ -1,6 +1,9 @@
 """The search space of ``pic4rl-tune``: hyperparameter samplers as RL Zoo's, each an Optuna
 trial and the run's ``n_envs`` → dotted trainer parameters; ``pic4rl_agents.algorithm_table``
-gives each algorithm its own (the pair samplers are ``pic4rl_sim.engine.sampling``'s)."""
+gives each algorithm its own (the pair samplers are ``pic4rl_sim.engine.sampling``'s).
+
+``Fixing`` draws nothing for a parameter that ``--hyperparams`` fixes (the draws' seeds:
+``pic4rl_agents.tune_settings.TrialSeeded``)."""
 
 from __future__ import annotations
 
@@ -8,6 +11,37 @@ from typing import Any
 
 #: Hidden layers of the actor and of each critic, by the sampler's name for them.
 NET_ARCHS = {"small": [64, 64], "medium": [128, 128], "big": [256, 256]}
+#: The trainer keys of a sampler's parameter whose name is not its key; ``DERIVED``: the
+#: value is not the key's own (the key is computed from it).
+KEYS = {"net_arch": ("policy.net_arch", "policy.critic_arch"),
+        "gradient_steps_ratio": ("gradient_steps",), "epsilon_initial": ("epsilon.initial",),
+        "n_steps": ("ppo.n_steps",), "n_epochs": ("ppo.n_epochs",),
+        "ent_coef": ("ppo.ent_coef",), "gae_lambda": ("ppo.gae_lambda",),
+        "clip_range": ("ppo.clip_range",), "activation": ("policy.activation",)}
+DERIVED = ("net_arch", "gradient_steps_ratio")
+
+
+class Fixing:
+    """An Optuna trial as a sampler sees it: a parameter whose trainer keys are all in
+    ``fixed`` is not drawn (the trial's params and ``trials.csv`` show only what was), and
+    reads as the fixed value (a derived one as its first choice: the fixed key wins)."""
+
+    def __init__(self, trial: Any, fixed: dict[str, Any]) -> None:
+        self.trial, self.fixed = trial, fixed
+
+    def _fixed(self, name: str, default: Any) -> tuple[bool, Any]:
+        keys = KEYS.get(name, (name,))
+        if not all(k in self.fixed for k in keys):
+            return False, None
+        return True, default if name in DERIVED else self.fixed[keys[0]]
+
+    def suggest_categorical(self, name: str, choices: list[Any]) -> Any:
+        fixed, value = self._fixed(name, choices[0])
+        return value if fixed else self.trial.suggest_categorical(name, choices)
+
+    def suggest_float(self, name: str, low: float, high: float, *, log: bool = False) -> float:
+        fixed, value = self._fixed(name, low)
+        return value if fixed else self.trial.suggest_float(name, low, high, log=log)
 
 
 def _common(trial: Any) -> dict[str, Any]:

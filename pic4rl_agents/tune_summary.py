@@ -1,6 +1,7 @@
 """The summary of a ``pic4rl-tune`` study, in its folder, rewritten after every trial:
-``trials.csv``, ``best_trial.yaml``, ``best_params.yaml`` (a params file ``pic4rl-train``
-takes as it is), and at the end ``importances.yaml`` and ``eval_curves.png``."""
+``trials.csv`` (with the trainer parameters each trial used), ``best_trial.yaml``, ``best_params.yaml`` (a params file ``pic4rl-train``
+takes as it is), and at the end ``importances.yaml`` and ``eval_curves.png``; and each
+trial's line as it ends."""
 
 from __future__ import annotations
 
@@ -15,9 +16,29 @@ import yaml
 from pic4rl_metrics import atomic
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from .tune_settings import TuneSettings
 
 log = logging.getLogger(__name__)
+trial_log = logging.getLogger("pic4rl_agents.tune")  # the trials' lines, on stdout
+
+
+def log_trial(study: Any, trial: Any) -> None:
+    """One line for a finished trial: its state, its last evaluation (or why it failed), and
+    the best trial so far."""
+    attrs = trial.user_attrs
+    if "success_rate" in attrs:
+        what = (f"success {attrs['success_rate']:.2f}, reward {attrs['mean_reward']:.1f}, "
+                f"length {attrs['mean_length']:.0f} at {attrs['steps']:.0f} steps, "
+                f"{attrs['train_wall_s']:.0f} s")
+    else:
+        what = attrs.get("error", "no evaluation")
+    try:
+        best = f"; best so far: trial {study.best_trial.number} ({study.best_value:.3g})"
+    except ValueError:  # no completed trial yet
+        best = ""
+    trial_log.info("trial %d %s: %s%s", trial.number, trial.state.name.lower(), what, best)
 
 
 def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) -> None:
@@ -26,7 +47,7 @@ def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) ->
     from optuna.trial import TrialState
 
     folder = settings.study_dir
-    _write(folder / "trials.csv", study.trials_dataframe().to_csv(index=False))
+    _write(folder / "trials.csv", trials_table(study).to_csv(index=False))
     complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
     if not complete:
         return
@@ -41,6 +62,20 @@ def write_summary(study: Any, settings: TuneSettings, *, final: bool = False) ->
     if final:
         _write_importances(study, folder)
         _write_curves(complete, folder)
+
+
+def trials_table(study: Any) -> pd.DataFrame:
+    """Optuna's table of the trials, each trial's trainer parameters as it used them (drawn or
+    fixed by ``--hyperparams``) in columns ``hyperparams.<key>`` instead of one dict."""
+    import pandas as pd
+
+    frame = study.trials_dataframe()
+    if "user_attrs_hyperparams" not in frame:
+        return frame
+    used = [h if isinstance(h, dict) else {} for h in frame.pop("user_attrs_hyperparams")]
+    values = pd.DataFrame([{k: str(v) if isinstance(v, (list, dict)) else v
+                            for k, v in h.items()} for h in used], index=frame.index)
+    return pd.concat([frame, values.add_prefix("hyperparams.")], axis=1)
 
 
 def _write_importances(study: Any, folder: Path) -> None:

@@ -3,6 +3,8 @@ over it (``os.replace``), so a process killed mid-write leaves the previous file
 never half of one. The metrics' tables, figures and videos go this way, and the agents'
 checkpoints, replay buffers, configs, summaries and curves.
 
+``claim_dir`` gives a new run folder the same way: created exclusively, never shared.
+
 A temporary file is hidden (``.<name>.<random>.tmp<suffix>``): no run-directory glob sees it,
 and the suffix is the target's, since SB3 appends ``.zip`` or ``.pkl`` to a path without one.
 """
@@ -71,6 +73,21 @@ def numbered(path: Path, n: int, *, keep_suffix: bool = False) -> Path:
         return path
     stem, suffix = (path.stem, path.suffix) if keep_suffix else (path.name, "")
     return path.with_name(f"{stem}-{n}{suffix}")
+
+
+def claim_dir(path: str | Path) -> Path:
+    """The first of ``numbered(path, 1)``, ``numbered(path, 2)``, ... that this call creates
+    (its parents made): ``os.mkdir`` is exclusive, so processes claiming the same name at once
+    each get a folder of their own."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    n = 1
+    while True:
+        try:
+            numbered(path, n).mkdir()
+            return numbered(path, n)
+        except FileExistsError:
+            n += 1
 
 
 def series_index(path: Path, first: Path) -> int | None:

@@ -336,6 +336,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             executor.spin_once(timeout_sec=1.0)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except _rclpy.RCLError:  # a step's publish after Ctrl-C shut the context: stopping
+        if executor.context.ok():
+            raise
     finally:
         executor.shutdown()
         node.destroy_node()

@@ -1,7 +1,8 @@
 """``pic4rl-test`` in process: a trained agent and the proportional baseline drive the same
 recorded episodes (the default indoor pairs, or ``--random N`` pairs from the simulator),
 every bag is judged by ``pic4rl_metrics``, and the table has a row per agent; a taken run
-name gets a suffix; a model tested with another sensor or a missing agent exits 2. The
+name gets a suffix, claimed atomically; a model tested with another sensor or a missing agent
+exits 2, leaving no run folder. The
 default test pairs are free space in the indoor world."""
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ import io
 import json
 import math
 import re
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +28,7 @@ from pic4rl_agents.rosargs import split_ros_args
 from pic4rl_agents.testplan import DEFAULT_PAIRS, AgentSpec, resolve_agents
 from pic4rl_bridge.config import load_env_config
 from pic4rl_metrics.aggregate import aggregate
+from pic4rl_metrics.atomic import claim_dir
 from pic4rl_metrics.batch import MetricsResult, compute
 from pic4rl_sim.engine.core import EngineConfig
 from pic4rl_sim.engine.robot_specs import JACKAL
@@ -152,7 +156,21 @@ def test_a_model_tested_with_another_sensor_exits_2(trained_run: TrainedRun,
         r"Dict\(depth: Box\(1x\d+x\d+\) in \[\S+, \S+\], goal: Box\(\d+\) in \[\S+, \S+\]\); "
         r"use the sensor and settings it was trained with", line), line
     assert out == ""
-    assert not list(tmp_path.rglob("*.db3"))
+    assert not (tmp_path / "w").exists()  # a refused agent leaves no run folder behind
+
+
+def test_runs_claiming_one_name_at_once_each_get_their_own_folder(tmp_path: Path) -> None:
+    """``atomic.claim_dir``, as ``pic4rl-test --run`` and ``pic4rl-train`` claim theirs:
+    16 threads released together each create a folder of their own."""
+    start = threading.Barrier(16)
+
+    def claim(_: int) -> Path:
+        start.wait()
+        return claim_dir(tmp_path / "bags" / "r")
+
+    with ThreadPoolExecutor(16) as pool:
+        claimed = list(pool.map(claim, range(16)))
+    assert sorted(p.name for p in claimed) == sorted(["r"] + [f"r-{n}" for n in range(2, 17)])
 
 
 @pytest.mark.bad_input

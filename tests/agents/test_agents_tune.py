@@ -6,6 +6,12 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import optuna
@@ -15,6 +21,7 @@ import yaml
 from agents_helpers import LIDAR_TD3
 
 from pic4rl_agents import tune, tune_space
+from pic4rl_agents.tune_summary import write_summary
 from pic4rl_agents.config import ALGORITHM_NAMES, load_run_config
 
 #: Trials of seconds: tiny nets, 200 steps, 2 evaluations of 1 episode each. Episodes of 30
@@ -74,6 +81,10 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
 
     table = pd.read_csv(study_dir / "trials.csv")
     assert table["state"].tolist() == states and "params_learning_rate" in table
+    # As each trial used it: fixed (--hyperparams learning_starts:50), or the other's draw.
+    used = [50, other.params["learning_starts"], 50]
+    assert table["hyperparams.learning_starts"].tolist() == used
+    assert table["params_learning_starts"].isna().tolist() == [True, False, True]
     best = yaml.safe_load((study_dir / "best_trial.yaml").read_text())
     assert best["number"] == 1 and best["value"] == 1.0
 
@@ -90,6 +101,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
 
 
 @pytest.mark.slow
+@pytest.mark.ray
 def test_trials_run_as_tasks_of_a_ray_cluster_sharing_the_study(tmp_path: Path) -> None:
     """``--address local``: a local Ray of 2 CPUs runs the 2 workers as tasks; both trials
     land in the one SQLite study, each with its own run directory."""
@@ -103,6 +115,57 @@ def test_trials_run_as_tasks_of_a_ray_cluster_sharing_the_study(tmp_path: Path) 
     assert [t.state.name for t in study.trials] == ["COMPLETE", "COMPLETE"]
     assert sorted(p.name for p in (study_dir / "trials").iterdir()) == ["trial_0", "trial_1"]
     assert "2 trials in the study" in out
+
+
+def test_a_resumed_study_draws_new_parameters(tmp_path: Path) -> None:
+    """Two sessions of two trials on one study, as two runs of ``pic4rl-tune --seed 0``: the
+    second session's trials draw anew (seeded by their numbers), and what ``--hyperparams``
+    fixes is what trials.csv shows."""
+    settings = tune.settings_from(tune.build_parser().parse_args([
+        "--base", str(LIDAR_TD3), "--study-dir", str(tmp_path), "--study-name", "again",
+        "--hyperparams", "learning_starts:200"]))
+    drawn = []
+    for _ in range(2):
+        study = tune.create_study(settings, seed=0)
+        for _ in range(2):
+            trial = study.ask()
+            tune.suggest(trial, settings.base, settings.fixed)
+            study.tell(trial, 0.0)
+            drawn.append(trial.params)
+    assert all(a != b for i, a in enumerate(drawn) for b in drawn[i + 1:]), drawn
+    assert all("learning_starts" not in params for params in drawn)
+    write_summary(study, settings)
+    table = pd.read_csv(tmp_path / "trials.csv")
+    assert table["hyperparams.learning_starts"].tolist() == [200] * 4
+
+
+def test_a_learning_start_beyond_the_trials_budget_is_warned(
+        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    settings = tune.settings_from(tune.build_parser().parse_args([
+        "--base", str(LIDAR_TD3), "--study-dir", str(tmp_path), "--max-steps", "2000"]))
+    with caplog.at_level(logging.WARNING, logger="pic4rl_agents.tune_settings"):
+        settings.trial_run(3, {"algorithm": "td3", "learning_starts": 1000})
+        assert not caplog.records
+        settings.trial_run(4, {"algorithm": "td3", "learning_starts": 5000})
+    assert "trial 4: learning_starts 5000 is not below its budget of 2000 steps" in caplog.text
+
+
+def test_ctrl_c_ends_the_study_in_one_line_with_exit_130(tmp_path: Path) -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "pic4rl_agents.tune", "--base", str(LIDAR_TD3), "--study-dir",
+         str(tmp_path), "--n-trials", "1", *TINY_TRIAL, "--max-steps", "100000"],
+        env={**os.environ, "PYTHONPATH": str(Path(tune.__file__).parents[1])},
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not (tmp_path / "trials" / "trial_0" / "config.yaml").is_file():
+        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in out + err and "Trial 0 failed" not in err
+    assert err.splitlines()[-1] == f"pic4rl-tune: interrupted; the summary is in {tmp_path}"
+    assert (tmp_path / "trials.csv").is_file()
 
 
 @pytest.mark.parametrize("algorithm", ALGORITHM_NAMES)

@@ -64,6 +64,16 @@ def test_a_suite_expands_to_its_cells(tmp_path: Path) -> None:
     assert suite.root == tmp_path / "bags" / "tiny"
 
 
+def test_a_relative_bags_path_is_read_from_the_suite_file(tmp_path: Path,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    path = _files(tmp_path, baselines=["dwa"])
+    path.write_text(path.read_text().replace(str(tmp_path / "bags"), "out"))
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    assert load_suite(path).root == tmp_path / "out" / "tiny"  # like its env: paths
+    assert load_suite(path, bags_dir="mine").root == tmp_path / "elsewhere" / "mine" / "tiny"
+
+
 @pytest.mark.bad_input
 @pytest.mark.parametrize(("change", "message"), [
     ({"taks": []}, r"suite.yaml: unknown key 'taks'; did you mean 'tasks'\?"),
@@ -165,6 +175,7 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
     assert out.count("| goto | dwa |") == 2 and "failed" not in out
 
 
+@pytest.mark.ray
 def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     pytest.importorskip("ray")
     suite = load_suite(_files(tmp_path, baselines=["proportional", "dwa"],
