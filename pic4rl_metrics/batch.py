@@ -5,6 +5,7 @@ This is the library behind ``pic4rl-metrics compute`` and the tester of ``pic4rl
 
 from __future__ import annotations
 
+import gc
 import logging
 import math
 import os
@@ -177,6 +178,10 @@ def run_parallel(fn: Callable[[Any], Any], work: Sequence[Any], *, jobs: int, pr
     out: list[Any] = []
     with bar:
         if jobs > 1 and len(work) > 1:
+            # The workers are forked: garbage whose destructor takes a lock that a thread of
+            # this process held (Ray's GCS client after ray.shutdown) would hang a worker's
+            # first collection, so it is collected here, before the fork.
+            gc.collect()
             with ProcessPoolExecutor(max_workers=min(jobs, len(work))) as pool:
                 chunks = max(1, len(work) // (4 * jobs))
                 for item in pool.map(fn, work, chunksize=chunks):
