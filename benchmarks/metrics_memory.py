@@ -2,9 +2,9 @@
 
 Each length is a real-robot-shaped log (``pic4rl_metrics.synthetic.write_long_bag``: 50 Hz
 odometry, 40 Hz scans of 720 beams), judged by ``pic4rl_metrics.compute`` in a fresh
-subprocess that reports its own peak resident memory (``ru_maxrss``) and wall time, so one
-length's memory never counts against the next. The baseline is the same subprocess judging
-nothing (Python, numpy, pandas and rosbags imported).
+subprocess that reports its own peak resident memory (``VmHWM``: ``ru_maxrss`` would carry a
+large parent's across exec) and wall time, so one length's memory never counts against the
+next. The baseline is the same subprocess judging nothing (Python, numpy, pandas and rosbags imported).
 
     .venv/bin/python benchmarks/metrics_memory.py               # 1, 5, 15 min
     .venv/bin/python benchmarks/metrics_memory.py --long        # also 30 and 120 min
@@ -26,11 +26,12 @@ from pic4rl_metrics.synthetic import write_long_bag
 
 #: Judges the bag given as argv[1] (none: only imports) and prints its figures as JSON.
 CHILD = """
-import json, resource, sys, time
+import json, sys, time
 from pic4rl_metrics import compute
 start = time.perf_counter()
 row = compute(sys.argv[1:]).frame.iloc[0].to_dict() if sys.argv[1:] else {}
-print(json.dumps({"peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+hwm = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmHWM:"))
+print(json.dumps({"peak_mb": hwm / 1024,
                   "s": time.perf_counter() - start, "error": row.get("error", ""),
                   "path_m": row.get("path_length_m"), "n_scans": row.get("n_scans")}))
 """

@@ -49,7 +49,7 @@ def test_pic4rl_test_reads_each_params_file_once(tmp_path: Path, reads: Counter[
     extra = _test_file(tmp_path)
     driven: list[Any] = []
     monkeypatch.setattr(tester, "run_agent", lambda spec, **_: driven.append(spec) or ["goal"])
-    monkeypatch.setattr(tester, "judge", lambda run_dir, **_: (pd.DataFrame(), ()))
+    monkeypatch.setattr(tester, "judge", lambda run_dir, *_, **__: (pd.DataFrame(), ()))
     monkeypatch.setattr("pic4rl_metrics.report.render_comparison", lambda *a, **k: "")
     monkeypatch.setattr("pic4rl_metrics.results.table_columns", lambda table: [])
     code = tester.main(["--agent", str(AGENT), "--baseline", "dwa", "--bags", str(tmp_path),

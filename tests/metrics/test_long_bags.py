@@ -22,10 +22,13 @@ from pic4rl_metrics.synthetic import write_long_bag
 MINUTES = 30
 PEAK_MB = 300
 CHILD = """
-import json, resource, sys
+import json, sys
 from pic4rl_metrics import compute
 row = compute(sys.argv[1:], progress=True).frame.iloc[0].to_dict()
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+# VmHWM, not ru_maxrss: Linux keeps ru_maxrss across exec, so a child spawned by a large
+# pytest process would report the parent's resident size.
+peak = next(int(line.split()[1]) for line in open("/proc/self/status")
+            if line.startswith("VmHWM:")) / 1024
 print(json.dumps({"peak_mb": peak, **{k: row[k] for k in (
     "error", "path_length_m", "n_poses", "n_scans", "obstacle_dist_min_m", "collision_count",
     "clearance_time_s")}}))
