@@ -19,7 +19,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..schema import PROBABILITY, Range, check, param, to_params
-from .arena import rng_for
+from .arena import rng_for, walls
 from .barn_world import start_and_goal
 from .world_spec import Cylinder, WorldSpec
 
@@ -29,7 +29,7 @@ HEIGHT_M = 1.0
 COLUMNS, ROWS = 28, 30  # the field's cells, inside the enclosure
 _LEFT_X, _BOTTOM_Y, _FIELD_Y = -4.425, 0.075, 5.175  # BARN's enclosure and field (centres)
 _WALL_ROWS = 64  # cylinders up each side column, from _BOTTOM_Y
-_MARGIN_M = 1.0
+_MARGIN_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -108,5 +108,6 @@ def barn_like(seed: int, p: BarnLikeParams) -> WorldSpec:
     ys = [c.y for c in cylinders] + [start.y, goal[1]]
     bounds = (min(xs) - _MARGIN_M, min(ys) - _MARGIN_M, max(xs) + _MARGIN_M, max(ys) + _MARGIN_M)
     params = {**to_params(p), "filled_fraction": float(grid.mean()), "corridor_entry": float(entry)}
-    return WorldSpec(p.KIND, bounds, (), cylinders, spawn_poses=(start,), goal_points=(goal,),
+    return WorldSpec(p.KIND, bounds, tuple(walls(bounds)), cylinders,
+                     spawn_poses=(start,), goal_points=(goal,),
                      seed=seed, params=params)

@@ -22,14 +22,15 @@ from typing import Any, ClassVar
 
 from ..errors import require
 from ..schema import check
+from .arena import walls
 from .geometry import Pose2D
 from .world_spec import Cylinder, WorldSpec
 
 DATA = Path(__file__).with_name("data") / "barn_worlds.json.gz"
 LICENSE = DATA.with_name("LICENSE-BARN")
 WORLDS = 300
-#: The field's enclosure (cylinder centres), with 1 m around it and the goal: the bounds.
-_MARGIN_M = 1.0
+#: The bounds: the cylinders, the start and the goal with this much around them (m).
+_MARGIN_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -57,14 +58,16 @@ def start_and_goal() -> tuple[Pose2D, tuple[float, float]]:
     return Pose2D(float(x), float(y), float(yaw)), (float(x + dx), float(y + dy))
 
 
-def test_worlds() -> tuple[int, ...]:
+def challenge_test_worlds() -> tuple[int, ...]:
     """The challenge's 50 test worlds (0, 6, ..., 294): never train on them."""
     return tuple(int(i) for i in barn_data()["test_worlds"])
 
 
 def barn(seed: int, p: BarnParams) -> WorldSpec:
-    """BARN world ``seed`` (its index): the cylinders as written, bounds around them and the
-    goal, the challenge's start as the spawn pose and its goal as the goal point."""
+    """BARN world ``seed`` (its index): the cylinders as written, bounds 2 m around them, the
+    start and the goal, walled like every generated world (Gazebo's world has no walls; they
+    keep a robot that leaves the field from wandering off the map), the challenge's start as
+    the spawn pose and its goal as the goal point."""
     require(isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed < WORLDS,
             "world_variant", seed, f"a BARN world index in [0, {WORLDS - 1}] (world: barn)")
     data = barn_data()
@@ -77,5 +80,6 @@ def barn(seed: int, p: BarnParams) -> WorldSpec:
     bounds = (min(xs) - _MARGIN_M, min(ys) - _MARGIN_M, max(xs) + _MARGIN_M, max(ys) + _MARGIN_M)
     params = {"index": float(seed),
               "reference_path_length_m": float(world["reference_path_length_m"])}
-    return WorldSpec("barn", bounds, (), cylinders, spawn_poses=(start,), goal_points=(goal,),
+    return WorldSpec("barn", bounds, tuple(walls(bounds)), cylinders,
+                     spawn_poses=(start,), goal_points=(goal,),
                      seed=seed, params=params)
