@@ -6,6 +6,11 @@ real time) needs hours for the same sweep.
 
     .venv/bin/python benchmarks/barn_sweep.py                    # the planner, 500 episodes
     .venv/bin/python benchmarks/barn_sweep.py --agent dwa --worlds 10 --runs 2
+    .venv/bin/python benchmarks/barn_sweep.py --runs 1 --set --bags bags/barn_untuned
+
+``--set KEY=VALUE ...`` replaces the env file's ``baselines:`` section (its tuned settings)
+with these (none: the baselines' defaults); ``--bags DIR`` keeps the bags and the results
+files (``DIR/barn/results.md``) instead of a temporary folder.
 
 Target (docs/performance.md): the 500 episodes in <= 3 min on this 2-core machine. The table
 is printed on stderr; the last lines are ``RESULT <name> <value>``: the wall-clock seconds of
@@ -21,6 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import yaml
+
 from pic4rl_agents import bench, benchtable
 from pic4rl_agents.suite import PairSet, load_suite
 
@@ -33,12 +40,23 @@ def main() -> int:
     parser.add_argument("--worlds", type=int, default=50, help="the first N test worlds")
     parser.add_argument("--runs", type=int, default=10, help="runs per world")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--set", nargs="*", metavar="KEY=VALUE",
+                        help="the baselines' settings instead of the env file's")
+    parser.add_argument("--bags", help="keep the bags and results here")
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory(prefix="barn_sweep_") as bags:
-        suite = load_suite(SUITE, bags_dir=bags)
+    with tempfile.TemporaryDirectory(prefix="barn_sweep_") as scratch:
+        suite = load_suite(SUITE, bags_dir=args.bags or scratch)
+        env = suite.cells[0].env
+        if args.set is not None:
+            data = yaml.safe_load(Path(env).read_text())
+            data["baselines"] = {"ros__parameters": {
+                k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.set)}}
+            env = str(Path(scratch) / "env_barn.yaml")
+            Path(env).write_text(yaml.safe_dump(data))
         pairs = PairSet(f"env{args.runs}", episodes=args.runs)
-        cells = [dataclasses.replace(c, pairs=pairs) for c in suite.cells
-                 if c.agent == args.agent][:args.worlds]
+        cells = [dataclasses.replace(c, pairs=pairs, env=env,
+                                     name=c.name.replace(c.pairs.label, pairs.label))
+                 for c in suite.cells if c.agent == args.agent][:args.worlds]
         suite = dataclasses.replace(suite, cells=tuple(cells))
         episodes = len(cells) * args.runs
         start = time.perf_counter()
