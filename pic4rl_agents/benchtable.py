@@ -1,7 +1,9 @@
 """A suite's results, from its bags alone through ``pic4rl_metrics``: one table (one row per
-task × agent × world × robot × pair set, every repetition's episodes together) with the
-paper's columns, SPL, the success rate's Wilson 95 % interval and n, and a leaderboard per
-task (success, then SPL). A cell that failed makes its row read ``failed: <error>``.
+task × agent × world × robot × pair set, every repetition's episodes together) in the suite's
+layout (``LAYOUTS``): the paper's columns, SPL, the success rate's Wilson 95 % interval and n;
+or BARN's, success, collision and timeout rates with their Wilson intervals and the mean BARN
+time and score with bootstrap intervals. A leaderboard per task ranks by success, then SPL (the
+BARN score). A cell that failed makes its row read ``failed: <error>``.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
-from pic4rl_metrics.aggregate import aggregate, wilson_interval
+from pic4rl_metrics.aggregate import aggregate, bootstrap_interval, wilson_interval
 from pic4rl_metrics.batch import MetricsResult, compute
 from pic4rl_metrics.html_report import write_report
 from pic4rl_metrics.paired import agent_names
@@ -32,6 +34,25 @@ ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
 METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
 TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
 REPORT = "report.html"  # the suite's page, beside its tables
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A table's columns after the row keys and n: ``rates`` (outcomes as k/n over the judged
+    episodes, each with its Wilson 95 % interval; success first), ``means`` (metrics' means,
+    each with a bootstrap 95 % interval when ``intervals``), and the leaderboards' ``rank``
+    metric after success."""
+
+    rates: tuple[str, ...]
+    means: tuple[str, ...]
+    intervals: bool
+    rank: str
+
+
+#: The layouts a suite's ``table`` names (``suite.TABLES``).
+LAYOUTS = {"paper": Layout(("success",), METRIC_COLUMNS, False, "spl"),
+           "barn": Layout(("success", "collision", "timeout"), ("barn_time_s", "barn_score"),
+                          True, "barn_score")}
 
 
 @dataclass(frozen=True)
@@ -65,15 +86,38 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
     return frame, tuple(str(f.error) for f in result.failed), result
 
 
-def _row(key: Mapping[str, str], stats: pd.Series | None, error: str) -> list[str | None]:
+def _interval(low: float, high: float) -> str | None:
+    return None if math.isnan(low) else f"[{low:.2f}, {high:.2f}]"
+
+
+def _header(layout: Layout) -> tuple[str, ...]:
+    rates = [c for r in layout.rates for c in (r, f"{r} 95% CI")]
+    means = []
+    for m in layout.means:
+        label = plain_text(METRICS[m].label)
+        means += [f"{label} [{plain_text(METRICS[m].unit)}]"] + (
+            [f"{label} 95% CI"] if layout.intervals else [])
+    return (*ROW_KEYS, "n", *rates, *means, "status")
+
+
+def _row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
+         episodes: pd.DataFrame) -> list[str | None]:
+    """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals)."""
     cells: list[str | None] = list(key.values())
+    width = 2 * len(layout.rates) + len(layout.means) * (1 + layout.intervals)
     if stats is None:
-        return [*cells, "0", None, None, *[None] * len(METRIC_COLUMNS), f"failed: {error}"]
-    k, n = int(stats["n_success"]), int(stats["n_judged"])
-    low, high = wilson_interval(k, n)
-    ci = None if n == 0 else f"[{low:.2f}, {high:.2f}]"
-    metrics = [_num(stats.get(f"{c}_mean")) for c in METRIC_COLUMNS]
-    return [*cells, str(int(stats["n_episodes"])), f"{k}/{n}" if n else None, ci, *metrics,
+        return [*cells, "0", *[None] * width, f"failed: {error}"]
+    n = int(stats["n_judged"])
+    for rate in layout.rates:
+        k = int(stats["n_success" if rate == "success" else f"n_{rate}"])
+        cells += [f"{k}/{n}" if n else None, _interval(*wilson_interval(k, n))]
+    for m in layout.means:
+        cells.append(_num(stats.get(f"{m}_mean")))
+        if layout.intervals:
+            over = episodes[episodes["success"] == 1.0] if METRICS[m].quality else episodes
+            values = over[m] if m in over else []
+            cells.append(_interval(*bootstrap_interval(pd.to_numeric(values, errors="coerce"))))
+    return [*cells[:len(key)], str(int(stats["n_episodes"])), *cells[len(key):],
             f"failed: {error}" if error else "ok"]
 
 
@@ -83,11 +127,12 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
     """The table's header and rows (in the suite's order) and the unjudged bags' errors;
     ``errors``: the failed cells' errors by cell name; ``judged``: ``_judged``'s, when the
     caller judged the bags already."""
+    layout = LAYOUTS[suite.table]
     frame, bad, _ = judged if judged is not None else _judged(suite, suite.cells)
     agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
-    header = (*ROW_KEYS, "n", "success", "success 95% CI",
-              *(f"{plain_text(METRICS[c].label)} [{plain_text(METRICS[c].unit)}]"
-                for c in METRIC_COLUMNS), "status")
+    good = frame[frame["error"].fillna("") == ""] if "error" in frame else frame
+    groups = {k: g for k, g in good.groupby(list(ROW_KEYS), sort=False)} if len(good) else {}
+    header = _header(layout)
     rows: dict[tuple[str, ...], tuple[dict[str, str], list[str]]] = {}
     for cell in suite.cells:
         key = tuple(cell.row.values())
@@ -97,7 +142,8 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
     out = []
     for key, (row, errs) in rows.items():
         stats = agg.loc[key] if agg is not None and key in agg.index else None
-        out.append(_row(row, stats, "; ".join(errs)))
+        out.append(_row(row, stats, "; ".join(errs), layout,
+                        groups.get(key, pd.DataFrame(columns=["success"]))))
     return header, out, bad
 
 
@@ -111,15 +157,18 @@ def _rate(row: Sequence[str | None], col: int) -> float:
     return float(text)
 
 
-def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]]
-                 ) -> dict[str, str]:
-    """Markdown per task: its rows by success rate, then SPL, best first."""
-    success, spl = header.index("success"), len(header) - 2
+def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]],
+                 layout: Layout = LAYOUTS["paper"]) -> dict[str, str]:
+    """Markdown per task: its rows by success rate, then the layout's rank metric (SPL, the
+    BARN score), best first."""
+    label = plain_text(METRICS[layout.rank].label)
+    success, spl = header.index("success"), header.index(
+        f"{label} [{plain_text(METRICS[layout.rank].unit)}]")
     boards = {}
     for task in dict.fromkeys(r[0] for r in rows):
         mine = sorted((r for r in rows if r[0] == task),
                       key=lambda r: (_rate(r, success), _rate(r, spl)), reverse=True)
-        cols = ["rank", *header[1:5], "n", "success", "success 95% CI", "SPL", "status"]
+        cols = ["rank", *header[1:5], "n", "success", "success 95% CI", label, "status"]
         body = [[str(i + 1), *r[1:5], r[5], r[success], r[success + 1], r[spl], r[-1]]
                 for i, r in enumerate(mine)]
         boards[str(task)] = render_rows(cols, body, "markdown")
@@ -173,7 +222,7 @@ def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
     if judged[2] is not None:
         files.append(_report(suite, judged[2]))
     files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
-              for task, text in leaderboards(header, rows).items()]
+              for task, text in leaderboards(header, rows, LAYOUTS[suite.table]).items()]
     files += [save_figure(comparison_figure(task, header, rows),
                           suite.root / f"comparison_{task}.png", overwrite=True)
               for task in dict.fromkeys(r[0] for r in rows)]

@@ -9,7 +9,7 @@
         env: config/env_goto_lidar.yaml  # the test env (applied over each agent's config)
         agents: {td3_lidar: checkpoints/td3_lidar}
         baselines: [dwa, proportional]
-        worlds: ["indoor:0"]     # WORLD[:VARIANT]; default: the env's
+        worlds: ["indoor:0", {world: barn, variants: [0, 6], label: barn_test}]  # default: the env's
         robots: [jackal]         # default: the env's
         pairs: [paper, {random: 100, kind: paper, seed: 0}, {file: g.json}, {episodes: 10}]
         repetitions: 1           # cells per combination, seeds seed, seed+1, ...
@@ -19,6 +19,9 @@ A cell is one agent or baseline × world × robot × pair set × repetition: one
 run. Pair sets: ``paper`` (the paper's 5 indoor pairs), ``{random: N, kind, seed}`` (N pairs
 drawn once from the seed, the same on every machine), ``{file: PATH}`` (a goals_and_poses
 file), ``{episodes: N}`` (N episodes as the env draws them, for tasks without goal pairs).
+A world group (``{world, variants, label}``) is a cell per variant and one table row,
+``WORLD:LABEL``, for all of them (a benchmark's test worlds). ``table: barn`` gives the table
+BARN's columns (``benchtable.LAYOUTS``).
 """
 
 from __future__ import annotations
@@ -40,7 +43,10 @@ from pic4rl_sim.schema import read_yaml
 from .config import SIM_NODE
 from .testplan import DEFAULT_PAIRS, TestPlan, resolve_agents
 
-SUITE_KEYS = ("suite", "bags", "transport", "retries", "tasks")
+SUITE_KEYS = ("suite", "bags", "transport", "retries", "table", "tasks")
+#: The results table's layouts (``benchtable.LAYOUTS``): the paper's columns, or BARN's.
+TABLES = ("paper", "barn")
+WORLD_GROUP_KEYS = ("world", "variants", "label")
 TASK_KEYS = ("name", "env", "agents", "baselines", "worlds", "robots", "pairs", "repetitions",
              "seed")
 PAIR_KEYS = {"random": ("random", "kind", "seed"), "file": ("file", "episodes"),
@@ -71,6 +77,7 @@ class Cell:
     agent_path: str = ""  # a checkpoint; empty for a baseline
     world: str = ""  # empty: the env's
     variant: int | None = None
+    world_label: str = ""  # a world group's row label: its variants share one row
     robot: str = ""
     pairs: PairSet = PairSet("paper")
     repetition: int = 0
@@ -84,7 +91,8 @@ class Cell:
     @property
     def row(self) -> dict[str, str]:
         """The table row this cell adds episodes to (every repetition shares it)."""
-        world = (self.world or "env") + ("" if self.variant is None else f":{self.variant}")
+        label = self.world_label or ("" if self.variant is None else str(self.variant))
+        world = (self.world or "env") + (f":{label}" if label else "")
         return {"task": self.task, "agent": self.agent, "world": world,
                 "robot": self.robot or "env", "pairs": self.pairs.label}
 
@@ -96,6 +104,7 @@ class Suite:
     bags_dir: Path
     retries: int
     cells: tuple[Cell, ...]
+    table: str = TABLES[0]
 
     @property
     def root(self) -> Path:
@@ -152,11 +161,22 @@ def _pair_set(item: Any, where: str, base: Path) -> PairSet:
     return PairSet(f"env{episodes}", episodes=episodes)
 
 
-def _world(item: Any, where: str) -> tuple[str, int | None]:
-    require(isinstance(item, str) and bool(item), where, item, "WORLD or WORLD:VARIANT")
+def _worlds(item: Any, where: str) -> list[tuple[str, int | None, str]]:
+    """(world, variant, row label) of a ``WORLD[:VARIANT]`` item or a world group."""
+    if isinstance(item, Mapping):
+        _keys(item, WORLD_GROUP_KEYS, where)
+        variants = item.get("variants")
+        require(isinstance(variants, list) and bool(variants) and all(
+            isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in variants),
+            f"{where}.variants", variants, "a non-empty list of integers >= 0")
+        world = _name(item.get("world"), f"{where}.world")
+        label = _name(item.get("label"), f"{where}.label")
+        return [(world, v, label) for v in variants]
+    require(isinstance(item, str) and bool(item), where, item,
+            "WORLD, WORLD:VARIANT or {world, variants, label}")
     world, _, variant = item.partition(":")
     require(variant == "" or variant.isdigit(), where, item, "WORLD:VARIANT, VARIANT >= 0")
-    return _name(world, where), int(variant) if variant else None
+    return [(_name(world, where), int(variant) if variant else None, "")]
 
 
 def _list(data: Mapping[str, Any], key: str, where: str, default: list[Any]) -> list[Any]:
@@ -190,8 +210,9 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
             raise ConfigError(f"{where}: missing key {key!r}")
     task, env = _name(data["name"], f"{where}.name"), _path(data["env"], f"{where}.env", base)
     sim = params_file.node_section(params_file.read(env), SIM_NODE, source=env) or {}
-    worlds = [_world(w, f"{where}.worlds") for w in _list(data, "worlds", where, [])] or [
-        (str(sim.get("world", "")), sim.get("world_variant"))]
+    worlds = [w for item in _list(data, "worlds", where, [])
+              for w in _worlds(item, f"{where}.worlds")] or [
+        (str(sim.get("world", "")), sim.get("world_variant"), "")]
     robots = [_name(r, f"{where}.robots") for r in _list(data, "robots", where, [])] or [
         str(sim.get("robot", ""))]
     pairs = [_pair_set(p, f"{where}.pairs", base) for p in _list(data, "pairs", where, ["paper"])]
@@ -200,14 +221,14 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
     cells = []
     for agent, path in _agents(data, where, base, env):
-        for world, variant in worlds:
+        for world, variant, label in worlds:
             for robot in robots:
                 for pair_set in pairs:
                     for rep in range(reps):
                         parts = [task, agent, world + ("" if variant is None else str(variant)),
                                  robot, pair_set.label, f"r{rep}"]
                         cells.append(Cell("-".join(p for p in parts if p), task, agent, env,
-                                          path, world, variant, robot, pair_set, rep,
+                                          path, world, variant, label, robot, pair_set, rep,
                                           seed + rep, transport))
     return cells
 
@@ -243,6 +264,8 @@ def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite
     names = [t.value for t in TransportName]
     require(transport in names, f"{path}: transport", transport, " or ".join(names))
     retries = _count(data.get("retries", 2), f"{path}: retries", 0)
+    table = data.get("table", TABLES[0])
+    require(table in TABLES, f"{path}: table", table, " or ".join(TABLES))
     tasks = _list(data, "tasks", str(path), [])
     cells = [c for i, t in enumerate(tasks)
              for c in _task_cells(t, f"{path}: tasks[{i}]", path.parent, transport)]
@@ -257,4 +280,4 @@ def load_suite(path: str | Path, *, bags_dir: str | Path | None = None) -> Suite
                 data["bags"], "a directory path")
         bags_dir = path.parent / data["bags"]
     bags = Path("bags" if bags_dir is None else bags_dir).absolute()
-    return Suite(name, path, bags, retries, tuple(cells))
+    return Suite(name, path, bags, retries, tuple(cells), table)

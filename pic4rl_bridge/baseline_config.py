@@ -64,13 +64,36 @@ class DwaConfig:
 
 
 @dataclass(frozen=True)
+class PlannerConfig:
+    """The privileged planner (``pic4rl_bridge.planner.PlannerController``): how fast it goes
+    against how wide it keeps of obstacles (BARN's dense fields want a slower, wider one)."""
+
+    lookahead_m: float = param(0.4, doc="the steering target: the farthest point of the plan "
+                               "this far ahead that the robot sees", unit="m", range=POSITIVE)
+    turn_in_place_rad: float = param(0.8, doc="bearing of the target beyond which it turns in "
+                                     "place; full speed within a third of it", unit="rad",
+                                     range=Range(0.1, 3.1416))
+    replan_distance_m: float = param(0.3, doc="plans again when this far off its plan",
+                                     unit="m", range=POSITIVE)
+    clearance_m: float = param(0.07, doc="beyond the bounding radius: the line of sight to the "
+                               "target keeps this from obstacles", unit="m", range=NON_NEGATIVE)
+    plan_margin_m: float = param(0.0, doc="beyond the bounding radius: the plan keeps at least "
+                                 "this (0: the simulator's plan margins, widest first)",
+                                 unit="m", range=NON_NEGATIVE)
+    max_linear_m_s: float = param(0.0, doc="its speed limit; 0: the env's", unit="m/s",
+                                  range=NON_NEGATIVE)
+
+
+@dataclass(frozen=True)
 class BaselinesConfig:
     """The classical controllers ``pic4rl-test --baseline`` runs."""
 
     dwa: DwaConfig = section(DwaConfig)
+    planner: PlannerConfig = section(PlannerConfig)
 
     def __post_init__(self) -> None:
         self.dwa.check_as(f"{PREFIX}dwa.")
+        check(self.planner, f"{PREFIX}planner.")
 
 
 def baselines_config_from_params(params: Mapping[str, Any]) -> BaselinesConfig:

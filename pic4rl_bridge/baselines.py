@@ -19,6 +19,7 @@ simulator.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Protocol
 
@@ -108,7 +109,8 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
                               "this env has none (no 'sim:' section: a real robot)")
         from .planner import PlannerController
 
-        return PlannerController(robot, world)
+        return PlannerController(robot, world,
+                                 **dataclasses.asdict((settings or BaselinesConfig()).planner))
     if name == "dwa_heading":
         from .follow import HeadingController
 

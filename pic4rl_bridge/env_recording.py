@@ -97,8 +97,15 @@ def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,
         goal_tolerance_m=c.goal_tolerance_m, collision_tolerance_m=c.collision_tolerance_m,
         safety_margin_m=c.warning_tolerance_m, max_speed_mps=robot.max_linear_m_s,
         shortest_path_m=lengths[0], straight_line_m=lengths[1],
+        reference_path_m=_reference_path_m(sampler),
         scan_mount=None if mount is None else Mount(mount.x, mount.y, mount.yaw),
         time_budget_s=c.episode_max_steps * robot.control_dt_s,
     )
     parsed, given = parse_facts(task_facts, source=f"task {c.task}")
     return facts.merged(parsed, given=given)
+
+
+def _reference_path_m(sampler: PairSampler | None) -> float | None:
+    """The simulated world's reference path length (m), where it has one (``barn``)."""
+    length = sampler.world.params.get("reference_path_length_m") if sampler is not None else None
+    return None if length is None else float(length)

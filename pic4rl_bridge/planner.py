@@ -16,8 +16,10 @@ robot's projection on it that the robot sees in a straight line with ``clearance
 point's bearing, and a speed that falls from the full speed, with the bearing within a third of
 ``turn_in_place_rad``, to none (turning in place) beyond it, capped by pure pursuit's arc. Both
 are continuous in the bearing, so that a student can regress them. The commands stay within
-the env's speed ranges; the robot's acceleration limits are the simulator's (its actuators are
-force-capped at them).
+the env's speed ranges (and its own ``max_linear_m_s``, when set); the robot's acceleration
+limits are the simulator's (its actuators are force-capped at them). Its settings are the
+``baselines:`` section's ``planner.*`` (``PlannerConfig``): BARN's dense fields want it slower
+or wider (``plan_margin_m``: a plan that keeps more than the simulator's widest margin).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ import math
 import numpy as np
 from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import point_along
-from pic4rl_sim.engine.paths import plan_path, planner_for
+from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path, planner_for
 from pic4rl_sim.engine.world_spec import WorldSpec
 
 from .frame import SensorFrame
@@ -45,8 +47,13 @@ class PlannerController:
 
     def __init__(self, robot: RobotInfo, world: WorldSpec, *, lookahead_m: float = 0.4,
                  turn_in_place_rad: float = 0.8, replan_distance_m: float = 0.3,
-                 clearance_m: float = 0.07) -> None:
+                 clearance_m: float = 0.07, plan_margin_m: float = 0.0,
+                 max_linear_m_s: float = 0.0) -> None:
         self.robot, self.world = robot, world
+        self.margins_m = ((plan_margin_m, *PLAN_MARGINS_M) if plan_margin_m > 0
+                          else PLAN_MARGINS_M)  # the widest that has a path
+        self.max_linear_m_s = (min(max_linear_m_s, robot.max_linear_m_s) if max_linear_m_s > 0
+                               else robot.max_linear_m_s)
         self._sight = planner_for(world, robot_radius_m=robot.footprint.bounding_radius_m
                                   + clearance_m)
         self.lookahead_m = lookahead_m
@@ -68,7 +75,8 @@ class PlannerController:
     def _replan(self, xy: tuple[float, float], goal: tuple[float, float]) -> np.ndarray:
         self.plans += 1
         path = plan_path(self.world, xy, goal,
-                         robot_radius_m=self.robot.footprint.bounding_radius_m)
+                         robot_radius_m=self.robot.footprint.bounding_radius_m,
+                         margins_m=self.margins_m)
         self._path, self._goal = (path if len(path) else np.array([xy, goal])), goal
         return self._path
 
@@ -91,11 +99,11 @@ class PlannerController:
         r = self.robot
         w = float(np.clip(_TURN_GAIN * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
         facing = (self.turn_in_place_rad - abs(bearing)) / (2.0 * self.turn_in_place_rad / 3.0)
-        v = r.max_linear_m_s * min(max(facing, 0.0), 1.0)
+        v = self.max_linear_m_s * min(max(facing, 0.0), 1.0)
         curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # pure pursuit's arc
         if abs(curvature) * v > r.max_angular_rad_s:
             v = r.max_angular_rad_s / abs(curvature)
-        return float(min(max(v, r.min_linear_m_s, 0.0), r.max_linear_m_s)), w
+        return float(min(max(v, r.min_linear_m_s, 0.0), self.max_linear_m_s)), w
 
     def action(self, frame: SensorFrame) -> np.ndarray:
         """The goToPose normalised action of ``command``."""

@@ -58,7 +58,7 @@ def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True)
                        help="scan distance beyond the footprint that counts as a collision (m)")
     facts.add_argument("--safety-margin", type=float, metavar="M",
                        help="scan distance beyond the footprint that counts as unsafe (m)")
-    facts.add_argument("--max-speed", type=float, metavar="MPS", help="robot's max speed, for the BARN score")
+    facts.add_argument("--max-speed", type=float, metavar="MPS", help="robot's max speed")
     run = parser.add_argument_group("running")
     run.add_argument("--jobs", "-j", type=_jobs, default=1, metavar="N",
                      help="bags judged in parallel (0: one per core)")

@@ -147,6 +147,9 @@ class EpisodeFacts:
     shortest_path_m: float | None = _fact(decode.path_length)
     #: Straight start-goal distance (m) as the recorder measured it.
     straight_line_m: float | None = _fact(decode.positive)
+    #: A benchmark world's reference path (m), whose length sets the BARN score's optimal
+    #: time (BARN's worlds carry one); ``None`` elsewhere.
+    reference_path_m: float | None = _fact(decode.positive)
     #: The LiDAR's pose in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``;
     #: ``None``: not recorded (see ``reader`` for tf).
     scan_mount: Mount | None = _fact(decode.mount)

@@ -25,8 +25,12 @@ STILL_YAW_RATE_RADPS = 0.05
 #: A shorter path is no path: its distance/path ratio is undefined, not odometry jitter over a
 #: start-goal distance (m).
 MIN_PATH_M = 0.01
-#: BARN challenge: actual time is clipped to [4, 8] x the optimal time.
-BARN_CLIP = (4.0, 8.0)
+#: BARN challenge: the optimal time is the reference path over this speed (m/s); the actual
+#: time runs from the moment the robot is ``BARN_MOVED_M`` (m) from its start and is clipped to
+#: ``BARN_CLIP`` x the optimal time.
+BARN_SPEED_MPS = 2.0
+BARN_MOVED_M = 0.1
+BARN_CLIP = (2.0, 8.0)
 #: Beyond these (and ``timebase.PLAUSIBLE_SPEED_MPS``) no ground robot moves: a series that
 #: exceeds one is flagged as damaged.
 PLAUSIBLE_YAW_RATE_RADPS = 50.0
@@ -164,14 +168,29 @@ def _soft_spl(d: Derived) -> float:
     return float(np.clip(progress, 0.0, 1.0)) * d.spl_weight
 
 
-@_register("barn_score", "-", "BARN score", ("goal", "max_speed"))
-def _barn_score(d: Derived) -> float:
-    optimal = d.optimal[0]
-    if not optimal > 0:
+def _barn_time(d: Derived) -> float:
+    """BARN's actual time (s): from the first pose ``BARN_MOVED_M`` from the start (the
+    ``start`` fact, else the first pose) to the end; NaN when the robot never got that far."""
+    start = d.facts.start or (d.pose.x[0], d.pose.y[0])
+    moved = np.flatnonzero(np.hypot(d.pose.x - start[0], d.pose.y - start[1]) >= BARN_MOVED_M)
+    if not moved.size:
         return NAN
-    ot = optimal / d.facts.max_speed_mps  # type: ignore[operator]
+    return d.time_s - float(d.t_s[moved[0]] - d.t_s[0])
+
+
+_register("barn_time_s", "s", "BARN time", quality=True)(_barn_time)
+
+
+@_register("barn_score", "-", "BARN score", ("goal",))
+def _barn_score(d: Derived) -> float:
+    reference = d.facts.reference_path_m or d.optimal[0]
+    if not reference > 0 or math.isnan(d.success):
+        return NAN
+    if not d.success:
+        return 0.0
+    ot = reference / BARN_SPEED_MPS
     lo, hi = BARN_CLIP
-    return d.success * ot / float(np.clip(d.time_s, lo * ot, hi * ot))
+    return ot / float(np.clip(_barn_time(d), lo * ot, hi * ot))
 
 
 @_register("path_curvature_mean_radpm", "rad/m", "mean curvature", quality=True)

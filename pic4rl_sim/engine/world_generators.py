@@ -30,6 +30,8 @@ from ..schema import (
     to_params,
 )
 from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
+from .barn_like_world import BarnLikeParams, barn_like
+from .barn_world import BarnParams, barn
 from .person_walk import corner_occluders, leg_speeds
 from .vineyard_world import VineyardParams, vineyard
 from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
@@ -302,7 +304,8 @@ class Generator(NamedTuple):
 #: Every generator, by the ``KIND`` of its parameters.
 GENERATORS: dict[str, Generator] = {g.params.KIND: g for g in (
     Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
-    Generator(VineyardParams, vineyard), Generator(PersonParams, person))}
+    Generator(VineyardParams, vineyard), Generator(PersonParams, person),
+    Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like))}
 
 
 def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:

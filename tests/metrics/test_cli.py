@@ -104,7 +104,8 @@ def test_compute_csv_holds_every_column_at_full_precision(capsys, runs: Path) ->
     assert df["clearance_time_s"].tolist() == pytest.approx([10.0, 10.0], abs=EXACT)
     assert df["soft_spl"].tolist() == pytest.approx([1.0, 0.5], abs=EXACT)
     assert df["obstacle_dist_min_m"].tolist() == pytest.approx([1.0, 1.0], abs=F32)
-    assert df["barn_score"].isna().all()  # no max speed given
+    # BARN: OT = 5 m / 2 m/s, AT = 10 s - 0.2 s (0.1 m off the start); a timeout scores 0
+    assert df["barn_score"].tolist() == pytest.approx([2.5 / 9.8, 0.0], abs=EXACT)
     assert df["error"].isna().all()  # empty cells
 
 
@@ -118,7 +119,8 @@ def test_compute_json_has_nulls_for_missing(capsys, runs: Path) -> None:
     assert alpha["spl"] == pytest.approx(1.0, abs=EXACT)
     assert beta["outcome"] == "timeout" and beta["spl"] == 0.0
     assert beta["start_goal_distance_m"] == pytest.approx(10.0, abs=EXACT)
-    assert alpha["barn_score"] is None and alpha["row_path_mae_m"] is None
+    assert alpha["barn_score"] == pytest.approx(2.5 / 9.8, abs=EXACT)
+    assert alpha["row_path_mae_m"] is None
     assert alpha["n_poses"] == 101 and alpha["n_scans"] == 101
 
 

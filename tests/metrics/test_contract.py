@@ -51,6 +51,7 @@ FACTS = st.builds(
     row_centerline=_optional(st.lists(POINT, min_size=2, max_size=5).map(tuple)),
     shortest_path_m=_optional(st.one_of(POSITIVE, st.just(math.inf))),
     straight_line_m=_optional(POSITIVE),
+    reference_path_m=_optional(POSITIVE),
     scan_mount=_optional(st.builds(Mount, FINITE, FINITE, FINITE)),
     outcome=_optional(st.sampled_from(list(Outcome))),
     extra=st.dictionaries(TEXT.filter(lambda k: k not in FACT_KEYS), TEXT, max_size=3),

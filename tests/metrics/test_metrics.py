@@ -168,25 +168,35 @@ def test_unknown_outcome_without_goal_or_collision(line_bags) -> None:
     assert m["distance_path_ratio"] == pytest.approx(1.0, abs=EXACT)
 
 
+# LINE: 0.5 m/s along x for 10 s, a pose every 0.1 s. It is 0.1 m from its start at
+# t = 0.2 s, where BARN's clock starts: AT = 10 - 0.2 = 9.8 s.
+BARN_AT = 9.8
+
+
 @pytest.mark.parametrize(
-    ("max_speed", "expected"),
+    ("reference_m", "expected"),
     [
-        # l = 5 m, T = 10 s. OT = 5/3 s: 4 OT = 6.7 <= T <= 8 OT = 13.3, no clip: OT / T.
-        (3.0, (5 / 3) / 10.0),
-        # OT = 5 s: T < 4 OT = 20, clipped up: OT / (4 OT) = 1/4.
-        (1.0, 0.25),
-        # OT = 0.5 s: T > 8 OT = 4, clipped down: OT / (8 OT) = 1/8.
-        (10.0, 0.125),
+        # OT = 5 / 2 = 2.5 s: 2 OT = 5 <= AT <= 8 OT = 20, no clip: OT / AT.
+        (5.0, 2.5 / BARN_AT),
+        # OT = 10 s: AT < 2 OT = 20 (too fast), clipped up: OT / (2 OT) = 1/2.
+        (20.0, 0.5),
+        # OT = 0.5 s: AT > 8 OT = 4 (too slow), clipped down: OT / (8 OT) = 1/8.
+        (1.0, 0.125),
     ],
 )
-def test_barn_score_by_hand(line_bags, max_speed: float, expected: float) -> None:
-    facts = EpisodeFacts(max_speed_mps=max_speed)
-    given = frozenset({"max_speed_mps"})
-    assert _row(line_bags["goal"], facts=facts, given=given)["barn_score"] == pytest.approx(
-        expected, abs=EXACT
-    )
-    # S = 0 for a timeout.
+def test_barn_score_by_hand(line_bags, reference_m: float, expected: float) -> None:
+    facts = EpisodeFacts(reference_path_m=reference_m)
+    given = frozenset({"reference_path_m"})
+    row = _row(line_bags["goal"], facts=facts, given=given)
+    assert row["barn_time_s"] == pytest.approx(BARN_AT, abs=EXACT)
+    assert row["barn_score"] == pytest.approx(expected, abs=EXACT)
+    # S = 0 for a timeout, whatever the times.
     assert _row(line_bags["timeout"], facts=facts, given=given)["barn_score"] == 0.0
+
+
+def test_barn_score_without_a_reference_uses_the_optimal_path(line_bags) -> None:
+    # No reference_path_m: l_ref = the straight 5 m line, OT = 2.5 s.
+    assert _row(line_bags["goal"])["barn_score"] == pytest.approx(2.5 / BARN_AT, abs=EXACT)
 
 
 def test_heading_error_of_a_goal_to_the_side(tmp_path: Path) -> None:

@@ -310,7 +310,7 @@ def test_make_world_suggests_close_names_and_checks_types() -> None:
 @pytest.mark.parametrize("kind", KINDS)
 def test_generator_params_describe_every_parameter(kind: str) -> None:
     described = specs(GENERATORS[kind].params)
-    assert described
+    assert described or kind == "barn"  # BARN's worlds are data: an index, no parameters
     for spec in described:
         assert type(spec.default) in (int, float) and spec.description and spec.bounds
         assert (spec.unit != "") == spec.name.endswith(("_m", "_m_s"))
