@@ -233,7 +233,7 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
     return cells
 
 
-def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None]],
+def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None, str]],
                        sim: Mapping[str, Any], where: str) -> None:
     """A pairs file that records its world runs only there: ``ConfigError`` naming the file,
     its world and the task's other one."""
@@ -242,7 +242,7 @@ def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None]
 
     for pair_set in (p for p in pairs if p.file):
         drawn = load_goals_and_poses(pair_set.file).world
-        for world, variant in worlds:
+        for world, variant, _label in worlds:
             if variant is None:
                 variant = sim.get("world_variant", SimParams.world_variant)
             name = f"{world or sim.get('world', SimParams.world)}:{variant}"
