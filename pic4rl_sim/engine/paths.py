@@ -200,10 +200,13 @@ def grid_steps(free: np.ndarray) -> list[Step]:
 
 
 def grid_search(free: np.ndarray, steps: list[Step], s: int, g: int,
-                limit_cells: float = math.inf) -> np.ndarray | None:
+                limit_cells: float = math.inf,
+                weights: np.ndarray | None = None) -> np.ndarray | None:
     """Cells of a shortest 8-connected path from ``s`` to ``g`` (flat indices of the padded
     grid whose flat mask is ``free`` and moves ``steps``: ``grid_steps``); empty when none,
-    ``None`` when the distance exceeds ``limit_cells``. Dijkstra by buckets one cell wide."""
+    ``None`` when the distance exceeds ``limit_cells``. Dijkstra by buckets one cell wide; a
+    move into a cell costs its length times the cell's flat ``weights`` (each >= 1, so that
+    the buckets stay exact; ``None``: 1)."""
     dist = np.full(free.size, np.inf)
     parent = np.full(free.size, -1, dtype=np.int64)
     dist[s] = 0.0
@@ -217,11 +220,12 @@ def grid_search(free: np.ndarray, steps: list[Step], s: int, g: int,
         if dist[g] < bucket + 1:
             break
         d_front = dist[front]
-        moves = [(front[m] + off, d_front[m] + cost, front[m])
+        moves = [(front[m] + off, np.full(int(m.sum()), cost), front[m])
                  for off, cost, ok in steps if (m := ok[front]).any()]
         if not moves:
             continue
         nb, nd, par = (np.concatenate(x) for x in zip(*moves))
+        nd = dist[par] + (nd if weights is None else nd * weights[nb])
         better = nd < dist[nb]
         if not better.any():
             continue
