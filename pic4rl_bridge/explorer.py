@@ -183,11 +183,12 @@ class ExplorerController:
         floor = self.radius_m + min(self.config.narrow_margin_m, self.config.margin_m)
         return bool((ahead & (self._field.at(self._samples) < floor - _SHAVE_M)).any())
 
-    def _make_field(self, xy: np.ndarray, goal: tuple[float, float]) -> _Clearance:
+    def _make_field(self, xy: np.ndarray, goal: tuple[float, float],
+                    pad: int = _PAD_CELLS) -> _Clearance:
         cells = self.grid.cells
         ends = self._cell(np.array([xy, goal]))
         both = np.concatenate((cells, ends)) if len(cells) else ends
-        lo, hi = both.min(axis=0) - _PAD_CELLS, both.max(axis=0) + 1 + _PAD_CELLS
+        lo, hi = both.min(axis=0) - pad, both.max(axis=0) + 1 + pad
         cap = self.radius_m + self.config.margin_m + 0.1
         return _Clearance(cells, lo, hi, self.grid.resolution_m, cap)
 
@@ -198,6 +199,9 @@ class ExplorerController:
         field = self._field
         need = self.radius_m + min(self.config.margin_m, self.config.narrow_margin_m)
         path = self._search(field, xy, np.array(goal), need)
+        if path is None:  # the way round may pass beyond the window: a wider one
+            self._field = field = self._make_field(xy, goal, 4 * _PAD_CELLS)
+            path = self._search(field, xy, np.array(goal), need)
         if path is None:  # no way round what was seen: straight on, the walls will tell
             path = np.array([xy, goal])
         self._path, self._goal, self._need_m = path, goal, need
