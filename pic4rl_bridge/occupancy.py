@@ -37,10 +37,12 @@ def to_world(points: np.ndarray, pose: Pose2D) -> np.ndarray:
     return np.column_stack((pose.x + c * x - s * y, pose.y + s * x + c * y))
 
 
-def sensed_scan(frame: SensorFrame, robot: RobotInfo, depth_rows: int = 0) -> ScanData | None:
+def sensed_scan(frame: SensorFrame, robot: RobotInfo, depth_rows: int = 0, *,
+                depth_first: bool = False) -> ScanData | None:
     """What the grid marks from ``frame``: its scan, else the depth image's pseudo-scan
-    (``depth_scan`` of its ``depth_rows`` middle rows, 0: all), else ``None``."""
-    if frame.scan is not None:
+    (``depth_scan`` of its ``depth_rows`` middle rows, 0: all), else ``None``; with
+    ``depth_first`` the depth image's even when a scan is there (a depth agent's memory)."""
+    if frame.scan is not None and not (depth_first and frame.depth is not None):
         return frame.scan
     if frame.depth is not None:
         return depth_scan(frame.depth, robot.depth_mount or Pose2D(0.0, 0.0, 0.0),
