@@ -72,7 +72,8 @@ class PolicyConfig:
 
     net_arch: tuple[int, ...] = param((256, 256), doc="actor (pi) hidden layers")
     critic_arch: tuple[int, ...] = param((256, 256), doc="critic (qf, PPO's vf) hidden layers")
-    cnn_channels: tuple[int, ...] = param((16, 32, 32), doc="depth CNN: one conv layer each")
+    cnn_channels: tuple[int, ...] = param((16, 32, 32), doc="each image's CNN (depth, memory): "
+                                          "one conv layer each")
     cnn_features: int = param(128, doc="the CNN's output size, concatenated with the goal "
                               "vector", range=POSITIVE)
     share_features_extractor: bool = param(False, doc="off-policy: actor and critic share the "
