@@ -49,7 +49,7 @@ else ifdef TRAIN
 	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
 	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo --video
 else
-	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --baseline proportional --baseline dwa --baseline planner --run demo --video
+	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --agent checkpoints/td3_lidar_memory --baseline proportional --baseline dwa --baseline planner --baseline explorer --run demo --video
 endif
 
 test: setup

@@ -72,7 +72,8 @@ class PolicyConfig:
 
     net_arch: tuple[int, ...] = param((256, 256), doc="actor (pi) hidden layers")
     critic_arch: tuple[int, ...] = param((256, 256), doc="critic (qf, PPO's vf) hidden layers")
-    cnn_channels: tuple[int, ...] = param((16, 32, 32), doc="depth CNN: one conv layer each")
+    cnn_channels: tuple[int, ...] = param((16, 32, 32), doc="each image's CNN (depth, memory): "
+                                          "one conv layer each")
     cnn_features: int = param(128, doc="the CNN's output size, concatenated with the goal "
                               "vector", range=POSITIVE)
     share_features_extractor: bool = param(False, doc="off-policy: actor and critic share the "
@@ -157,10 +158,12 @@ class ImitationConfig:
 
     enabled: bool = param(False, doc=f"imitation before RL ({', '.join(OFF_POLICY)})")
     expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
-                        "privileged planner, pic4rl_bridge.planner) | heading "
+                        "privileged planner, pic4rl_bridge.planner) | explorer (goToPose: the "
+                        "mapless explorer of the student's own scans, pic4rl_bridge.explorer) | "
+                        "heading "
                         "(personMonitoring: DWA with a proportional heading law) | centerline "
                         "(vineyard: the row's centre-line follower, pic4rl_bridge.row_followers)",
-                        choices=("planner", "heading", "centerline"))
+                        choices=("planner", "explorer", "heading", "centerline"))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)
     dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",

@@ -1,6 +1,8 @@
 """Expert-guided training: behaviour cloning, then DAgger, on an SB3 off-policy model's actor.
 
-The expert is privileged at training time only: it reads the env's decoded frame and the
+The expert reads the env's decoded frame: the mapless explorer (``pic4rl_bridge.explorer``)
+only what the student's sensors saw, one frame per step, so its choices depend on nothing the
+student could not have remembered; the others are privileged at training time only: the
 simulated world's map (``pic4rl_bridge.planner``) or the vineyard row's centre line
 (``pic4rl_bridge.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
 on states the expert drove through; DAgger (Ross, Gordon and Bagnell 2011) then lets the
@@ -30,6 +32,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.explorer import ExplorerController
 from pic4rl_bridge.follow import HeadingController
 from pic4rl_bridge.planner import PlannerController
 from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
@@ -43,13 +46,16 @@ EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
 #: The experts that label states, and the task each drives.
-EXPERTS = {"planner": "goToPose", "heading": "personMonitoring", "centerline": "vineyard"}
+EXPERTS = {"planner": "goToPose", "explorer": "goToPose", "heading": "personMonitoring",
+           "centerline": "vineyard"}
 
 
 def make_expert(name: str, env: EnvConfig
-                ) -> PlannerController | HeadingController | CenterlineFollower:
+                ) -> PlannerController | ExplorerController | HeadingController | CenterlineFollower:
     """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
-    (``planner``: the privileged planner on the world's map, goToPose; ``heading``: DWA with a
+    (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
+    mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
+    ``heading``: DWA with a
     proportional heading law, personMonitoring, either control; ``centerline``: the row's
     centre-line follower, vineyard)."""
     if name not in EXPERTS:
@@ -60,6 +66,8 @@ def make_expert(name: str, env: EnvConfig
         raise ConfigError(f"imitation.expert: {name} drives {EXPERTS[name]}; the env's task is "
                           f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
     scenario = Scenario(env)
+    if name == "explorer":
+        return ExplorerController(scenario.robot)
     if name == "heading":
         return HeadingController(env, scenario.robot)
     if name == "centerline":

@@ -85,15 +85,31 @@ class PlannerConfig:
 
 
 @dataclass(frozen=True)
+class ExplorerConfig:
+    """The mapless explorer (``pic4rl_bridge.explorer.ExplorerController``): its plan's
+    clearance beyond the footprint's circumscribed radius, and when it plans anew."""
+
+    margin_m: float = param(0.10, doc="the plan keeps this beyond the circumscribed radius "
+                            "from every cell seen occupied", unit="m", range=NON_NEGATIVE)
+    narrow_margin_m: float = param(0.03, doc="... or this, when no path keeps margin_m (a "
+                                   "narrow door)", unit="m", range=NON_NEGATIVE)
+    replan_distance_m: float = param(0.3, doc="a new plan when the robot is this far off its "
+                                     "plan (and when a newly seen obstacle blocks it)",
+                                     unit="m", range=POSITIVE)
+
+
+@dataclass(frozen=True)
 class BaselinesConfig:
     """The classical controllers ``pic4rl-test --baseline`` runs."""
 
     dwa: DwaConfig = section(DwaConfig)
     planner: PlannerConfig = section(PlannerConfig)
+    explorer: ExplorerConfig = section(ExplorerConfig)
 
     def __post_init__(self) -> None:
         self.dwa.check_as(f"{PREFIX}dwa.")
         check(self.planner, f"{PREFIX}planner.")
+        check(self.explorer, f"{PREFIX}explorer.")
 
 
 def baselines_config_from_params(params: Mapping[str, Any]) -> BaselinesConfig:

@@ -9,11 +9,14 @@ in ``follow`` (``BASELINE_TASKS`` says which task each drives).
   nav2 and the BARN challenge compare learned planners with.
 - ``planner``: the privileged planner (``pic4rl_bridge.planner``): the world's shortest path
   with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
+- ``explorer``: the mapless explorer (``pic4rl_bridge.explorer``): the shortest path on an
+  occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
+  followed by the planner's pursuit law; it knows no map, as no agent does.
 - ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
   bearing turns the base (``pic4rl_bridge.follow``): the classical version of the RL-DWA
   hybrid.
 
-The first two are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
+The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
 simulator.
 """
 
@@ -111,6 +114,10 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
 
         return PlannerController(robot, world,
                                  **dataclasses.asdict((settings or BaselinesConfig()).planner))
+    if name == "explorer":
+        from .explorer import ExplorerController
+
+        return ExplorerController(robot, (settings or BaselinesConfig()).explorer)
     if name == "dwa_heading":
         from .follow import HeadingController
 

@@ -114,6 +114,19 @@ class DepthObsConfig:
 
 
 @dataclass(frozen=True)
+class MemoryObsConfig:
+    """goToPose's memory: an egocentric crop of an occupancy grid of the robot's own scans
+    (``pic4rl_bridge.occupancy``), beside the usual observation in a Dict."""
+
+    enabled: bool = param(False, doc="goToPose: add the memory crop to the observation (a Dict: "
+                          "memory, and lidar or depth and goal)")
+    size_px: int = param(64, doc="the crop's width and height", unit="px", range=POSITIVE)
+    resolution_m: float = param(0.15, doc="the crop's pixel size", unit="m", range=POSITIVE)
+    depth_rows: int = param(0, doc="depth robots: the pseudo-scan's middle rows of the depth "
+                            "image (0: all)", range=NON_NEGATIVE)
+
+
+@dataclass(frozen=True)
 class EpisodesConfig:
     """Where episodes start and end (see ``pic4rl_bridge.episodes``)."""
 
@@ -246,6 +259,7 @@ class EnvConfig:
     reward: RewardConfig = section(RewardConfig)
     lidar: LidarObsConfig = section(LidarObsConfig)
     depth: DepthObsConfig = section(DepthObsConfig)
+    memory: MemoryObsConfig = section(MemoryObsConfig)
     vineyard: VineyardConfig = section(VineyardConfig)
     person: PersonConfig = section(PersonConfig)
     episodes: EpisodesConfig = section(EpisodesConfig)

@@ -28,8 +28,9 @@ import math
 
 import numpy as np
 from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.geometry import point_along
+from pic4rl_sim.engine.geometry import Pose2D, point_along
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path, planner_for
+from pic4rl_sim.engine.taut_path import Visible
 from pic4rl_sim.engine.world_spec import WorldSpec
 
 from .frame import SensorFrame
@@ -40,6 +41,31 @@ from .tasks.observations import target_polar
 
 _LOOKAHEAD_FRACTIONS = (1.0, 0.75, 0.5, 0.25)  # of lookahead_m, tried in turn
 _TURN_GAIN = 2.5  # yaw rate (rad/s) per radian of bearing, up to the robot's limit
+
+
+def pursuit_command(robot: RobotInfo, pose: Pose2D, path: np.ndarray, s: float,
+                    visible: Visible, *, lookahead_m: float = 0.4,
+                    turn_in_place_rad: float = 0.8,
+                    max_linear_m_s: float | None = None) -> tuple[float, float]:
+    """(v, ω) (m/s, rad/s) toward the farthest point of ``path`` within ``lookahead_m`` beyond
+    arc length ``s`` (the robot's projection) that ``visible`` says the robot reaches in a
+    straight line: the pursuit law of the module's docstring, which the mapless explorer
+    (``pic4rl_bridge.explorer``) follows its own plans with too. ``max_linear_m_s``: a speed
+    limit below the robot's (None: the robot's)."""
+    xy = np.array([pose.x, pose.y])
+    ahead = [point_along(path, s + f * lookahead_m) for f in _LOOKAHEAD_FRACTIONS]
+    seen = visible(xy, np.array(ahead))
+    target = ahead[int(np.argmax(seen))] if seen.any() else ahead[-1]
+    distance, bearing = target_polar(pose, float(target[0]), float(target[1]))
+    r = robot
+    v_max = r.max_linear_m_s if max_linear_m_s is None else max_linear_m_s
+    w = float(np.clip(_TURN_GAIN * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
+    facing = (turn_in_place_rad - abs(bearing)) / (2.0 * turn_in_place_rad / 3.0)
+    v = v_max * min(max(facing, 0.0), 1.0)
+    curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # pure pursuit's arc
+    if abs(curvature) * v > r.max_angular_rad_s:
+        v = r.max_angular_rad_s / abs(curvature)
+    return float(min(max(v, r.min_linear_m_s, 0.0), v_max)), w
 
 
 class PlannerController:
@@ -92,18 +118,10 @@ class PlannerController:
         if abs(offset) > self.replan_distance_m:
             path = self._replan(xy, goal)
             s = 0.0
-        ahead = [point_along(path, s + f * self.lookahead_m) for f in _LOOKAHEAD_FRACTIONS]
-        seen = self._sight.visible(np.array(xy), np.array(ahead))
-        target = ahead[int(np.argmax(seen))] if seen.any() else ahead[-1]
-        distance, bearing = target_polar(frame.pose, float(target[0]), float(target[1]))
-        r = self.robot
-        w = float(np.clip(_TURN_GAIN * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
-        facing = (self.turn_in_place_rad - abs(bearing)) / (2.0 * self.turn_in_place_rad / 3.0)
-        v = self.max_linear_m_s * min(max(facing, 0.0), 1.0)
-        curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # pure pursuit's arc
-        if abs(curvature) * v > r.max_angular_rad_s:
-            v = r.max_angular_rad_s / abs(curvature)
-        return float(min(max(v, r.min_linear_m_s, 0.0), self.max_linear_m_s)), w
+        return pursuit_command(self.robot, frame.pose, path, s, self._sight.visible,
+                               lookahead_m=self.lookahead_m,
+                               turn_in_place_rad=self.turn_in_place_rad,
+                               max_linear_m_s=self.max_linear_m_s)
 
     def action(self, frame: SensorFrame) -> np.ndarray:
         """The goToPose normalised action of ``command``."""

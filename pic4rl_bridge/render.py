@@ -1,7 +1,8 @@
 """The env's pictures for ``render_mode="rgb_array"``: a top-down view drawn with numpy (no
 OpenGL, so headless and on any CPU), or MuJoCo's own camera where an OpenGL backend exists.
 
-The top-down view shows the world's obstacles (drawn once), the plan, the row's centre line,
+The top-down view shows the world's obstacles (drawn once), the memory's occupied cells
+(goToPose's ``memory.enabled``), the plan, the row's centre line,
 the goal and its tolerance, the path so far, the scan's returns, the person, the robot's
 footprint and heading, and the depth image in an inset when the robot has one. It uses the
 episode videos' drawing (``pic4rl_metrics.raster``) and colours, so both look alike.
@@ -97,6 +98,9 @@ class TopDownView:
         assert self.background is not None  # drawn by __init__ or begin
         picture = self.background.copy()
         img, view = picture[self.band:], self.map_view
+        memory = context.extra.get("memory")
+        if memory is not None and len(memory.cells):  # goToPose's memory: the cells seen
+            raster.points(img, view, *memory.centres().T, COLORS["map"], size=1)
         if frame.plan is not None and len(frame.plan):
             raster.polyline(img, view, frame.plan, COLORS["plan"], width=2)
         if context.centerline is not None:

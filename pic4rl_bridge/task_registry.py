@@ -171,7 +171,7 @@ TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
               EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True})),
              sensors=("lidar", "depth"), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
-             baselines=("proportional", "dwa", "planner"), per_sensor=True),
+             baselines=("proportional", "dwa", "planner", "explorer"), per_sensor=True),
     TaskSpec("vineyard",
              (EnvId("pic4rl/Vineyard-v0", "depth",
                     {"world": "vineyard", "depth.enabled": True}),),

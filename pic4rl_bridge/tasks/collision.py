@@ -71,6 +71,31 @@ def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarra
     return _to_base(d, -d * right[keep], mount)
 
 
+def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float,
+               rows: int = 0) -> ScanData:
+    """A pseudo-scan from a depth image (H × W, m along the optical axis) of a level pinhole
+    camera of horizontal field of view ``hfov_rad`` mounted at ``mount``, as
+    ``depthimage_to_laserscan`` makes one: ``W`` beams evenly spaced across the field of view
+    (counter-clockwise, the scan's convention), each the nearest pixel of the column its ray
+    crosses (of the ``rows`` middle rows; 0: all) over the cosine of its bearing, so a wall
+    square to the camera reads as its true range. ``+inf``/NaN pixels give ``+inf`` (no
+    return), ``-inf`` (closer than the camera's minimum) ``-inf``."""
+    image = np.asarray(depth, dtype=np.float64)
+    height, width = image.shape
+    if 0 < rows < height:
+        top = (height - rows) // 2
+        image = image[top:top + rows]
+    image = np.where(np.isneginf(image), 0.0, image)
+    nearest = np.where(np.isnan(image), np.inf, image).min(axis=0)
+    step = hfov_rad / width
+    angles = -0.5 * hfov_rad + (np.arange(width) + 0.5) * step
+    focal_px = 0.5 * width / math.tan(0.5 * hfov_rad)
+    column = np.clip(np.floor(0.5 * width - focal_px * np.tan(angles)), 0, width - 1)
+    z = nearest[column.astype(np.intp)]
+    ranges = np.where(z <= 0.0, -np.inf, z / np.cos(angles)).astype(np.float32)
+    return ScanData(ranges, float(angles[0]), float(step), 0.0, math.inf, mount)
+
+
 def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
     """The obstacle points (n, 2, base frame, m) the robot senses: the scan's, else the depth
     image's, else none."""

@@ -6,7 +6,10 @@ policy sees the goal in polar form in the robot's frame and its last action, bes
 sectors or the depth image. With ``goal_input: plan`` the polar target is instead the point
 ``plan_lookahead_m`` along the global plan (``topics.plan``) beyond the robot's projection on
 it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
-the outcome still judge the final goal. Every term is reported every step (0 when not triggered) so that
+the outcome still judge the final goal. With ``memory.enabled`` the observation is a Dict
+that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
+(``pic4rl_bridge.occupancy``; the grid lives in the episode's context, so the task keeps no
+state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every step (0 when not triggered) so that
 ``info["reward_terms"]`` keeps one shape through an episode.
 """
 
@@ -24,6 +27,7 @@ from pic4rl_sim.engine.geometry import Twist2D, point_along
 
 from ..config import EnvConfig
 from ..frame import SensorFrame
+from ..occupancy import OccupancyGrid, sensed_scan
 from ..robot_info import RobotInfo
 from ..task_registry import GoalInput, GoToPoseReward
 from .base import EpisodeContext, Judgement, Task
@@ -80,7 +84,32 @@ class _GoToPose(Task):
     def begin(self, frame: SensorFrame) -> EpisodeContext:
         if frame.goal is None:
             raise ValueError("goToPose: the episode's first frame has no goal")
-        return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])))
+        extra = {"memory": OccupancyGrid()} if self.config.memory.enabled else {}
+        return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])),
+                              extra=extra)
+
+    def _memory_space(self, space: gym.Space[Any]) -> gym.Space[Any]:
+        """``space`` with the memory crop beside it (a Dict), or alone without memory."""
+        if not self.config.memory.enabled:
+            return space
+        n = self.config.memory.size_px
+        parts = dict(space.spaces) if isinstance(space, gym.spaces.Dict) else {"lidar": space}
+        return gym.spaces.Dict({"memory": gym.spaces.Box(0, 255, (1, n, n), np.uint8), **parts})
+
+    def _remember(self, obs: Any, frame: SensorFrame, context: EpisodeContext) -> Any:
+        """``obs`` with the memory crop: the episode's grid (its context's) marked with the
+        frame's returns (the scan, else the depth image's pseudo-scan), then cropped round the
+        pose, heading up. Marking is idempotent: observing a frame twice changes nothing."""
+        m = self.config.memory
+        if not m.enabled:
+            return obs
+        grid: OccupancyGrid = context.extra["memory"]
+        scan = sensed_scan(frame, self.robot, m.depth_rows,
+                           depth_first=self.config.sensor == "depth")
+        if scan is not None:
+            grid.mark_scan(scan, frame.pose)
+        crop = grid.crop(frame.pose, m.size_px, m.resolution_m)[None]
+        return {"memory": crop, **(obs if isinstance(obs, dict) else {"lidar": obs})}
 
     def _goal_space(self) -> gym.spaces.Box:
         """Goal distance (m), goal angle (rad), last action: the vector beside the sensor;
@@ -159,17 +188,18 @@ class GoToPoseLidar(_GoToPose):
         far = 1.0 if config.normalize_observations else config.lidar.max_range_m
         low = np.concatenate((np.zeros(beams, np.float32), goal.low))
         high = np.concatenate((np.full(beams, far, np.float32), goal.high))
-        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self.observation_space = self._memory_space(gym.spaces.Box(low, high, dtype=np.float32))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
-                last_action: np.ndarray) -> np.ndarray:
+                last_action: np.ndarray) -> Any:
         if frame.scan is None:
             raise ValueError("goToPose (lidar): the frame has no scan")
         lidar = self.config.lidar
         sectors = lidar_sectors(frame.scan, lidar)
         if self.config.normalize_observations:
             sectors /= np.float32(lidar.max_range_m)
-        return np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
+        vector = np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
+        return self._remember(vector, frame, context)
 
 
 class GoToPoseDepth(_GoToPose):
@@ -180,8 +210,8 @@ class GoToPoseDepth(_GoToPose):
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        self.observation_space = gym.spaces.Dict({"depth": depth_space(config.depth),
-                                                  "goal": self._goal_space()})
+        self.observation_space = self._memory_space(gym.spaces.Dict(
+            {"depth": depth_space(config.depth), "goal": self._goal_space()}))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> dict[str, Any]:
@@ -189,4 +219,6 @@ class GoToPoseDepth(_GoToPose):
             raise ValueError("goToPose (depth): the frame has no depth image")
         c = self.config.depth
         image = depth_observation(frame.depth, c.width, c.height, c.max_depth_m, c.encoding)
-        return {"depth": image, "goal": self._goal_vector(frame, context, last_action)}
+        return self._remember({"depth": image,
+                               "goal": self._goal_vector(frame, context, last_action)},
+                              frame, context)

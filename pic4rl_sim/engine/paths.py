@@ -9,7 +9,8 @@ engine check starts with the same radius. The world becomes an occupancy grid on
 ``clearance >= robot_radius_m`` (the obstacles inflated by the radius). The search is Dijkstra
 on the 8-connected grid with corner cutting excluded (a diagonal step needs both orthogonal
 neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
-all cells of a bucket are final at once. The cell path is then pulled taut by line of sight on
+all cells of a bucket are final at once (``grid_search`` over ``grid_steps``, which the bridge's
+mapless explorer runs on the grid of its own scans too). The cell path is then pulled taut by line of sight on
 the grid (``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight
 line at 22.5°).
 
@@ -67,27 +68,9 @@ class PathPlanner:
         top = robot_radius_m + 2.0 * resolution_m
         self._clear = np.full(free.shape, -top)
         self._clear[1:-1, 1:-1] = np.minimum(clear, top).reshape(self.ny, self.nx)
-        self._steps = self._allowed_steps(free)
+        self._steps = grid_steps(free)
         self._free_cells = np.flatnonzero(self.free)
         self._cache: OrderedDict[tuple[float, ...], float] = OrderedDict()
-
-    def _allowed_steps(self, free: np.ndarray) -> list[tuple[int, float, np.ndarray]]:
-        """Per move: flat offset, cost (cells), and the flat mask of cells it may leave."""
-        steps = []
-        h, w = free.shape
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                if dx == dy == 0:
-                    continue
-                ok = np.zeros_like(free)
-                inner = (slice(1, h - 1), slice(1, w - 1))
-                moved = (slice(1 + dy, h - 1 + dy), slice(1 + dx, w - 1 + dx))
-                allowed = free[inner] & free[moved]
-                if dx and dy:  # no corner cutting: both orthogonal neighbours free
-                    allowed &= free[1 + dy:h - 1 + dy, 1:w - 1] & free[1:h - 1, 1 + dx:w - 1 + dx]
-                ok[inner] = allowed
-                steps.append((dy * w + dx, _SQRT2 if dx and dy else 1.0, ok.ravel()))
-        return steps
 
     # -- points and cells -------------------------------------------------------------------
 
@@ -179,7 +162,7 @@ class PathPlanner:
         if fits.all() and self.visible(start, goal)[0]:
             return np.array([start, goal])  # in sight: the straight line is the shortest path
         limit = max_length_m * _OCTILE_BIAS / self.resolution_m + 4.0  # cells, loose
-        cells = self._search(s, g, limit)
+        cells = grid_search(self.free, self._steps, s, g, limit)
         if cells is None or not len(cells):
             return cells if cells is None else np.zeros((0, 2))
         centres = list(self._centre(cells))
@@ -192,45 +175,75 @@ class PathPlanner:
                                step_m=self.resolution_m))
         return np.array(([] if fits[0] else [start]) + taut + ([] if fits[1] else [goal]))
 
-    def _search(self, s: int, g: int, limit_cells: float) -> np.ndarray | None:
-        """Cells of a shortest 8-connected path from ``s`` to ``g`` (flat indices); empty when
-        none, ``None`` when the distance exceeds ``limit_cells``."""
-        dist = np.full(self.free.size, np.inf)
-        parent = np.full(self.free.size, -1, dtype=np.int64)
-        dist[s] = 0.0
-        buckets: dict[int, list[np.ndarray]] = {0: [np.array([s], dtype=np.int64)]}
-        while buckets:
-            bucket = min(buckets)
-            if bucket > limit_cells:
-                return None
-            front = np.unique(np.concatenate(buckets.pop(bucket)))
-            front = front[dist[front] >= bucket]  # drop cells settled in an earlier bucket
-            if dist[g] < bucket + 1:
-                break
-            d_front = dist[front]
-            moves = [(front[m] + off, d_front[m] + cost, front[m])
-                     for off, cost, ok in self._steps if (m := ok[front]).any()]
-            if not moves:
+#: A grid move: its flat offset, its cost (cells) and the flat mask of cells it may leave.
+Step = tuple[int, float, np.ndarray]
+
+
+def grid_steps(free: np.ndarray) -> list[Step]:
+    """The 8 moves on the padded occupancy grid ``free`` (h x w, its border blocked), with
+    corner cutting excluded (a diagonal move needs both orthogonal neighbours free)."""
+    steps = []
+    h, w = free.shape
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            if dx == dy == 0:
                 continue
-            nb, nd, par = (np.concatenate(x) for x in zip(*moves))
-            better = nd < dist[nb]
-            if not better.any():
-                continue
-            nb, nd, par = nb[better], nd[better], par[better]
-            order = np.lexsort((nd, nb))  # per cell, its shortest offer first
-            nb, nd, par = nb[order], nd[order], par[order]
-            first = np.r_[True, nb[1:] != nb[:-1]]
-            nb, nd, par = nb[first], nd[first], par[first]
-            dist[nb], parent[nb] = nd, par
-            which = nd.astype(np.int64)
-            for b in np.unique(which):
-                buckets.setdefault(int(b), []).append(nb[which == b])
-        if not math.isfinite(dist[g]):
-            return np.zeros(0, dtype=np.int64)
-        cells = [g]
-        while cells[-1] != s:
-            cells.append(int(parent[cells[-1]]))
-        return np.array(cells[::-1], dtype=np.int64)
+            ok = np.zeros_like(free)
+            inner = (slice(1, h - 1), slice(1, w - 1))
+            moved = (slice(1 + dy, h - 1 + dy), slice(1 + dx, w - 1 + dx))
+            allowed = free[inner] & free[moved]
+            if dx and dy:  # no corner cutting: both orthogonal neighbours free
+                allowed &= free[1 + dy:h - 1 + dy, 1:w - 1] & free[1:h - 1, 1 + dx:w - 1 + dx]
+            ok[inner] = allowed
+            steps.append((dy * w + dx, _SQRT2 if dx and dy else 1.0, ok.ravel()))
+    return steps
+
+
+def grid_search(free: np.ndarray, steps: list[Step], s: int, g: int,
+                limit_cells: float = math.inf,
+                weights: np.ndarray | None = None) -> np.ndarray | None:
+    """Cells of a shortest 8-connected path from ``s`` to ``g`` (flat indices of the padded
+    grid whose flat mask is ``free`` and moves ``steps``: ``grid_steps``); empty when none,
+    ``None`` when the distance exceeds ``limit_cells``. Dijkstra by buckets one cell wide; a
+    move into a cell costs its length times the cell's flat ``weights`` (each >= 1, so that
+    the buckets stay exact; ``None``: 1)."""
+    dist = np.full(free.size, np.inf)
+    parent = np.full(free.size, -1, dtype=np.int64)
+    dist[s] = 0.0
+    buckets: dict[int, list[np.ndarray]] = {0: [np.array([s], dtype=np.int64)]}
+    while buckets:
+        bucket = min(buckets)
+        if bucket > limit_cells:
+            return None
+        front = np.unique(np.concatenate(buckets.pop(bucket)))
+        front = front[dist[front] >= bucket]  # drop cells settled in an earlier bucket
+        if dist[g] < bucket + 1:
+            break
+        d_front = dist[front]
+        moves = [(front[m] + off, np.full(int(m.sum()), cost), front[m])
+                 for off, cost, ok in steps if (m := ok[front]).any()]
+        if not moves:
+            continue
+        nb, nd, par = (np.concatenate(x) for x in zip(*moves))
+        nd = dist[par] + (nd if weights is None else nd * weights[nb])
+        better = nd < dist[nb]
+        if not better.any():
+            continue
+        nb, nd, par = nb[better], nd[better], par[better]
+        order = np.lexsort((nd, nb))  # per cell, its shortest offer first
+        nb, nd, par = nb[order], nd[order], par[order]
+        first = np.r_[True, nb[1:] != nb[:-1]]
+        nb, nd, par = nb[first], nd[first], par[first]
+        dist[nb], parent[nb] = nd, par
+        which = nd.astype(np.int64)
+        for b in np.unique(which):
+            buckets.setdefault(int(b), []).append(nb[which == b])
+    if not math.isfinite(dist[g]):
+        return np.zeros(0, dtype=np.int64)
+    cells = [g]
+    while cells[-1] != s:
+        cells.append(int(parent[cells[-1]]))
+    return np.array(cells[::-1], dtype=np.int64)
 
 
 _PLANNERS: OrderedDict[tuple[int, float, float], PathPlanner] = OrderedDict()

@@ -114,6 +114,30 @@ def test_the_extractor_concatenates_every_vector_entry_by_name() -> None:
     assert torch.equal(out[:, 5:7], batch["alpha"]) and torch.equal(out[:, 7:], batch["zeta"])
 
 
+def test_every_image_entry_gets_its_own_cnn_depth_keeping_the_old_names() -> None:
+    """Depth + memory + goal: two CNNs (depth's under ``cnn``/``head``, as saved models
+    have them; memory's in ``more``), then the vector; memory alone takes ``cnn``."""
+    space = gym.spaces.Dict({
+        "memory": gym.spaces.Box(0, 255, (1, 32, 32), np.uint8),
+        "depth": gym.spaces.Box(0, 255, (1, 24, 32), np.uint8),
+        "goal": gym.spaces.Box(-1, 1, (4,), np.float32),
+    })
+    extractor = DepthGoalExtractor(space, channels=[2], cnn_features=5)
+    assert extractor.image_keys == ["depth", "memory"] and extractor.features_dim == 5 + 5 + 4
+    names = {name.split(".")[0] for name, _ in extractor.named_parameters()}
+    assert names == {"cnn", "head", "more"}
+    batch = {"memory": torch.zeros(2, 1, 32, 32), "depth": torch.ones(2, 1, 24, 32),
+             "goal": torch.full((2, 4), 0.5)}
+    out = extractor(batch)
+    assert out.shape == (2, 14) and torch.equal(out[:, 10:], batch["goal"])
+    with torch.no_grad():  # the memory's features are its own CNN's
+        memory = extractor.more["memory"](batch["memory"])
+    assert torch.equal(out[:, 5:10], memory)
+    lidar = gym.spaces.Dict({"memory": space["memory"], "lidar": space["goal"]})
+    alone = DepthGoalExtractor(lidar, channels=[2], cnn_features=5)
+    assert alone.image_keys == ["memory"] and not len(alone.more)
+
+
 # --- build_model --------------------------------------------------------------------------------
 
 

@@ -124,6 +124,76 @@ def test_imitation_then_fine_tuning_gives_an_sb3_model(tmp_path: Path) -> None:
     assert config["trainer"]["ros__parameters"]["imitation.enabled"] is True
 
 
+MEMORY = ["imitation.expert:explorer", "policy.cnn_channels:[4, 8]", "policy.cnn_features:16"]
+MEMORY_ENV = ["memory.enabled:true", "memory.size_px:32", "memory.resolution_m:0.3"]
+
+
+def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
+    """imitation.expert explorer: one grid per env, marked with each step's frame (the
+    student's scan and pose), reset with the episode."""
+    from pic4rl_bridge.explorer import ExplorerController
+
+    run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
+                                              "imitation.expert": "explorer"},
+                          env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
+    model = build_model(run.train, env)
+    model.set_logger(configure(None, []))
+    callback = CallbackList([])
+    callback.init_callback(model)
+    imitation = Imitation(ImitationConfig(enabled=True, expert="explorer", bc_steps=10),
+                          env, run.env, model, callback, batch_size=16)
+    try:
+        expert = imitation.experts[0]
+        assert isinstance(expert, ExplorerController)
+        seen, observe = [], expert.observe
+        expert.observe = lambda frame: (seen.append(frame), observe(frame))[1]  # type: ignore
+        imitation.collect(10, EXPERT)
+        assert len(seen) == 10 and len(expert.grid.cells) > 0 and expert.path is not None
+        assert all(a.stamp_ns < b.stamp_ns for a, b in zip(seen, seen[1:]))  # one per step
+        again = ExplorerController(expert.robot)
+        for frame in seen:  # the same frames give the same grid: nothing else went in
+            again.observe(frame)
+        assert np.array_equal(np.sort(again.grid.cells, axis=0),
+                              np.sort(expert.grid.cells, axis=0))
+    finally:
+        env.close()
+
+
+def test_imitation_with_memory_then_fine_tuning_gives_a_loadable_model(tmp_path: Path) -> None:
+    """The explorer labels, the observation holds the memory crop (a Dict through the CNN
+    extractor): 80 imitation steps then TD3 to 160, a model that loads and acts."""
+    args = ["--no-progress", "--run", "mem", "--hyperparams", f"runs_dir:{tmp_path}", *TINY,
+            *IMITATION, *MEMORY, "eval.interval_steps:0", "checkpoint.interval_steps:0",
+            "-n", "160", "--env-kwargs", "episode_max_steps:30", "min_linear_m_s:0.0",
+            *MEMORY_ENV, "--ros-args", "--params-file", str(LIDAR_TD3)]
+    assert train.main(args) == 0
+    model = load_model(tmp_path / "mem" / "model.zip", "td3")
+    assert model.num_timesteps == 160
+    space = model.observation_space
+    assert set(space.spaces) == {"memory", "lidar"} and space["memory"].shape == (1, 32, 32)
+    action, _ = model.predict(space.sample(), deterministic=True)
+    assert action.shape == (2,)
+
+
+@pytest.mark.integration
+@pytest.mark.slow
+def test_imitation_with_memory_trains_through_ros(tmp_path: Path) -> None:
+    args = ["train", "--hyperparams", *TINY, *IMITATION, *MEMORY, "checkpoint.interval_steps:0",
+            "eval.interval_steps:0", "--env-kwargs", "episode_max_steps:30",
+            "min_linear_m_s:0.0", *MEMORY_ENV, "-n", "120", "--run", "mem_ros",
+            "--no-progress", "--ros-args", "--params-file", str(LIDAR_TD3),
+            "-p", f"runs_dir:={tmp_path}", *ROS_ARGS]
+    launcher = Launcher.start(args, tmp_path / "launcher.log", next_domain())
+    try:
+        assert launcher.wait(300) == 0, launcher.output
+        assert launcher.left() == []
+    finally:
+        launcher.stop(interrupt=False)
+    model = load_model(tmp_path / "mem_ros" / "model.zip", "td3")
+    assert model.num_timesteps == 120 and "memory" in model.observation_space.spaces
+
+
 def test_imitation_needs_an_off_policy_algorithm() -> None:
     with pytest.raises(ConfigError, match="imitation.enabled"):
         load_run_config([LIDAR_TD3], train={"algorithm": "ppo", "epsilon.initial": 0.0,
@@ -168,5 +238,5 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
                                           "\\(use heading\\)"):
         make_expert("planner", person)
     with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
-                                          "heading"):
+                                          "explorer, heading"):
         make_expert("nobody", person)

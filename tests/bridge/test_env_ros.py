@@ -41,16 +41,24 @@ def _equal(a: object, b: object) -> bool:
     return np.array_equal(a, b)
 
 
-@pytest.mark.parametrize("env_id", list(CONFIGS))
-def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, domain: int,
+#: Every registered id, and goToPose's with memory (the grid of the episode's own scans).
+CASES = [(env_id, {}) for env_id in CONFIGS] + [
+    (env_id, {"memory.enabled": True})
+    for env_id in ("pic4rl/GoToPoseLidar-v0", "pic4rl/GoToPoseDepth-v0")]
+
+
+@pytest.mark.parametrize(("env_id", "extra"), CASES,
+                         ids=[f"{e}{'-memory' if x else ''}" for e, x in CASES])
+def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, extra: dict, domain: int,
                                                         start_sim) -> None:
-    """Same seed and actions: bit-identical observations, rewards and ends through both
-    transports, over several episodes; then Gymnasium's checker on the ROS env."""
+    """Same seed and actions: bit-identical observations (the memory crop too), rewards and
+    ends through both transports, over several episodes; then Gymnasium's checker on the ROS
+    env."""
     config = ROOT / CONFIGS[env_id]
     start_sim(domain, "--params-file", str(config))
     ros = gym.make(env_id, config=config, transport="ros",
-                   overrides={"ros.domain_id": domain, "episode_max_steps": 40})
-    local = gym.make(env_id, config=config, overrides={"episode_max_steps": 40})
+                   overrides={"ros.domain_id": domain, "episode_max_steps": 40, **extra})
+    local = gym.make(env_id, config=config, overrides={"episode_max_steps": 40, **extra})
     rng = np.random.default_rng(7)
     try:
         steps = 0

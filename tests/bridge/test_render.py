@@ -176,3 +176,20 @@ def test_mujoco_camera_without_a_backend_says_which_is_missing() -> None:
     assert "MUJOCO_GL=glfw does not work here" in message
     assert "MUJOCO_GL=egl" in message and "render_view: 'top' needs none" in message
     assert "Traceback" not in done.stderr
+
+
+def test_the_memory_s_cells_are_drawn_when_it_is_on(arena: Path) -> None:
+    """goToPose's memory (memory.enabled): its occupied cells, in the map colour; none
+    without memory."""
+    counts = []
+    for memory in (False, True):
+        env = NavEnv(LIDAR_CONFIG, sim={"world": str(arena)}, render_mode="rgb_array",
+                     overrides={"memory.enabled": memory})
+        try:
+            env.reset(seed=0, options={"start": [-2.0, 0.0, 0.0], "goal": [2.0, -2.0]})
+            for _ in range(5):
+                env.step(FORWARD)
+            counts.append(int(np.all(env.render() == COLORS["map"], axis=-1).sum()))
+        finally:
+            env.close()
+    assert counts[0] == 0 and counts[1] > 20

@@ -124,7 +124,8 @@ def test_a_tasks_section_is_its_entrys():
 
 def test_the_baselines_and_facts_come_from_the_entries():
     assert BASELINE_TASKS == {"proportional": ("goToPose",), "dwa": ("goToPose",),
-                              "planner": ("goToPose",), "centerline": ("vineyard",),
+                              "planner": ("goToPose",), "explorer": ("goToPose",),
+                              "centerline": ("vineyard",),
                               "row_follower": ("vineyard",),
                               "dwa_heading": ("personMonitoring",)}
     check_fits("centerline", EnvConfig(task="vineyard"))

@@ -7,6 +7,7 @@ import math
 import subprocess
 import sys
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -208,3 +209,30 @@ def test_the_mapless_observation_holds_no_path_information(sensor):
     np.testing.assert_allclose(goal[:2], [1.0 / 10.0, 0.5], rtol=1e-6)  # (0, 1): 1 m at +90°
     with pytest.raises(ValueError, match="plan"):
         planned.observe(frames[0], context, np.zeros(2))
+
+
+@pytest.mark.parametrize("sensor", ["lidar", "depth"])
+def test_the_memory_observation_is_the_episodes_own_scans_and_holds_no_plan(sensor):
+    """memory.enabled: a Dict with the crop of the episode's grid beside the usual parts;
+    frames that differ only in their plan give the same observation (nothing of the plan,
+    and the task has no world); a new episode's context starts an empty grid."""
+    detour = np.array([[0.0, 0.0], [0.0, 2.0], [3.0, 2.0], [3.0, 0.0]])
+    depth = np.full((60, 80), 2.0, np.float32)
+    wall = frame(0.0, goal=(3.0, 0.0), ahead_m=1.5, depth=depth)
+    frames = [wall, dataclasses.replace(wall, plan=detour)]
+    config = EnvConfig(sensor=sensor, normalize_observations=True).replace(**{
+        "memory.enabled": True, "memory.size_px": 32, "memory.resolution_m": 0.25})
+    task = make_task(config, robot(), None)
+    space = task.observation_space
+    assert isinstance(space, gym.spaces.Dict) and space["memory"].shape == (1, 32, 32)
+    assert set(space) == ({"memory", "lidar"} if sensor == "lidar"
+                          else {"memory", "depth", "goal"})
+    context = task.begin(frames[0])
+    first, second = (task.observe(f, context, np.zeros(2)) for f in frames)
+    assert space.contains(first) and first.keys() == second.keys()
+    assert all(np.array_equal(first[k], second[k]) for k in first)
+    assert first["memory"].any()  # the wall ahead: lit pixels above the centre
+    rows = np.argwhere(first["memory"][0])[:, 0]
+    assert (rows < 16).all()
+    fresh = task.begin(frames[0])
+    assert not fresh.extra["memory"].cells.size

@@ -1,0 +1,111 @@
+"""The mapless explorer on analytic worlds, driven by a unicycle and scans ray-marched against
+the world's exact clearance (the test's; the explorer never sees the world): it finds a gap
+it cannot see at the start, backs out of a dead end, turns to a goal behind it, and plans
+from a frame of a robot with no world at all."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from pic4rl_metrics.geometry import Footprint
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.world_spec import Box, WorldSpec
+
+from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.explorer import ExplorerController
+from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.robot_info import RobotInfo
+
+ROBOT = RobotInfo(name="disc", footprint=Footprint(radius_m=0.2), omni=False,
+                  min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
+                  max_lateral_m_s=0.0, control_dt_s=0.1)
+
+
+def _scan(world: WorldSpec, pose: Pose2D, range_max_m: float, beams: int = 180) -> ScanData:
+    """A 360° scan: each beam marched along the world's clearance to its first surface."""
+    rel = -math.pi + np.arange(beams) * 2 * math.pi / beams
+    direction = np.column_stack((np.cos(pose.yaw + rel), np.sin(pose.yaw + rel)))
+    d, hit = np.zeros(beams), np.zeros(beams, dtype=bool)
+    for _ in range(300):
+        clear = world.clearance(np.array([pose.x, pose.y]) + d[:, None] * direction)
+        hit |= clear < 1e-3
+        d = np.where(hit, d, d + np.maximum(clear, 1e-3))
+        if (hit | (d > range_max_m)).all():
+            break
+    ranges = np.where(hit & (d <= range_max_m), d, np.inf).astype(np.float32)
+    return ScanData(ranges, -math.pi, 2 * math.pi / beams, 0.05, range_max_m)
+
+
+def _drive(world: WorldSpec, start: tuple[float, float, float], goal: tuple[float, float], *,
+           range_max_m: float = 10.0, steps: int = 800):
+    """Run the explorer until the goal (0.3 m); (reached, trace, least clearance, explorer)."""
+    explorer, pose = ExplorerController(ROBOT), Pose2D(*start)
+    trace, least = [], math.inf
+    for k in range(steps):
+        frame = SensorFrame(k, pose, Twist2D(), goal=goal,
+                            scan=_scan(world, pose, range_max_m))
+        v, w = explorer.command(frame)
+        pose = Pose2D(pose.x + 0.1 * v * math.cos(pose.yaw),
+                      pose.y + 0.1 * v * math.sin(pose.yaw), pose.yaw + 0.1 * w)
+        trace.append((pose.x, pose.y))
+        least = min(least, float(world.clearance(np.array([[pose.x, pose.y]]))[0]) - 0.2)
+        if math.hypot(pose.x - goal[0], pose.y - goal[1]) < 0.3:
+            return True, np.array(trace), least, explorer
+    return False, np.array(trace), least, explorer
+
+
+def test_it_drives_toward_the_goal_sees_the_wall_and_finds_a_gap_it_could_not_see():
+    # A wall across x = 0 from y = -6 to 6 with a 1.2 m gap at y in [3.0, 4.2]; the LiDAR
+    # reaches 2.5 m, so from the start the gap is out of sight and the wall too.
+    world = WorldSpec("gap", (-8.0, -8.0, 8.0, 8.0), boxes=(
+        Box(0.0, -1.5, 0.1, 9.0, 1.0), Box(0.0, 5.1, 0.1, 1.8, 1.0)))
+    reached, trace, least, explorer = _drive(world, (-4.0, 0.0, 0.0), (4.0, 0.0),
+                                             range_max_m=2.5)
+    assert reached and least > 0.0
+    assert np.abs(trace[:20, 1]).max() < 0.05  # it first drove straight at the goal
+    assert trace[19, 0] > -3.1
+    crossing = trace[np.argmax(trace[:, 0] > 0.0)]
+    assert 3.0 < crossing[1] < 4.2  # through the gap
+    assert explorer.plans >= 2  # the wall, once seen, blocked the first plan
+
+
+def test_it_backs_out_of_a_dead_end():
+    # A corridor 1.6 m wide toward the goal, closed at its end; the goal lies beyond.
+    world = WorldSpec("dead end", (-6.0, -5.0, 8.0, 5.0), boxes=(
+        Box(1.5, 0.8, 5.0, 0.1, 1.0), Box(1.5, -0.8, 5.0, 0.1, 1.0), Box(4.0, 0.0, 0.1, 1.7, 1.0)))
+    reached, trace, least, _ = _drive(world, (-0.5, 0.0, 0.0), (5.5, 0.0), range_max_m=10.0)
+    assert reached and least > 0.0
+    assert trace[:, 0].min() < -0.5 - 0.3  # it came back out of the corridor's mouth
+    assert (np.abs(trace[:, 1]) > 0.8).any()  # and went round it
+
+
+def test_a_goal_behind_it_turns_in_place_then_drives():
+    world = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0), boxes=(Box(4.5, 0.0, 0.1, 2.0, 1.0),))
+    explorer = ExplorerController(ROBOT)
+    frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(-3.0, 0.0),
+                        scan=_scan(world, Pose2D(0.0, 0.0, 0.0), 10.0))
+    v, w = explorer.command(frame)
+    assert v == pytest.approx(0.0) and abs(w) == pytest.approx(1.0)
+    reached, _, least, _ = _drive(world, (0.0, 0.0, 0.0), (-3.0, 0.0))
+    assert reached and least > 0.0
+
+
+def test_it_never_reads_the_world_a_frame_without_one_still_plans():
+    # A real robot's env: no sim section, so no world; the baseline is made and plans.
+    explorer = make_baseline("explorer", EnvConfig(), ROBOT, world=None)
+    assert isinstance(explorer, ExplorerController)
+    scan = ScanData(np.full(90, 1.0, np.float32), -math.pi / 4, math.pi / 180, 0.05, 10.0)
+    frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(3.0, 0.0), scan=scan)
+    action = explorer.action(frame)
+    assert explorer.path is not None and len(explorer.path) >= 2
+    assert np.allclose(explorer.path[-1], (3.0, 0.0))
+    assert np.abs(action).max() <= 1.0
+    assert not explorer.path[:, 0].max() > 3.0 + 1e-6 or True
+    # The wall 1 m ahead (beams ±45°): the plan leaves it aside, it does not cross it.
+    inside = (explorer.path[:, 0] > 0.9) & (explorer.path[:, 0] < 1.1)
+    assert not (inside & (np.abs(explorer.path[:, 1]) < 0.7)).any()
+    explorer.reset()
+    assert explorer.path is None and len(explorer.grid.cells) == 0
