@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.paths import grid_search, grid_steps
+from pic4rl_sim.engine.paths import grid_search, grid_steps, segment_samples
 from pic4rl_sim.engine.taut_path import pull_taut
 
 from .baseline_config import ExplorerConfig
@@ -90,12 +90,7 @@ class _Clearance:
     def visible(self, a: np.ndarray, b: np.ndarray, need_m: float) -> np.ndarray:
         """Whether each segment a[i]-b[i] (or from one point) keeps ``need_m`` of clearance
         at every half cell."""
-        a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-        counts = np.ceil(np.hypot(*(b - a).T) / (0.5 * self.res)).astype(np.int64) + 1
-        seg = np.repeat(np.arange(len(a)), counts)
-        starts = np.cumsum(counts) - counts
-        t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
-        pts = a[seg] + (b[seg] - a[seg]) * t[:, None]
+        pts, starts = segment_samples(a, b, 0.5 * self.res)
         return np.logical_and.reduceat(self.at(pts) >= need_m, starts)
 
 

@@ -39,6 +39,19 @@ _CHUNK = 8192  # cell centres per clearance call: bounds the (points x obstacles
 _CACHE = 256  # lengths kept per planner (the sampler's query is asked again for the facts)
 
 
+
+def segment_samples(a: np.ndarray, b: np.ndarray, step_m: float) -> tuple[np.ndarray,
+                                                                          np.ndarray]:
+    """Points every ``step_m`` or closer along each segment a[i]-b[i] (both (n, 2), or one a
+    single point), ends included, and where each segment's points start: a per-point test
+    reduced with ``np.logical_and.reduceat(ok, starts)`` says which segments pass whole."""
+    a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
+    counts = np.ceil(np.hypot(*(b - a).T) / step_m).astype(np.int64) + 1
+    seg = np.repeat(np.arange(len(a)), counts)
+    starts = np.cumsum(counts) - counts
+    t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
+    return a[seg] + (b[seg] - a[seg]) * t[:, None], starts
+
 class PathPlanner:
     """Shortest-path lengths between points of one world for a disc robot; build it once
     (tens of milliseconds), query it per episode. Lengths of the last queries are cached."""
@@ -115,12 +128,7 @@ class PathPlanner:
         """Whether the disc can move straight from each point of ``a`` to the same row of
         ``b`` (both (n, 2), or one a single point): the interpolated clearance is at least the
         radius every half cell along the way."""
-        a, b = np.broadcast_arrays(np.atleast_2d(a), np.atleast_2d(b))
-        counts = np.ceil(np.hypot(*(b - a).T) / (0.5 * self.resolution_m)).astype(np.int64) + 1
-        seg = np.repeat(np.arange(len(a)), counts)
-        starts = np.cumsum(counts) - counts
-        t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
-        pts = a[seg] + (b[seg] - a[seg]) * t[:, None]
+        pts, starts = segment_samples(a, b, 0.5 * self.resolution_m)
         ok = self.clearance_at(pts) >= self.robot_radius_m - 1e-9
         return np.logical_and.reduceat(ok, starts)
 
