@@ -164,7 +164,7 @@ _register("spl", "-", "SPL", ("goal",))(lambda d: d.success * d.spl_weight)
 @_register("soft_spl", "-", "soft-SPL", ("goal",))
 def _soft_spl(d: Derived) -> float:
     straight = d.straight_m
-    progress = 1.0 - d.goal_dist[-1] / straight if straight > 0 else NAN
+    progress = 1.0 - d.goal_dist[-1] / straight if straight >= MIN_PATH_M else NAN
     return float(np.clip(progress, 0.0, 1.0)) * d.spl_weight
 
 
