@@ -87,7 +87,8 @@ class PlannerConfig:
 @dataclass(frozen=True)
 class ExplorerConfig:
     """The mapless explorer (``pic4rl_bridge.explorer.ExplorerController``): its plan's
-    clearance beyond the footprint's circumscribed radius, and when it plans anew."""
+    clearance beyond the footprint's circumscribed radius, when it plans anew, and how fast
+    it goes (BARN's dense fields want it slower, as the planner)."""
 
     margin_m: float = param(0.10, doc="the plan keeps this beyond the circumscribed radius "
                             "from every cell seen occupied", unit="m", range=NON_NEGATIVE)
@@ -96,6 +97,12 @@ class ExplorerConfig:
     replan_distance_m: float = param(0.3, doc="a new plan when the robot is this far off its "
                                      "plan (and when a newly seen obstacle blocks it)",
                                      unit="m", range=POSITIVE)
+    squeeze_radius_m: float = param(0.0, doc="when no path keeps the circumscribed radius + "
+                                    "narrow_margin_m, one that keeps this (a gap the footprint "
+                                    "fits only driven along it); 0: none", unit="m",
+                                    range=NON_NEGATIVE)
+    max_linear_m_s: float = param(0.0, doc="its speed limit; 0: the env's", unit="m/s",
+                                  range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,10 @@ terrain plan optimistically). It plans the shortest path on that grid with the o
 inflated by the footprint's circumscribed radius plus ``margin_m`` (``narrow_margin_m`` when
 nothing else passes: a narrow door), by ``pic4rl_sim.engine.paths``' vectorised grid search
 and taut pull, and follows it with the privileged planner's pursuit law
-(``planner.pursuit_command``). It keeps its plan until a newly seen obstacle blocks it or the
-robot is ``replan_distance_m`` off it: a plan made anew at every step would flip between the
-two ways round an obstacle, and an expert that flips is one a student cannot learn.
+(``planner.pursuit_command``) within its own speed limit (``max_linear_m_s``). It keeps its
+plan until a newly seen obstacle blocks it or the robot is ``replan_distance_m`` off it: a plan
+made anew at every step would flip between the two ways round an obstacle, and an expert that
+flips is one a student cannot learn.
 
 The search runs on a window of the grid (what was seen, the robot and the goal, with
 ``_PAD_CELLS`` round them), on a clearance field (distance to the nearest occupied cell,
@@ -104,6 +105,8 @@ class ExplorerController:
         self.radius_m = robot.footprint.bounding_radius_m
         self.grid = OccupancyGrid(GRID_RESOLUTION_M)
         self.lookahead_m, self.turn_in_place_rad = lookahead_m, turn_in_place_rad
+        cap = self.config.max_linear_m_s
+        self.max_linear_m_s = min(cap, robot.max_linear_m_s) if cap > 0 else robot.max_linear_m_s
         self.plans = 0  # paths planned since the controller was made
         self.reset()
 
@@ -159,7 +162,8 @@ class ExplorerController:
         return pursuit_command(self.robot, frame.pose, path, s,
                                lambda a, b: field.visible(a, b, need),
                                lookahead_m=self.lookahead_m,
-                               turn_in_place_rad=self.turn_in_place_rad)
+                               turn_in_place_rad=self.turn_in_place_rad,
+                               max_linear_m_s=self.max_linear_m_s)
 
     def action(self, frame: SensorFrame) -> np.ndarray:
         """The goToPose normalised action of ``command``."""
@@ -175,8 +179,7 @@ class ExplorerController:
         if self._field is None or not len(self._samples):
             return True
         ahead = self._sample_ok & (self._sample_s >= s - self.grid.resolution_m)
-        floor = self.radius_m + min(self.config.narrow_margin_m, self.config.margin_m)
-        return bool((ahead & (self._field.at(self._samples) < floor - _SHAVE_M)).any())
+        return bool((ahead & (self._field.at(self._samples) < self._need_m - _SHAVE_M)).any())
 
     def _make_field(self, xy: np.ndarray, goal: tuple[float, float],
                     pad: int = _PAD_CELLS) -> _Clearance:
@@ -196,6 +199,10 @@ class ExplorerController:
         path = self._search(field, xy, np.array(goal), need)
         if path is None:  # the way round may pass beyond the window: a wider one
             self._field = field = self._make_field(xy, goal, 4 * _PAD_CELLS)
+            path = self._search(field, xy, np.array(goal), need)
+        squeeze = self.config.squeeze_radius_m
+        if path is None and 0 < squeeze < need:  # a gap only the footprint, aligned, fits
+            need = squeeze
             path = self._search(field, xy, np.array(goal), need)
         if path is None:  # no way round what was seen: straight on, the walls will tell
             path = np.array([xy, goal])

@@ -5,6 +5,8 @@ metric's formula on the env's own poses), one episode per world and setting.
     .venv/bin/python tools/barn_tune.py planner planner.max_linear_m_s=1.5,2.0 \
         planner.plan_margin_m=0,0.1
     .venv/bin/python tools/barn_tune.py dwa dwa.horizon_s=1.5,2.5 --worlds 3:300:6
+    .venv/bin/python tools/barn_tune.py explorer explorer.squeeze_radius_m=0.27,0.3 \
+        explorer.max_linear_m_s=1.0,1.5,2.0
 
 Each ``KEY=V1,V2`` is one axis of the grid (a ``baselines.*`` key without its prefix); every
 combination runs on ``--worlds`` (a Python range START:STOP:STEP; default every world whose
@@ -59,7 +61,7 @@ def episode(env: NavEnv, baseline: str, settings: object, seed: int) -> tuple[st
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("baseline", choices=("dwa", "planner"))
+    parser.add_argument("baseline", choices=("dwa", "planner", "explorer"))
     parser.add_argument("axes", nargs="*", metavar="KEY=V1,V2")
     parser.add_argument("--worlds", default="3:300:6", help="START:STOP:STEP (a range)")
     parser.add_argument("--seed", type=int, default=0)

@@ -24,7 +24,7 @@ SUITE, CI = REPO / "config" / "suite_barn.yaml", REPO / "config" / "suite_barn_c
 def test_the_protocol_is_the_50_test_worlds_times_10_runs(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
     assert suite.table == "barn"
-    for agent in ("dwa", "planner"):
+    for agent in ("dwa", "planner", "explorer"):
         cells = [c for c in suite.cells if c.agent == agent]
         assert [c.variant for c in cells] == list(range(0, 300, 6))
         assert {c.pairs.episodes for c in cells} == {10} and {c.world for c in cells} == {"barn"}
@@ -63,7 +63,7 @@ def test_the_ci_suite_runs_in_process_into_barns_table(tmp_path: Path) -> None:
     assert h[5:] == ("n", "success", "success 95% CI", "collision", "collision 95% CI",
                      "timeout", "timeout 95% CI", "BARN time [s]", "BARN time 95% CI",
                      "BARN score [-]", "BARN score 95% CI", "status")
-    assert [r[1] for r in table.rows] == ["dwa", "planner"]
+    assert [r[1] for r in table.rows] == ["dwa", "planner", "explorer"]
     for row in table.rows:
         cells = dict(zip(h, row))
         assert cells["status"] == "ok" and cells["world"] == "barn:ci3" and cells["n"] == "3"
@@ -86,7 +86,7 @@ def test_the_ci_suite_runs_in_process_into_barns_table(tmp_path: Path) -> None:
     text = (suite.root / "results.md").read_text()
     assert "BARN score" in text and (suite.root / "leaderboard_barn.md").is_file()
     csv = pd.read_csv(suite.root / "results.csv")
-    assert list(csv["agent"]) == ["dwa", "planner"]
+    assert list(csv["agent"]) == ["dwa", "planner", "explorer"]
 
 
 def test_the_bootstrap_interval_brackets_the_mean_and_is_seeded() -> None:

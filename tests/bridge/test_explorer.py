@@ -1,7 +1,8 @@
 """The mapless explorer on analytic worlds, driven by a unicycle and scans ray-marched against
 the world's exact clearance (the test's; the explorer never sees the world): it finds a gap
-it cannot see at the start, backs out of a dead end, turns to a goal behind it, and plans
-from a frame of a robot with no world at all."""
+it cannot see at the start, backs out of a dead end, turns to a goal behind it, plans
+from a frame of a robot with no world at all, keeps its own speed limit and takes a door only
+its footprint fits, aligned, with a squeeze radius."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.world_spec import Box, WorldSpec
 
+from pic4rl_bridge.baseline_config import baselines_config_from_params
 from pic4rl_bridge.baselines import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.explorer import ExplorerController
@@ -40,9 +42,10 @@ def _scan(world: WorldSpec, pose: Pose2D, range_max_m: float, beams: int = 180) 
 
 
 def _drive(world: WorldSpec, start: tuple[float, float, float], goal: tuple[float, float], *,
-           range_max_m: float = 10.0, steps: int = 800):
-    """Run the explorer until the goal (0.3 m); (reached, trace, least clearance, explorer)."""
-    explorer, pose = ExplorerController(ROBOT), Pose2D(*start)
+           range_max_m: float = 10.0, steps: int = 800, explorer: ExplorerController | None = None):
+    """Run the explorer until the goal (0.3 m); (reached, trace, least clearance beyond 0.2 m,
+    explorer)."""
+    explorer, pose = explorer or ExplorerController(ROBOT), Pose2D(*start)
     trace, least = [], math.inf
     for k in range(steps):
         frame = SensorFrame(k, pose, Twist2D(), goal=goal,
@@ -109,3 +112,42 @@ def test_it_never_reads_the_world_a_frame_without_one_still_plans():
     assert not (inside & (np.abs(explorer.path[:, 1]) < 0.7)).any()
     explorer.reset()
     assert explorer.path is None and len(explorer.grid.cells) == 0
+
+
+def test_its_own_speed_limit_caps_the_pursuit_and_never_raises_the_robots():
+    # An open world, the goal straight ahead: full speed is the robot's, or the cap below it.
+    world = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0), boxes=(Box(4.5, 0.0, 0.1, 2.0, 1.0),))
+    frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(3.0, 0.0),
+                        scan=_scan(world, Pose2D(0.0, 0.0, 0.0), 10.0))
+    speeds = {}
+    for cap in (0.0, 0.3, 2.0):
+        settings = baselines_config_from_params({"explorer.max_linear_m_s": cap})
+        explorer = make_baseline("explorer", EnvConfig(), ROBOT, world=None, settings=settings)
+        speeds[cap] = explorer.command(frame)[0]
+    assert speeds == pytest.approx({0.0: 0.5, 0.3: 0.3, 2.0: 0.5})
+
+
+def test_a_gap_only_the_footprint_fits_aligned_is_taken_with_the_squeeze_radius():
+    # A closed room whose one door (0.5 m) is narrower than the circumscribed disc (0.27 m
+    # radius) of a 0.5 x 0.2 m robot, plus its narrow margin: without a squeeze radius no plan
+    # fits and it drives straight at the goal; with 0.18 m it plans through the door.
+    robot = RobotInfo(name="rect", footprint=Footprint(length_m=0.5, width_m=0.2), omni=False,
+                      min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
+                      max_lateral_m_s=0.0, control_dt_s=0.1)
+    world = WorldSpec("room", (-4.0, -4.0, 5.0, 4.0), boxes=(
+        Box(-1.5, 0.0, 0.1, 3.1, 1.0), Box(-0.25, 1.5, 2.6, 0.1, 1.0),
+        Box(-0.25, -1.5, 2.6, 0.1, 1.0), Box(1.0, -0.525, 0.1, 2.05, 1.0),
+        Box(1.0, 1.275, 0.1, 0.55, 1.0)))  # the door: y in [0.5, 1.0] at x = 1
+    straight = ExplorerController(robot)
+    squeeze = ExplorerController(robot, baselines_config_from_params(
+        {"explorer.squeeze_radius_m": 0.18}).explorer)
+    for explorer in (straight, squeeze):
+        explorer.command(SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(3.0, 0.0),
+                                     scan=_scan(world, Pose2D(0.0, 0.0, 0.0), 10.0)))
+    assert np.allclose(straight.path, [(0.0, 0.0), (3.0, 0.0)])  # nothing fits: straight on
+    reached, trace, _, _ = _drive(world, (0.0, 0.0, 0.0), (3.0, 0.0), explorer=squeeze)
+    assert reached
+    crossing = trace[np.argmax(trace[:, 0] > 1.0)]
+    assert 0.5 + 0.1 < crossing[1] < 1.0 - 0.1  # through the door, its half-width clear
+    centre = world.clearance(trace)
+    assert centre.min() > 0.1  # never a wall nearer than the robot's half-width
