@@ -254,3 +254,12 @@ class StopAfterEval(BaseCallback):
                         and parent.last_success_rate >= self.success_rate)
         over = self.budget_s is not None and parent.last_row["train_wall_s"] >= self.budget_s
         return not (self.reached or over)
+
+
+def stopped_by_signal(err: BaseException, stop: threading.Event) -> bool:
+    """Whether ``err`` is ``train.stop_on_signal``'s interrupt: the ``KeyboardInterrupt``,
+    or, when it lands inside an extension (rclpy deserializing a message), the error that
+    extension turns it into, chained from it."""
+    if isinstance(err, KeyboardInterrupt):
+        return True
+    return stop.is_set() and isinstance(err.__cause__ or err.__context__, KeyboardInterrupt)

@@ -138,6 +138,7 @@ class Trainer:
         has imitated already); False when a callback (the clock) ended training during it."""
         from stable_baselines3.common.callbacks import CallbackList
 
+        from .callbacks import stopped_by_signal
         from .imitation import DecayingCloning, Imitation
 
         cfg = self.config.train
@@ -153,7 +154,9 @@ class Trainer:
                 done = imitation.run()
                 if cfg.imitation.rl_gradient_steps > 0:
                     callbacks.insert(0, DecayingCloning(imitation))
-            except KeyboardInterrupt:
+            except BaseException as err:
+                if not stopped_by_signal(err, self._stop):
+                    raise
                 done = False
         if self._stop.is_set():
             self.interrupted = True
@@ -280,6 +283,8 @@ class Trainer:
 
     def _learn(self, model: Any, callbacks: list[Any]) -> None:
         """Train up to ``max_steps``; Ctrl-C or SIGTERM ends it (the caller saves)."""
+        from .callbacks import stopped_by_signal
+
         cfg = self.config.train
         with stop_on_signal(self._stop):
             try:
@@ -289,8 +294,9 @@ class Trainer:
                 model.learn(cfg.max_steps - model.num_timesteps, callback=callbacks,
                             reset_num_timesteps=fresh,
                             log_interval=10 if cfg.off_policy else 1)
-            except KeyboardInterrupt:
-                pass
+            except BaseException as err:
+                if not stopped_by_signal(err, self._stop):
+                    raise
         if self._stop.is_set():
             self.interrupted = True
             log.warning("interrupted at %d steps; saving", model.num_timesteps)

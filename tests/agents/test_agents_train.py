@@ -36,7 +36,7 @@ from agents_helpers import (
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import load_model
-from pic4rl_agents.callbacks import StopWhenSet
+from pic4rl_agents.callbacks import StopWhenSet, stopped_by_signal
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.exploration import epsilon_at
 from pic4rl_agents.runs import find_resume
@@ -342,6 +342,27 @@ def test_a_stop_signal_is_an_interrupt_while_training(signum: int) -> None:
             time.sleep(5)  # the handler runs at once; this is never reached in full
     assert stop.is_set()
     assert signal.getsignal(signum) is previous
+
+
+def test_a_stop_turned_into_another_error_by_an_extension_is_still_the_stop() -> None:
+    """A KeyboardInterrupt raised while rclpy deserializes a message leaves pybind11 as a
+    TypeError chained from it (seen in CI); with the stop flag set that is the stop, and
+    without it, or unchained, it is an error."""
+    def raised(stop: threading.Event) -> BaseException:
+        try:
+            try:
+                raise KeyboardInterrupt
+            except KeyboardInterrupt as err:
+                raise TypeError("Unable to convert function return value") from err
+        except TypeError as err:
+            return err
+
+    stop = threading.Event()
+    assert not stopped_by_signal(raised(stop), stop)
+    stop.set()
+    assert stopped_by_signal(raised(stop), stop)
+    assert stopped_by_signal(KeyboardInterrupt(), threading.Event())
+    assert not stopped_by_signal(TypeError("a real bug"), stop)
 
 
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
