@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from pathlib import Path
 
 import gymnasium as gym
@@ -101,6 +102,11 @@ def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_si
     twin.create_publisher(Odometry, "odom", 10)
     env = gym.make("pic4rl/GoToPoseLidar-v0", config=config, transport="ros",
                    overrides={"ros.domain_id": domain, "ros.timeout_s": 5.0})
+    # The check reads the graph; a graph still discovering the twin has nothing to refuse.
+    node = env.unwrapped.transport.node
+    deadline = time.monotonic() + 10.0
+    while len(node.get_publishers_info_by_topic("/odom")) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
     try:
         with pytest.raises(SimConflict, match=(
                 rf"^2 simulator nodes publish /(goal_pose|odom) in ROS domain {domain}: "
