@@ -36,10 +36,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from pic4rl_metrics import read_episode
-from pic4rl_metrics.plots import scan_hits_world
-from pic4rl_metrics.synthetic import Obstacles, circle, write_episode_bag
-from pic4rl_metrics.video import VideoOptions, frame_count
-from pic4rl_metrics.video_batch import render_videos, write_video
+from pic4rl_metrics.viz.plots import scan_hits_world
+from pic4rl_metrics.testing.synthetic import Obstacles, circle, write_episode_bag
+from pic4rl_metrics.viz.video import VideoOptions, frame_count
+from pic4rl_metrics.viz.video_batch import render_videos, write_video
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = REPO / "config" / "env_goto_lidar.yaml"

@@ -69,7 +69,7 @@ class TestResult:
     run_dir: Path  # <bags>/<run>: <agent>/episode_NNNN/ bags, episodes.csv, table.md
     episode_set: str  # the episodes driven, in words
     outcomes: dict[str, list[str]]  # by agent, in episode order
-    table: pd.DataFrame  # pic4rl_metrics.aggregate by agent
+    table: pd.DataFrame  # pic4rl_metrics.tables.aggregate by agent
     failed: tuple[str, ...] = ()  # the errors of bags that could not be judged
     videos: tuple[str, ...] = ()  # with --video: one per episode, beside its bag
 
@@ -135,8 +135,8 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
 def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) -> str:
     """The test's table: the episodes per outcome, the task's headline first (a task without
     a goal shows no goals and no success rate), SPL where a row has it, then Table 1's."""
-    from pic4rl_metrics.report import OUTCOME_COUNTS, render_comparison
-    from pic4rl_metrics.results import table_columns
+    from pic4rl_metrics.tables.text import OUTCOME_COUNTS, render_comparison
+    from pic4rl_metrics.tables.results import table_columns
 
     headline, words = TASKS[task].headline
     key = "n_success" if headline == "goal" else f"n_{headline}"
@@ -154,9 +154,9 @@ def judge(run_dir: Path, task: str, *,
     agents' task, whose trajectory columns average its successful episodes, or all of them
     for a task without a goal) and the errors of the bags that could not be judged; the
     per-episode CSV and the table (markdown) are written into ``run_dir``."""
-    from pic4rl_metrics.aggregate import aggregate
-    from pic4rl_metrics.batch import compute
-    from pic4rl_metrics.report import render_episodes
+    from pic4rl_metrics.tables.aggregate import aggregate
+    from pic4rl_metrics.tables.batch import compute
+    from pic4rl_metrics.tables.text import render_episodes
 
     result = compute([run_dir])
     atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
@@ -170,7 +170,7 @@ def judge(run_dir: Path, task: str, *,
 def _check_video() -> None:
     """``--video``'s encoder is there, before any episode is driven."""
     from pic4rl_metrics.errors import MetricsError
-    from pic4rl_metrics.video_batch import ffmpeg_writer
+    from pic4rl_metrics.viz.video_batch import ffmpeg_writer
 
     try:
         ffmpeg_writer()
@@ -205,7 +205,7 @@ def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestR
     table, failed = judge(run_dir, specs[0].run.env.task, with_std=plan.with_std)
     videos: tuple[str, ...] = ()
     if plan.video:
-        from pic4rl_metrics.video_batch import render_videos
+        from pic4rl_metrics.viz.video_batch import render_videos
 
         rows = render_videos([run_dir], progress=plan.progress)
         videos = tuple(r.video for r in rows if r.video)

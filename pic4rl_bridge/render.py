@@ -5,7 +5,7 @@ The top-down view shows the world's obstacles (drawn once), the memory's occupie
 (goToPose's ``memory.enabled``), the plan, the row's centre line,
 the goal and its tolerance, the path so far, the scan's returns, the person, the robot's
 footprint and heading, and the depth image in an inset when the robot has one. It uses the
-episode videos' drawing (``pic4rl_metrics.raster``) and colours, so both look alike.
+episode videos' drawing (``pic4rl_metrics.viz.raster``) and colours, so both look alike.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from pic4rl_metrics import raster
-from pic4rl_metrics.raster import COLORS, View
+from pic4rl_metrics.viz import raster
+from pic4rl_metrics.viz.raster import COLORS, View
 
 from .errors import ConfigError
 from .frame import SensorFrame

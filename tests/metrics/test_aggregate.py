@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 from metrics_helpers import result_row as _row
 
-from pic4rl_metrics.aggregate import UNKNOWN_GROUP, aggregate
+from pic4rl_metrics.tables.aggregate import UNKNOWN_GROUP, aggregate
 from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.report import render_comparison
-from pic4rl_metrics.results import ERROR_COLUMN
+from pic4rl_metrics.tables.text import render_comparison
+from pic4rl_metrics.tables.results import ERROR_COLUMN
 
 NAN = math.nan
 
@@ -164,7 +164,7 @@ def test_aborted_episodes_are_counted_apart_and_out_of_the_success_rate(
 ])
 def test_wilson_interval_matches_the_score_interval(k: int, n: int, low: float,
                                                      high: float) -> None:
-    from pic4rl_metrics.aggregate import wilson_interval
+    from pic4rl_metrics.tables.aggregate import wilson_interval
 
     got = wilson_interval(k, n)
     assert got == pytest.approx((low, high), abs=1e-9)
@@ -176,7 +176,7 @@ def test_wilson_interval_matches_the_score_interval(k: int, n: int, low: float,
 
 
 def test_wilson_interval_of_nothing_is_nan() -> None:
-    from pic4rl_metrics.aggregate import wilson_interval
+    from pic4rl_metrics.tables.aggregate import wilson_interval
 
     assert all(math.isnan(v) for v in wilson_interval(0, 0))
 

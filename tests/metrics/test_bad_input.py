@@ -32,16 +32,16 @@ from pic4rl_metrics import (
     compute,
     read_episode,
 )
-from pic4rl_metrics.cli import main
+from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import parse_facts
-from pic4rl_metrics.synthetic import (
+from pic4rl_metrics.testing.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     Track,
     straight_line,
     write_episode_bag,
 )
-from pic4rl_metrics.topics import TopicMap
+from pic4rl_metrics.bags.topics import TopicMap
 
 pytestmark = pytest.mark.bad_input
 

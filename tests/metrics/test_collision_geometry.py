@@ -17,9 +17,9 @@ from pic4rl_bridge.frame import ScanData
 from pic4rl_bridge.tasks.collision import footprint_clearance, scan_points
 from pic4rl_metrics import EpisodeFacts, Footprint, compute, read_episode
 from pic4rl_metrics.geometry import Mount
-from pic4rl_metrics.scan_summary import scan_clearance
-from pic4rl_metrics.series import ScanSeries
-from pic4rl_metrics.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
+from pic4rl_metrics.core.scan_summary import scan_clearance
+from pic4rl_metrics.core.series import ScanSeries
+from pic4rl_metrics.testing.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
 from pic4rl_sim.engine.geometry import Pose2D
 from world_helpers import walled_square_mjcf
 

@@ -19,7 +19,7 @@ from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
 from pic4rl_metrics.geometry import Footprint, Mount
-from pic4rl_metrics.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
+from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
 POSITIVE = st.floats(min_value=1e-6, max_value=1e6, allow_nan=False)

@@ -25,10 +25,10 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from pic4rl_metrics import BagError, compute, read_episode
-from pic4rl_metrics.cli import main
+from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import STORAGES, typestore
-from pic4rl_metrics.synthetic import DEFAULT_T0_NS, Obstacles, write_episode_bag
-from pic4rl_metrics.topics import TopicMap
+from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, Obstacles, write_episode_bag
+from pic4rl_metrics.bags.topics import TopicMap
 
 FACTS = {"agent": "td3", "run": "r1", "episode": "3", "footprint": {"radius_m": 0.2}}
 SCENE = Obstacles(circles=((2.5, 0.8, 0.3),), segments=((-1.0, -1.0, 8.0, -1.0),))

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from pic4rl_metrics import cli
-from pic4rl_metrics.aggregate import wilson_interval
+from pic4rl_metrics.cli import commands as cli
+from pic4rl_metrics.tables.aggregate import wilson_interval
 
 
 class _Page(HTMLParser):
@@ -198,7 +198,7 @@ def test_an_existing_out_is_refused_without_force(bench_bags: Path, tmp_path: Pa
 def test_bags_without_a_pair_are_counted_and_drawn_in_no_pair(tmp_path: Path, capsys) -> None:
     """Two agents' bags with no start or goal in their facts (as a real robot's log): no
     couple, each counted as unpaired, and the pairs' section says why it is empty."""
-    from pic4rl_metrics.synthetic import straight_line, write_episode_bag
+    from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
 
     for agent in ("a", "b"):
         write_episode_bag(tmp_path / "bags" / agent, straight_line(0.5, 4.0),

@@ -12,8 +12,8 @@ import pytest
 from pic4rl_metrics import (
     compute,
 )
-from pic4rl_metrics.cli import main
-from pic4rl_metrics.synthetic import (
+from pic4rl_metrics.cli.commands import main
+from pic4rl_metrics.testing.synthetic import (
     straight_line,
     write_episode_bag,
 )

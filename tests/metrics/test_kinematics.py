@@ -22,7 +22,7 @@ from pic4rl_metrics import (
     compute_metrics,
     read_episode,
 )
-from pic4rl_metrics.synthetic import (
+from pic4rl_metrics.testing.synthetic import (
     circle,
     speed_ramp,
     straight_line,
@@ -96,7 +96,7 @@ def test_circle_yaw_rate_is_constant(circle_bags, source: str) -> None:
 
 
 def test_circle_pose_differences_rotate_into_the_body_frame(circle_bags) -> None:
-    from pic4rl_metrics.kinematics import velocity_series
+    from pic4rl_metrics.core.kinematics import velocity_series
 
     ep = read_episode(circle_bags["pose_only"])
     assert ep.pose.vx is None  # pose-only source
@@ -162,7 +162,7 @@ def test_pose_only_straight_line_speeds_match_the_analytic_ones(tmp_path: Path, 
     assert m.lin_acc_max_mps2 == pytest.approx(0.0, abs=DIFF)
     assert m.ang_vel_mean_radps == pytest.approx(0.0, abs=DIFF)
     assert m.path_length_m == pytest.approx(5.0, abs=EXACT)
-    from pic4rl_metrics.kinematics import velocity_series
+    from pic4rl_metrics.core.kinematics import velocity_series
 
     vel = velocity_series(ep.pose)
     np.testing.assert_allclose(vel.vx, 0.5, atol=DIFF)  # body frame: all forward

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from bench_helpers import read_results, run_benchmark
 
-from pic4rl_metrics.synthetic import write_long_bag
+from pic4rl_metrics.testing.synthetic import write_long_bag
 
 MINUTES = 30
 PEAK_MB = 300

@@ -1,4 +1,4 @@
-"""Paired statistics (``pic4rl_metrics.paired``) against known answers, and ``compare
+"""Paired statistics (``pic4rl_metrics.tables.paired``) against known answers, and ``compare
 --paired`` end to end on real bags.
 
 McNemar's exact p is checked against a published value (Fagerland, Lydersen & Laake 2013,
@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pic4rl_metrics import cli
-from pic4rl_metrics.paired import (
+from pic4rl_metrics.cli import commands as cli
+from pic4rl_metrics.tables.paired import (
     NOT_DISTINGUISHABLE,
     cluster_bootstrap,
     mcnemar_exact,

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_metrics.errors import ConfigError
 from pic4rl_metrics.geometry import Footprint
-from pic4rl_metrics.plots import (
+from pic4rl_metrics.viz.plots import (
     comparison_figure,
     episode_figure,
     plot_acceleration_profile,
@@ -21,8 +21,8 @@ from pic4rl_metrics.plots import (
     save_figure,
     scan_points_world,
 )
-from pic4rl_metrics.results import METRIC_COLUMNS, EpisodeMetrics
-from pic4rl_metrics.series import CmdSeries, Episode, PoseSeries, ScanSeries
+from pic4rl_metrics.tables.results import METRIC_COLUMNS, EpisodeMetrics
+from pic4rl_metrics.core.series import CmdSeries, Episode, PoseSeries, ScanSeries
 
 T0 = 1_700_000_000_000_000_000  # an epoch-like stamp (ns), where float64 would lose ns
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -32,9 +32,9 @@ from pic4rl_metrics import (
     read_episode,
     synthetic,
 )
-from pic4rl_metrics.metrics import MIN_PATH_M
-from pic4rl_metrics.results import METRIC_COLUMNS
-from pic4rl_metrics.series import PointSeries, PoseSeries, ScanSeries
+from pic4rl_metrics.core.metrics import MIN_PATH_M
+from pic4rl_metrics.tables.results import METRIC_COLUMNS
+from pic4rl_metrics.core.series import PointSeries, PoseSeries, ScanSeries
 
 PURE = settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 BAGS = settings(

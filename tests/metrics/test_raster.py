@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_metrics import raster
+from pic4rl_metrics.viz import raster
 from pic4rl_metrics.geometry import Footprint
-from pic4rl_metrics.raster import COLORS, View
+from pic4rl_metrics.viz.raster import COLORS, View
 
 RED = (255, 0, 0)
 

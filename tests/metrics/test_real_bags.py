@@ -20,7 +20,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 import pic4rl_metrics
-from pic4rl_metrics.cli import main
+from pic4rl_metrics.cli.commands import main
 
 REAL_BAGS = Path(__file__).resolve().parents[3] / "shared" / "real_bags"
 

@@ -14,12 +14,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import pic4rl_metrics.registry as registry_module
+import pic4rl_metrics.core.registry as registry_module
 from pic4rl_metrics import REGISTRY, ConfigError, Derived, Metric, compute, metric
-from pic4rl_metrics.cli import main
-from pic4rl_metrics.registry import Registry
-from pic4rl_metrics.results import METRIC_COLUMNS
-from pic4rl_metrics.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.cli.commands import main
+from pic4rl_metrics.core.registry import Registry
+from pic4rl_metrics.tables.results import METRIC_COLUMNS
+from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
 
 LINE = straight_line(0.5, 4.0)  # x = 0, 0.05, ..., 2 m: mean x is 1 m
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pic4rl_metrics.cli import _inputs, build_parser
+from pic4rl_metrics.cli.commands import _inputs, build_parser
 from pic4rl_metrics.contract import EpisodeFacts
-from pic4rl_metrics.derived import INPUT_TESTS, Derived
-from pic4rl_metrics.roles import (
+from pic4rl_metrics.core.derived import INPUT_TESTS, Derived
+from pic4rl_metrics.core.roles import (
     LASER_SCAN,
     ODOMETRY,
     POSE_COV,
@@ -24,8 +24,8 @@ from pic4rl_metrics.roles import (
     TWIST_STAMPED,
     has_header,
 )
-from pic4rl_metrics.series import CmdSeries, Episode, PoseSeries
-from pic4rl_metrics.topics import TopicMap, topic_map_from_dict
+from pic4rl_metrics.core.series import CmdSeries, Episode, PoseSeries
+from pic4rl_metrics.bags.topics import TopicMap, topic_map_from_dict
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "metrics.md"
 

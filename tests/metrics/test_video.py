@@ -13,12 +13,12 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
-from pic4rl_metrics.cli import main
-from pic4rl_metrics.raster import COLORS
-from pic4rl_metrics.reader import read_episode
-from pic4rl_metrics.synthetic import Obstacles, straight_line, write_episode_bag
-from pic4rl_metrics.video import EpisodeScene, VideoOptions, frame_count
-from pic4rl_metrics.video_batch import render_videos, video_names
+from pic4rl_metrics.cli.commands import main
+from pic4rl_metrics.viz.raster import COLORS
+from pic4rl_metrics.bags.reader import read_episode
+from pic4rl_metrics.testing.synthetic import Obstacles, straight_line, write_episode_bag
+from pic4rl_metrics.viz.video import EpisodeScene, VideoOptions, frame_count
+from pic4rl_metrics.viz.video_batch import render_videos, video_names
 
 REAL_BAGS = Path(__file__).resolve().parents[3] / "shared" / "real_bags"
 WALLS = Obstacles(segments=((-1, -2, 8, -2), (8, -2, 8, 2), (8, 2, -1, 2), (-1, 2, -1, -2)))

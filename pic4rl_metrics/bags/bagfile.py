@@ -36,8 +36,8 @@ from rosbags.typesys import (
 from rosbags.typesys.base import Nodetype
 from rosbags.typesys.store import Typestore
 
-from .contract import typestore
-from .errors import BagError
+from ..contract import typestore
+from ..errors import BagError
 from .inputs import COMPRESSED_SUFFIX, ROS1_SUFFIX, is_bag_file, special, split_parts
 
 if sys.version_info >= (3, 14):

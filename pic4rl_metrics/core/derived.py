@@ -13,8 +13,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .contract import UNJUDGED, EpisodeFacts, Outcome
-from .geometry import distance_to_polyline
+from ..contract import UNJUDGED, EpisodeFacts, Outcome
+from ..geometry import distance_to_polyline
 from .kinematics import (
     Derivative,
     PathTurning,
@@ -27,7 +27,7 @@ from .kinematics import (
     velocity_series,
 )
 from .roles import SERIES_ROLES
-from .rows import deviations
+from .crop_rows import deviations
 from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
 from .series import Episode
 

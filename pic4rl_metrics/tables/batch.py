@@ -19,15 +19,15 @@ from typing import Any
 import pandas as pd
 from tqdm import tqdm
 
-from .contract import EpisodeFacts
-from .errors import ConfigError, MetricsError
-from .inputs import discover
-from .metrics import compute_metrics
-from .reader import read_episode
-from .registry import REGISTRY
+from ..contract import EpisodeFacts
+from ..errors import ConfigError, MetricsError
+from ..bags.inputs import discover
+from ..core.metrics import compute_metrics
+from ..bags.reader import read_episode
+from ..core.registry import REGISTRY
 from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
-from .series import Episode
-from .topics import TopicMap
+from ..core.series import Episode
+from ..bags.topics import TopicMap
 
 log = logging.getLogger(__name__)
 

@@ -12,7 +12,7 @@ import json
 from collections.abc import Sequence
 
 from .aggregate import DASH
-from .errors import ConfigError
+from ..errors import ConfigError
 
 FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")
 

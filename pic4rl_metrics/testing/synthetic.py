@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from . import contract
-from .bagwriter import BagWriter
-from .contract import OUTCOMES, STORAGES, EpisodeFacts, typestore
+from .. import contract
+from ..bags.bagwriter import BagWriter
+from ..contract import OUTCOMES, STORAGES, EpisodeFacts, typestore
 from .synthetic_tracks import (
     Obstacles,
     Track,
@@ -30,7 +30,7 @@ from .synthetic_tracks import (
     speed_ramp,
     straight_line,
 )
-from .topics import normalize_topic
+from ..bags.topics import normalize_topic
 
 __all__ = ["DEFAULT_T0_NS", "POSE_TYPES", "Obstacles", "Track", "cast_scan", "circle",
            "from_waypoints", "speed_ramp", "straight_line", "write_episode_bag", "write_long_bag"]

@@ -18,15 +18,15 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from . import atomic
-from .contract import EpisodeFacts, Outcome
-from .geometry import Mount
-from .errors import ConfigError
-from .kinematics import differentiate, seconds, velocity_series
-from .scan_summary import scan_points
-from .registry import METRICS
-from .results import EpisodeMetrics
-from .series import Episode, ScanSeries
+from .. import atomic
+from ..contract import EpisodeFacts, Outcome
+from ..geometry import Mount
+from ..errors import ConfigError
+from ..core.kinematics import differentiate, seconds, velocity_series
+from ..core.scan_summary import scan_points
+from ..core.registry import METRICS
+from ..tables.results import EpisodeMetrics
+from ..core.series import Episode, ScanSeries
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.
 END_STYLE: dict[Outcome, tuple[str, str, str]] = {

@@ -19,9 +19,9 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from .contract import Outcome
-from .errors import ConfigError
-from .registry import REGISTRY
+from ..contract import Outcome
+from ..errors import ConfigError
+from ..core.registry import REGISTRY
 from .results import ERROR_COLUMN
 
 #: Group name of rows whose key is missing (and, for ``agent``, whose run is missing too).

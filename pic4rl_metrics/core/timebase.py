@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .errors import CorruptBagError
+from ..errors import CorruptBagError
 from .scan_summary import ScanStream, ScanSummary
 from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
 

@@ -19,9 +19,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .contract import EpisodeFacts
-from .geometry import Footprint, Mount
-from .rows import lane_sides
+from ..contract import EpisodeFacts
+from ..geometry import Footprint, Mount
+from .crop_rows import lane_sides
 from .series_kinds import ScanSeries
 
 NAN = float("nan")

@@ -25,10 +25,10 @@ from typing import Any
 
 import yaml
 
-from . import contract
-from .contract import EpisodeFacts, parse_facts
-from .errors import ConfigError, TopicError
-from .roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
+from .. import contract
+from ..contract import EpisodeFacts, parse_facts
+from ..errors import ConfigError, TopicError
+from ..core.roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
 
 
 def normalize_topic(name: str) -> str:

@@ -12,7 +12,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from .contract import Outcome
+from ..contract import Outcome
 from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .metrics import BUILTIN_COLUMNS
-from .registry import METRICS, REGISTRY, EpisodeMetrics, Metric
+from ..core.metrics import BUILTIN_COLUMNS
+from ..core.registry import METRICS, REGISTRY, EpisodeMetrics, Metric
 
 if TYPE_CHECKING:
     import pandas as pd

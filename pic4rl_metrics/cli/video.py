@@ -13,12 +13,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .errors import MetricsError
+from ..errors import MetricsError
 
 if TYPE_CHECKING:
-    from .contract import EpisodeFacts
-    from .topics import TopicMap
-    from .video_batch import VideoResult
+    from ..contract import EpisodeFacts
+    from ..bags.topics import TopicMap
+    from ..viz.video_batch import VideoResult
 
 
 def _positive(text: str) -> float:
@@ -50,7 +50,7 @@ def add_video_options(parser: argparse.ArgumentParser) -> None:
 def _table(rows: tuple[VideoResult, ...]) -> str:
     import pandas as pd
 
-    from .report import short_bag
+    from ..tables.text import short_bag
 
     frame = pd.DataFrame(
         [{"bag": short_bag(r.bag), "video": r.video, "frames": r.frames or "",
@@ -62,8 +62,8 @@ def _table(rows: tuple[VideoResult, ...]) -> str:
 def run_video_command(args: argparse.Namespace, topic_map: TopicMap, facts: EpisodeFacts,
                       given: frozenset[str]) -> int:
     """Render the videos the parsed ``args`` ask for; the exit code."""
-    from .video import VideoOptions
-    from .video_batch import render_videos
+    from ..viz.video import VideoOptions
+    from ..viz.video_batch import render_videos
 
     progress = sys.stderr.isatty() if args.progress is None else args.progress
     try:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .contract import EpisodeFacts
+from ..contract import EpisodeFacts
 from .roles import SERIES_ROLES
 from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
 

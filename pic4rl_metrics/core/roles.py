@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-from . import contract
-from .geometry import yaw_from_quaternion
+from .. import contract
+from ..geometry import yaw_from_quaternion
 from .timebase import Samples, cmd_series, point_series, scan_series
 
 ODOMETRY = "nav_msgs/msg/Odometry"

@@ -21,7 +21,7 @@ from PIL import Image
 from . import raster
 from .plots import scan_hits_world
 from .raster import COLORS, View
-from .series import Episode
+from ..core.series import Episode
 
 #: One colour per agent, in order (matplotlib's tab10).
 PALETTE: tuple[tuple[int, int, int], ...] = (

@@ -23,17 +23,18 @@ from urllib.parse import quote
 
 import pandas as pd
 
-from . import atomic, html_page as hp
-from .aggregate import _group_keys, aggregate, wilson_interval
-from .batch import MetricsResult
-from .contract import Outcome
-from .errors import ConfigError, OutputError
-from .paired import N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, pair_labels, paired_cells
-from .paired import paired_table, seed_spread
-from .registry import METRICS
-from .report import plain_text, short_bag
+from .. import atomic
+from . import html_page as hp
+from ..tables.aggregate import _group_keys, aggregate, wilson_interval
+from ..tables.batch import MetricsResult
+from ..contract import Outcome
+from ..errors import ConfigError, OutputError
+from ..tables.paired import N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, pair_labels, paired_cells
+from ..tables.paired import paired_table, seed_spread
+from ..core.registry import METRICS
+from ..tables.text import plain_text, short_bag
 from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
-from .results import ROW_COLUMNS
+from ..tables.results import ROW_COLUMNS
 
 #: A task's own columns, shown in the leaderboard when some episode has them.
 TASK_COLUMNS = ("barn_score", *ROW_COLUMNS, "follow_heading_mae_rad", "person_in_view_fraction",

@@ -32,7 +32,7 @@ from importlib.metadata import entry_points
 from typing import Any
 
 from .derived import INPUT_TESTS, Derived
-from .errors import ConfigError
+from ..errors import ConfigError
 
 log = logging.getLogger(__name__)
 

@@ -33,7 +33,7 @@ from rosbags.interfaces import (
 )
 from rosbags.rosbag2 import Writer, WriterError
 
-from .contract import (
+from ..contract import (
     FACTS_TOPIC,
     OUTCOME_TOPIC,
     WRITTEN_OUTCOMES,
@@ -47,7 +47,7 @@ from .contract import (
     plain,
     typestore,
 )
-from .errors import OutputError
+from ..errors import OutputError
 
 STRING = "std_msgs/msg/String"
 

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from .aggregate import _error_mask, _group_keys
-from .errors import ConfigError
+from ..errors import ConfigError
 from .layouts import check_format, render_rows
 
 if TYPE_CHECKING:

@@ -17,13 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from . import atomic
-from .batch import BagResult, judge_bag, resolve_jobs, run_parallel
-from .contract import EpisodeFacts
-from .errors import ConfigError, MetricsError, OutputError
-from .inputs import discover
-from .paired import pair_key
-from .topics import TopicMap
+from .. import atomic
+from ..tables.batch import BagResult, judge_bag, resolve_jobs, run_parallel
+from ..contract import EpisodeFacts
+from ..errors import ConfigError, MetricsError, OutputError
+from ..bags.inputs import discover
+from ..tables.paired import pair_key
+from ..bags.topics import TopicMap
 from .video import EpisodeScene, VideoOptions, extent, union
 
 log = logging.getLogger(__name__)

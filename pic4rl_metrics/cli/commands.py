@@ -16,20 +16,20 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import atomic
-from .aggregate import aggregate
-from .batch import MetricsResult, compute
-from .contract import EpisodeFacts, parse_facts
-from .errors import ConfigError, MetricsError, OutputError
-from .registry import METRICS, REGISTRY
-from .inputs import discover
-from .layouts import FORMATS
-from .paired import render_paired
-from .report import EPISODE_VIEW, render_comparison, render_episodes
-from .results import METRIC_COLUMNS, table_columns
-from .roles import ROLES, Role
-from .topics import TopicMap, load_topic_map, parse_frames
-from .video_cli import add_video_options, run_video_command
+from .. import atomic
+from ..tables.aggregate import aggregate
+from ..tables.batch import MetricsResult, compute
+from ..contract import EpisodeFacts, parse_facts
+from ..errors import ConfigError, MetricsError, OutputError
+from ..core.registry import METRICS, REGISTRY
+from ..bags.inputs import discover
+from ..tables.layouts import FORMATS
+from ..tables.paired import render_paired
+from ..tables.text import EPISODE_VIEW, render_comparison, render_episodes
+from ..tables.results import METRIC_COLUMNS, table_columns
+from ..core.roles import ROLES, Role
+from ..bags.topics import TopicMap, load_topic_map, parse_frames
+from .video import add_video_options, run_video_command
 
 
 def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True) -> None:
@@ -246,7 +246,7 @@ def _report_failures(result: MetricsResult) -> int:
 
 
 def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
-    from .plots import (  # matplotlib on demand
+    from ..viz.plots import (  # matplotlib on demand
         by_world, comparison_figure, episode_figure, figure_names, save_figure)
 
     out: Path = args.out
@@ -284,7 +284,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "compare" and args.paired:
             _emit(render_paired(result, args.paired, args.format), args.out, args.force)
         elif args.command == "report":
-            from .html_report import write_report  # matplotlib and Pillow on demand
+            from ..viz.html_report import write_report  # matplotlib and Pillow on demand
 
             write_report(result, args.out, overwrite=args.force, references=args.reference,
                          inputs=[str(b) for b in args.bags], title=args.title)
