@@ -72,25 +72,27 @@ def _rising_edges(flag: np.ndarray) -> int:
 
 
 def _register(name: str, unit: str, label: str, needs: tuple[str, ...] = ("pose",),
-              quality: bool = False, text: bool = False):  # noqa: ANN202
+              quality: bool = False, text: bool = False,
+              table: tuple[str, int] | None = None):  # noqa: ANN202
     return metric(name, unit=unit, label=label, needs=needs, quality=quality, text=text,
-                  _builtin=True)
+                  table=table, _builtin=True)
 
 
 _register("outcome", "", "outcome", text=True)(lambda d: d.outcome.value)
-_register("success", "n/total", "success")(lambda d: d.success)
-_register("clearance_time_s", "s", "time", quality=True)(lambda d: d.time_s)
-_register("heading_error_mean_rad", "rad", "cum. heading", ("goal",), quality=True)(
+_register("success", "n/total", "success", table=("paper", 0))(lambda d: d.success)
+_register("clearance_time_s", "s", "time", quality=True, table=("paper", 1))(lambda d: d.time_s)
+_register("heading_error_mean_rad", "rad", "cum. heading", ("goal",), quality=True,
+          table=("paper", 2))(
     lambda d: time_mean(d.t_s, np.abs(d.goal_bearing)))
 _register("heading_error_signed_mean_rad", "rad", "signed heading", ("goal",), quality=True)(
     lambda d: time_mean(d.t_s, d.goal_bearing))
-_register("path_length_m", "m", "path", quality=True)(lambda d: d.path_m)
+_register("path_length_m", "m", "path", quality=True, table=("paper", 3))(lambda d: d.path_m)
 _register("net_displacement_m", "m", "net displacement")(lambda d: d.net_m)
 _register("start_goal_distance_m", "m", "start-goal distance", ("goal",))(
     lambda d: d.start_goal_m)
 
 
-@_register("distance_path_ratio", "m/m", "dist/path", quality=True)
+@_register("distance_path_ratio", "m/m", "dist/path", quality=True, table=("paper", 4))
 def _distance_path_ratio(d: Derived) -> float:
     reference = d.start_goal_m if math.isfinite(d.start_goal_m) else d.net_m
     return reference / d.path_m if d.path_m >= MIN_PATH_M else NAN
@@ -105,19 +107,21 @@ def _path_optimality(d: Derived) -> float:
     return d.optimal[0] / d.path_m if d.path_m >= MIN_PATH_M else NAN
 
 
-_register("lin_vel_mean_mps", "m/s", "$v_{mean}$", quality=True)(
+_register("lin_vel_mean_mps", "m/s", "$v_{mean}$", quality=True, table=("paper", 5))(
     lambda d: time_mean(d.vel_t_s, d.velocity.speed))
 _register("lin_vel_std_mps", "m/s", "$v_{std.dev.}$", quality=True)(
     lambda d: time_std(d.vel_t_s, d.velocity.speed))
 _register("ang_vel_mean_radps", "rad/s", "$\\omega_{mean}$", quality=True)(
     lambda d: time_mean(d.vel_t_s, np.abs(d.velocity.wz)))
-_register("ang_vel_std_radps", "rad/s", "$\\omega_{std.dev.}$", quality=True)(
+_register("ang_vel_std_radps", "rad/s", "$\\omega_{std.dev.}$", quality=True, table=("paper", 6))(
     lambda d: time_std(d.vel_t_s, d.velocity.wz))
-_register("lin_acc_max_mps2", "m/s$^2$", "max linear acceleration", quality=True)(
+_register("lin_acc_max_mps2", "m/s$^2$", "max linear acceleration", quality=True,
+          table=("paper", 7))(
     lambda d: _max(d.lin_acc))
 _register("lin_acc_mean_mps2", "m/s$^2$", "mean linear acceleration", quality=True)(
     lambda d: interval_mean(d.acc.dt_s, d.lin_acc))
-_register("yaw_acc_max_radps2", "rad/s$^2$", "max yaw acceleration", quality=True)(
+_register("yaw_acc_max_radps2", "rad/s$^2$", "max yaw acceleration", quality=True,
+          table=("paper", 8))(
     lambda d: _max(d.yaw_acc))
 _register("yaw_acc_mean_radps2", "rad/s$^2$", "mean yaw acceleration", quality=True)(
     lambda d: interval_mean(d.acc.dt_s, d.yaw_acc))
@@ -129,9 +133,11 @@ _register("yaw_jerk_max_radps3", "rad/s$^3$", "max yaw jerk", quality=True)(
     lambda d: _max(d._yaw(d.jerk)))
 _register("yaw_jerk_mean_radps3", "rad/s$^3$", "mean yaw jerk", quality=True)(
     lambda d: interval_mean(d.jerk.dt_s, d._yaw(d.jerk)))
-_register("obstacle_dist_min_m", "m", "min obstacle distance", ("scan",), quality=True)(
+_register("obstacle_dist_min_m", "m", "min obstacle distance", ("scan",), quality=True,
+          table=("paper", 9))(
     lambda d: _min(d.clearance.nearest_m))
-_register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), quality=True)(
+_register("obstacle_dist_mean_m", "m", "mean obstacle distance", ("scan",), quality=True,
+          table=("paper", 10))(
     lambda d: time_mean(seconds(d.scan.t_ns), d.clearance.nearest_m))
 
 
@@ -220,15 +226,19 @@ _register("goal_dist_final_m", "m", "final goal distance", ("goal",))(
     lambda d: float(d.goal_dist[-1]))
 
 
-def _row(stat):  # noqa: ANN001, ANN202
+def _crop_row_stat(stat):  # noqa: ANN001, ANN202
     def value(d: Derived) -> float:
         row = d.row_deviation
         return NAN if row is None else float(stat(row[0], row[1]))
     return value
 
 
-_register("row_path_mae_m", "m", "row path MAE")(_row(lambda t, e: time_mean(t, np.abs(e))))
-_register("row_path_mse_m2", "m$^2$", "row path MSE")(_row(lambda t, e: time_mean(t, e**2)))
+_register("row_path_mae_m", "m", "row path MAE",
+          table=("row", 0))(
+    _crop_row_stat(lambda t, e: time_mean(t, np.abs(e))))
+_register("row_path_mse_m2", "m$^2$", "row path MSE",
+          table=("row", 1))(
+    _crop_row_stat(lambda t, e: time_mean(t, e**2)))
 _register("row_reference", "", "row reference", text=True)(
     lambda d: None if d.row_deviation is None else d.row_deviation[2])
 

@@ -42,13 +42,19 @@ ENTRY_POINT_GROUP = "pic4rl.metrics"
 #: Inputs a metric may need; ``derived.INPUT_TESTS`` says how an episode has each.
 INPUTS: frozenset[str] = frozenset(INPUT_TESTS)
 
+#: The comparison tables' sections, in the order they are shown, and whether a section shows
+#: always (the paper's Table 1) or only when some episode has a value (the vineyard's rows).
+TABLE_SECTIONS: dict[str, bool] = {"paper": True, "row": False}
+
 
 @dataclass(frozen=True)
 class Metric:
     """One column: ``func(derived) -> float`` (or ``str`` when ``text``).
 
     ``quality``: a trajectory-quality column, which tables average over the successful
-    episodes unless asked to average all (``aggregate(over=...)``).
+    episodes unless asked to average all (``aggregate(over=...)``). ``table``: its place in
+    the comparison tables, (section of ``TABLE_SECTIONS``, position in it); ``None``: in the
+    per-episode results only.
     """
 
     name: str
@@ -59,8 +65,13 @@ class Metric:
     quality: bool = False
     text: bool = False
     builtin: bool = False
+    table: tuple[str, int] | None = None
 
     def __post_init__(self) -> None:
+        if self.table is not None and self.table[0] not in TABLE_SECTIONS:
+            msg = (f"metric {self.name!r}: table section {self.table[0]!r} is none of "
+                   f"{sorted(TABLE_SECTIONS)}")
+            raise ConfigError(msg)
         if not self.name.isidentifier():
             msg = f"metric {self.name!r}: a name must be a Python identifier (a column name)"
             raise ConfigError(msg)
@@ -157,6 +168,12 @@ class Registry:
                 log.warning(msg)
                 self.plugin_errors.append(msg)
 
+    def table(self, section: str) -> tuple[str, ...]:
+        """The columns placed in a table ``section``, in their positions' order."""
+        placed = sorted((m.table[1], i, m.name) for i, m in enumerate(self.metrics.values())
+                        if m.table is not None and m.table[0] == section)
+        return tuple(name for _, _, name in placed)
+
     def select(self, names: Iterable[str] | None = None) -> tuple[Metric, ...]:
         """The metrics to compute: all (``names`` None) or the named ones in table order,
         always with ``outcome`` and ``success`` (tables need them). Unknown names raise
@@ -189,14 +206,16 @@ def metric(
     needs: Iterable[str] = ("pose",),
     quality: bool = False,
     text: bool = False,
+    table: tuple[str, int] | None = None,
     registry: Registry = REGISTRY,
     _builtin: bool = False,
 ) -> Callable[[Callable[[Derived], Any]], Callable[[Derived], Any]]:
-    """Decorator: register ``func(derived) -> float`` as the column ``name``."""
+    """Decorator: register ``func(derived) -> float`` as the column ``name`` (``table``: its
+    section and position in the comparison tables)."""
 
     def register(func: Callable[[Derived], Any]) -> Callable[[Derived], Any]:
         registry.add(Metric(
-            name, unit, label or name, func, frozenset(needs), quality, text, _builtin,
+            name, unit, label or name, func, frozenset(needs), quality, text, _builtin, table,
         ))  # fmt: skip
         return func
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..core.metrics import BUILTIN_COLUMNS
-from ..core.registry import METRICS, REGISTRY, EpisodeMetrics, Metric
+from ..core.registry import METRICS, REGISTRY, TABLE_SECTIONS, EpisodeMetrics, Metric
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -19,31 +19,20 @@ __all__ = [
     "ROW_COLUMNS", "TABLE1_COLUMNS", "EpisodeMetrics", "Metric", "table_columns",
 ]
 
-#: Columns of the paper's Table 1, in its order.
-TABLE1_COLUMNS: tuple[str, ...] = (
-    "success",
-    "clearance_time_s",
-    "heading_error_mean_rad",
-    "path_length_m",
-    "distance_path_ratio",
-    "lin_vel_mean_mps",
-    "ang_vel_std_radps",
-    "lin_acc_max_mps2",
-    "yaw_acc_max_radps2",
-    "obstacle_dist_min_m",
-    "obstacle_dist_mean_m",
-)
-
+#: Columns of the paper's Table 1, in its order (each metric's ``table`` placement).
+TABLE1_COLUMNS: tuple[str, ...] = REGISTRY.table("paper")
 #: The vineyard's columns: a comparison shows them after Table 1's when some episode has them.
-ROW_COLUMNS: tuple[str, ...] = ("row_path_mae_m", "row_path_mse_m2")
+ROW_COLUMNS: tuple[str, ...] = REGISTRY.table("row")
 
 
 def table_columns(table: pd.DataFrame) -> tuple[str, ...]:
-    """Table 1's columns, then ``ROW_COLUMNS`` that hold a value in ``table`` (per episode,
-    or aggregated: ``<metric>_mean``)."""
+    """The columns of the comparison tables' sections, in order (``TABLE_SECTIONS``): those of
+    a section shown always, the others' when they hold a value in ``table`` (per episode, or
+    aggregated: ``<metric>_mean``); a plugin's placed metric joins its section."""
     def has(name: str) -> bool:
         return any(c in table.columns and table[c].notna().any() for c in (name, f"{name}_mean"))
-    return TABLE1_COLUMNS + tuple(c for c in ROW_COLUMNS if has(c))
+    return tuple(c for section, always in TABLE_SECTIONS.items() for c in REGISTRY.table(section)
+                 if always or has(c))
 
 
 #: Columns a result DataFrame holds besides the metrics: where the row came from.

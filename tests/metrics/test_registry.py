@@ -163,3 +163,27 @@ def test_every_builtin_metric_is_documented() -> None:
             first = first or part
             named.add(name)
     assert named == set(METRIC_COLUMNS)
+
+
+def test_a_metric_s_table_placement_is_in_its_registry_entry() -> None:
+    from pic4rl_metrics.tables.results import ROW_COLUMNS, TABLE1_COLUMNS, table_columns
+    assert TABLE1_COLUMNS == (
+        "success", "clearance_time_s", "heading_error_mean_rad", "path_length_m",
+        "distance_path_ratio", "lin_vel_mean_mps", "ang_vel_std_radps", "lin_acc_max_mps2",
+        "yaw_acc_max_radps2", "obstacle_dist_min_m", "obstacle_dist_mean_m")
+    assert ROW_COLUMNS == ("row_path_mae_m", "row_path_mse_m2")
+    # a user's metric placed first among the rows' columns joins the table when it has values
+    metric("row_width_m", unit="m", table=("row", -1))(lambda d: 1.0)
+    try:
+        frame = pd.DataFrame({"row_width_m": [0.8], "row_path_mae_m": [math.nan]})
+        assert table_columns(frame) == (*TABLE1_COLUMNS, "row_width_m")
+        assert REGISTRY.table("row") == ("row_width_m", *ROW_COLUMNS)
+    finally:
+        REGISTRY.remove("row_width_m")
+
+
+@pytest.mark.bad_input
+def test_a_table_section_that_does_not_exist_is_refused() -> None:
+    with pytest.raises(ConfigError, match=r"metric 'x_m': table section 'table2' is none of "
+                                          r"\['paper', 'row'\]"):
+        Metric("x_m", "m", "x", lambda d: 0.0, table=("table2", 0))
