@@ -48,6 +48,7 @@ from pic4rl_bridge.task_registry import TASKS
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic
+from pic4rl_metrics.entry import entry_point
 
 from . import runs
 from .config import ENV_NODE, SIM_NODE
@@ -275,6 +276,8 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
         progress=not args.no_progress)
 
 
+@entry_point("pic4rl-test", BridgeError,
+             interrupted="interrupted; the finished episodes' bags are kept")
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -290,15 +293,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             result = run_test(plan, agents)
     except TransportError as err:
         env = agents[0].run.env if agents else None
-        print(f"pic4rl-test: {err}\n{no_sim_hint('test', env)}", file=sys.stderr)
-        return 2
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-test: {err}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("pic4rl-test: interrupted; the finished episodes' bags are kept",
-              file=sys.stderr)
-        return 130
+        raise TransportError(f"{err}\n{no_sim_hint('test', env)}") from err
     for error in result.failed:
         print(f"error: {error}", file=sys.stderr)
     text = render_table(result.table, agents[0].run.env.task, args.format,

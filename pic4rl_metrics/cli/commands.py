@@ -20,7 +20,8 @@ from .. import atomic
 from ..tables.aggregate import aggregate
 from ..tables.batch import MetricsResult, compute
 from ..contract import EpisodeFacts, parse_facts
-from ..errors import ConfigError, MetricsError, OutputError
+from ..entry import entry_point
+from ..errors import ConfigError, OutputError
 from ..core.registry import METRICS, REGISTRY
 from ..bags.inputs import discover
 from ..tables.layouts import FORMATS
@@ -247,7 +248,7 @@ def _report_failures(result: MetricsResult) -> int:
 
 def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
     from ..viz.plots import (  # matplotlib on demand
-        by_world, comparison_figure, episode_figure, figure_names, save_figure)
+        by_world, trajectories_figure, episode_figure, figure_names, save_figure)
 
     out: Path = args.out
     drawn = [r for r in result.results if r.episode is not None]
@@ -258,7 +259,7 @@ def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
         name = "comparison" if len(worlds) == 1 else "comparison_" + (
             re.sub(r"[^\w.-]", "-", world) or "no-world")
         if len(episodes) > 1:
-            figures.append((out / f"{name}.png", lambda e=episodes: comparison_figure(
+            figures.append((out / f"{name}.png", lambda e=episodes: trajectories_figure(
                 e, group_by=args.by)))
     for target, draw in figures:
         if target.exists():
@@ -269,37 +270,34 @@ def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
         print(f"wrote {target}", file=sys.stderr)
 
 
+@entry_point("pic4rl-metrics")
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``pic4rl-metrics``; returns the exit code."""
     args = build_parser().parse_args(argv)
-    try:
-        if args.command == "video":
-            return run_video_command(args, *_inputs(args))
-        if args.command == "report":
-            _check_report_inputs(args)
-        result = _run(args)
-        if args.command == "compute":
-            shown = _shown(result, list(EPISODE_VIEW), numeric=False)
-            _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
-        elif args.command == "compare" and args.paired:
-            _emit(render_paired(result, args.paired, args.format), args.out, args.force)
-        elif args.command == "report":
-            from ..viz.html_report import write_report  # matplotlib and Pillow on demand
+    if args.command == "video":
+        return run_video_command(args, *_inputs(args))
+    if args.command == "report":
+        _check_report_inputs(args)
+    result = _run(args)
+    if args.command == "compute":
+        shown = _shown(result, list(EPISODE_VIEW), numeric=False)
+        _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
+    elif args.command == "compare" and args.paired:
+        _emit(render_paired(result, args.paired, args.format), args.out, args.force)
+    elif args.command == "report":
+        from ..viz.html_report import write_report  # matplotlib and Pillow on demand
 
-            write_report(result, args.out, overwrite=args.force, references=args.reference,
-                         inputs=[str(b) for b in args.bags], title=args.title)
-            print(f"wrote {args.out}", file=sys.stderr)
-        elif args.command == "compare":
-            table = aggregate(result.frame, by=args.by, over=args.over,
-                              count_aborted=args.count_aborted)
-            columns = _shown(result, table_columns(result.frame), numeric=True)
-            text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
-            _emit(text, args.out, args.force)
-        else:
-            _plot(args, result)
-    except MetricsError as err:
-        print(f"pic4rl-metrics: {err}", file=sys.stderr)
-        return 2
+        write_report(result, args.out, overwrite=args.force, references=args.reference,
+                     inputs=[str(b) for b in args.bags], title=args.title)
+        print(f"wrote {args.out}", file=sys.stderr)
+    elif args.command == "compare":
+        table = aggregate(result.frame, by=args.by, over=args.over,
+                          count_aborted=args.count_aborted)
+        columns = _shown(result, table_columns(result.frame), numeric=True)
+        text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
+        _emit(text, args.out, args.force)
+    else:
+        _plot(args, result)
     return _report_failures(result)
 
 

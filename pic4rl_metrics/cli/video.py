@@ -13,8 +13,6 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import MetricsError
-
 if TYPE_CHECKING:
     from ..contract import EpisodeFacts
     from ..bags.topics import TopicMap
@@ -66,14 +64,10 @@ def run_video_command(args: argparse.Namespace, topic_map: TopicMap, facts: Epis
     from ..viz.video_batch import render_videos
 
     progress = sys.stderr.isatty() if args.progress is None else args.progress
-    try:
-        options = VideoOptions(fps=args.fps, speed=args.speed, gif=args.gif)
-        rows = render_videos(args.bags, args.out, options=options, topic_map=topic_map,
-                             facts=facts, given=given, jobs=args.jobs, progress=progress,
-                             grid=args.grid, overwrite=args.force)
-    except MetricsError as err:
-        print(f"pic4rl-metrics: {err}", file=sys.stderr)
-        return 2
+    options = VideoOptions(fps=args.fps, speed=args.speed, gif=args.gif)
+    rows = render_videos(args.bags, args.out, options=options, topic_map=topic_map,
+                         facts=facts, given=given, jobs=args.jobs, progress=progress,
+                         grid=args.grid, overwrite=args.force)
     if rows:
         sys.stdout.write(_table(rows) + "\n")
     for row in rows:

@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..lazy import lazy_exports
 
 _HOMES = {
-    "episode_figure": "plots", "comparison_figure": "plots", "View": "raster",
+    "episode_figure": "plots", "trajectories_figure": "plots", "View": "raster",
     "EpisodeScene": "video", "render_videos": "video_batch", "write_report": "html_report",
 }
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)

@@ -240,7 +240,7 @@ def _group(episode: Episode, group_by: str) -> str:
     return episode.bag.name if value is None else str(value)
 
 
-def comparison_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -> Figure:
+def trajectories_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -> Figure:
     """All trajectories on one axes and all speed profiles on another, coloured by group.
 
     ``group_by`` names an ``EpisodeFacts`` field (agent, task, world, run, ...); an episode
@@ -252,7 +252,7 @@ def comparison_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -
         suggestion = f"; did you mean {hint[0]!r}?" if hint else f"; expected one of {names}"
         raise ConfigError(f"group_by={group_by!r} is not an episode fact{suggestion}")
     if not episodes:
-        raise ConfigError("comparison_figure: no episodes to plot")
+        raise ConfigError("trajectories_figure: no episodes to plot")
     groups = list(dict.fromkeys(_group(ep, group_by) for ep in episodes))
     cycle = mpl.rcParams["axes.prop_cycle"].by_key().get("color", [])
     if len(groups) <= len(cycle):

@@ -13,7 +13,7 @@ from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_metrics.errors import ConfigError
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_metrics.viz.plots import (
-    comparison_figure,
+    trajectories_figure,
     episode_figure,
     plot_acceleration_profile,
     plot_trajectory,
@@ -179,7 +179,7 @@ def test_episode_figure_uses_inferred_outcome_for_end_marker():
 def test_comparison_figure_one_legend_entry_per_group():
     eps = [wall_episode(agent="dwa", bag="a"), wall_episode(agent="dwa", bag="b"),
            wall_episode(agent="td3", bag="c", speed=0.3), wall_episode(agent=None, bag="d")]
-    fig = comparison_figure(eps)
+    fig = trajectories_figure(eps)
     ax_traj, ax_speed = fig.axes
     texts = [t.get_text() for t in ax_traj.get_legend().get_texts()]
     assert texts == ["dwa", "td3", "d"]
@@ -191,9 +191,9 @@ def test_comparison_figure_one_legend_entry_per_group():
 
 def test_comparison_figure_rejects_unknown_group():
     with pytest.raises(ConfigError, match="did you mean 'agent'"):
-        comparison_figure([wall_episode()], group_by="agnet")
+        trajectories_figure([wall_episode()], group_by="agnet")
     with pytest.raises(ConfigError, match="no episodes"):
-        comparison_figure([])
+        trajectories_figure([])
 
 
 def test_save_figure_refuses_to_overwrite(tmp_path):
