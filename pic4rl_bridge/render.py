@@ -24,7 +24,6 @@ from .errors import ConfigError
 from .frame import SensorFrame
 from .scenario import Scenario
 from .tasks.base import EpisodeContext
-from .tasks.collision import scan_points
 
 #: ``render_view`` values: the drawn top-down view, or MuJoCo's camera.
 RENDER_VIEWS = ("top", "mujoco")
@@ -125,7 +124,7 @@ class TopDownView:
 def scan_world(frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
     """The scan's returns (the collision test's points) in the world (m)."""
     assert frame.scan is not None
-    base, pose = scan_points(frame.scan), frame.pose
+    base, pose = frame.scan.points(), frame.pose
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
     return (pose.x + c * base[:, 0] - s * base[:, 1], pose.y + s * base[:, 0] + c * base[:, 1])
 

@@ -11,11 +11,12 @@ does not extrapolate. A static transform holds at all times (the last one of a c
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from ..geometry import wrap_angle
 
 #: (parent, child, stamp ns, tx, ty, tz, qx, qy, qz, qw) of one ``TransformStamped``.
 Row = tuple[str, str, int, float, float, float, float, float, float, float]
@@ -203,4 +204,4 @@ def static_pose(tree: dict[str, Edge], parent: str, child: str) -> tuple[float, 
     """x, y, yaw of ``child`` in ``parent`` through transforms that hold (``ChainError`` when
     none joins them)."""
     x, y, yaw = _relative(tree, parent, child, np.zeros(1, dtype=np.int64))[0]
-    return float(x), float(y), math.atan2(math.sin(yaw), math.cos(yaw))
+    return float(x), float(y), float(wrap_angle(yaw))

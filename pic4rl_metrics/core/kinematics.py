@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..geometry import wrap_angle
 from .series import PoseSeries
 
 NS = 1e-9
@@ -23,11 +24,6 @@ def seconds(t_ns: np.ndarray, t0_ns: int | None = None) -> np.ndarray:
         return np.zeros(0)
     origin = int(t_ns[0]) if t0_ns is None else int(t0_ns)
     return (t_ns - origin).astype(np.float64) * NS
-
-
-def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
-    """Wrap to [-pi, pi)."""
-    return (np.asarray(angle, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def time_mean(t_s: np.ndarray, values: np.ndarray) -> float:

@@ -12,7 +12,6 @@ episode built in memory the same way, so both give the same numbers.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
@@ -43,21 +42,6 @@ class ScanClearance(NamedTuple):
     nearest_m: np.ndarray  # nearest valid return (from the sensor)
     range_mean_m: np.ndarray  # mean of valid returns
     margin_m: np.ndarray  # signed distance of the nearest return to the footprint
-
-
-def scan_points(
-    scan: ScanSeries, mount: Mount, ranges: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Valid returns (``ranges``: ``scan.valid_ranges()``) as points in the base frame: x and
-    y (n_scans, n_beams), NaN elsewhere; the env's geometry
-    (``pic4rl_bridge.tasks.collision.scan_points``)."""
-    ranges = scan.valid_ranges() if ranges is None else ranges
-    angles = scan.angles
-    if len(angles) and (angles == angles[0]).all():
-        angles = angles[0]  # one scanner: the trigonometry once, not once per scan
-    fx, fy = ranges * np.cos(angles), ranges * np.sin(angles)
-    c, s = math.cos(mount.yaw_rad), math.sin(mount.yaw_rad)
-    return mount.x_m + c * fx - s * fy, mount.y_m + s * fx + c * fy
 
 
 def scan_clearance(
@@ -121,7 +105,7 @@ def summarize(scan: ScanSeries, facts: EpisodeFacts,
     margin = np.full(len(scan), NAN)
     lanes = None
     if facts.footprint is not None or wants_lanes(facts):
-        x, y = scan_points(scan, mount, ranges)
+        x, y = scan.points(mount, ranges)
         if facts.footprint is not None:
             margin = _row_min(facts.footprint.signed_distance_xy(x, y))
         if wants_lanes(facts):

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry import Mount, scan_points
+
 
 @dataclass(frozen=True)
 class PoseSeries:
@@ -57,6 +59,16 @@ class ScanSeries:
         in_range = np.isfinite(ranges) & (ranges >= rmin) & (ranges <= rmax)
         out = np.where(in_range, ranges, np.nan)
         return np.where(too_close, np.broadcast_to(rmin, ranges.shape), out)
+
+    def points(self, mount: Mount, ranges: np.ndarray | None = None,
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Valid returns (``ranges``: ``valid_ranges()``) of a scanner at ``mount`` as points in
+        the base frame (``geometry.scan_points``): x and y (n_scans, n_beams), NaN elsewhere."""
+        ranges = self.valid_ranges() if ranges is None else ranges
+        angles = self.angles
+        if len(angles) and (angles == angles[0]).all():
+            angles = angles[0]  # one scanner: the trigonometry once, not once per scan
+        return scan_points(ranges, angles, mount)
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry import wrap_angle
+
 
 @dataclass(frozen=True)
 class Track:
@@ -55,11 +57,6 @@ def _times(duration_s: float, dt_s: float) -> np.ndarray:
     return np.arange(math.floor(duration_s / dt_s + 1e-9) + 1) * dt_s
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    """Angle wrapped to [-pi, pi] (rad)."""
-    return np.arctan2(np.sin(angle), np.cos(angle))
-
-
 def straight_line(
     speed_mps: float,
     duration_s: float,
@@ -97,7 +94,7 @@ def circle(
     ones = np.ones_like(t)
     return Track(
         t, center[0] + radius_m * np.sin(heading), center[1] - radius_m * np.cos(heading),
-        _wrap(heading), speed_mps * ones, 0 * ones, speed_mps / radius_m * ones,
+        wrap_angle(heading), speed_mps * ones, 0 * ones, speed_mps / radius_m * ones,
     )  # fmt: skip
 
 
@@ -138,7 +135,7 @@ def from_waypoints(
     clock = 0.0
     for i, (p, d, heading) in enumerate(zip(starts, seg, headings)):
         if i > 0 and yaw_rate_radps:
-            turn = float(_wrap(heading - headings[i - 1]))
+            turn = float(wrap_angle(heading - headings[i - 1]))
             rate = math.copysign(abs(yaw_rate_radps), turn)
             phases.append((clock, abs(turn) / abs(yaw_rate_radps), *p, headings[i - 1], 0, rate))
             clock += phases[-1][1]
@@ -153,7 +150,7 @@ def from_waypoints(
     tau = t - t0
     yaw = yaw0 + wz * tau
     return Track(
-        t, x0 + vx * tau * np.cos(yaw0), y0 + vx * tau * np.sin(yaw0), _wrap(yaw),
+        t, x0 + vx * tau * np.cos(yaw0), y0 + vx * tau * np.sin(yaw0), wrap_angle(yaw),
         vx, np.zeros_like(t), wz,
     )  # fmt: skip
 

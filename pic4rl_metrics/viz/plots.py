@@ -23,7 +23,6 @@ from ..contract import EpisodeFacts, Outcome
 from ..geometry import Mount
 from ..errors import ConfigError
 from ..core.kinematics import differentiate, seconds, velocity_series
-from ..core.scan_summary import scan_points
 from ..core.registry import METRICS
 from ..tables.results import EpisodeMetrics
 from ..core.series import Episode, ScanSeries
@@ -75,7 +74,7 @@ def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np
     yaw = np.interp(ts, tp, np.unwrap(np.asarray(pose.yaw, float)))[:, None]
     some = ScanSeries(t_scan[rows], scan.ranges[rows], scan.angles[rows],
                       scan.range_min[rows], scan.range_max[rows])
-    bx, by = scan_points(some, episode.facts.scan_mount or Mount())
+    bx, by = some.points(episode.facts.scan_mount or Mount())
     return rows, x + np.cos(yaw) * bx - np.sin(yaw) * by, y + np.sin(yaw) * bx + np.cos(yaw) * by
 
 
