@@ -1,4 +1,4 @@
-"""The text renderers (``report``), on small hand-built result frames."""
+"""The text renderers (``tables.text``), on small hand-built result frames."""
 
 from __future__ import annotations
 

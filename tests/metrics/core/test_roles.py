@@ -27,7 +27,7 @@ from pic4rl_metrics.core.roles import (
 from pic4rl_metrics.core.series import CmdSeries, Episode, PoseSeries
 from pic4rl_metrics.bags.topics import TopicMap, topic_map_from_dict
 
-DOC = Path(__file__).resolve().parents[2] / "docs" / "metrics.md"
+DOC = Path(__file__).resolve().parents[3] / "docs" / "metrics.md"
 
 
 def _pose() -> PoseSeries:

@@ -152,7 +152,7 @@ def test_the_topic_map_selects_metrics(bag: Path, tmp_path: Path) -> None:
 
 def test_every_builtin_metric_is_documented() -> None:
     """docs/metrics.md's per-episode table names every one of our columns, and no other."""
-    doc = (Path(__file__).resolve().parents[2] / "docs" / "metrics.md").read_text()
+    doc = (Path(__file__).resolve().parents[3] / "docs" / "metrics.md").read_text()
     table = doc.split("## Per-episode metrics", 1)[1].split("\n\n", 2)[1]
     named = set()
     for line in table.splitlines()[2:]:

@@ -20,7 +20,7 @@ from pic4rl_metrics.testing.synthetic import Obstacles, straight_line, write_epi
 from pic4rl_metrics.viz.video import EpisodeScene, VideoOptions, frame_count
 from pic4rl_metrics.viz.video_batch import render_videos, video_names
 
-REAL_BAGS = Path(__file__).resolve().parents[3] / "shared" / "real_bags"
+REAL_BAGS = Path(__file__).resolve().parents[4] / "shared" / "real_bags"
 WALLS = Obstacles(segments=((-1, -2, 8, -2), (8, -2, 8, 2), (8, 2, -1, 2), (-1, 2, -1, -2)))
 FOOTPRINT = {"length_m": 0.5, "width_m": 0.4}
 

@@ -22,7 +22,7 @@ from rosbags.typesys import Stores, get_typestore
 import pic4rl_metrics
 from pic4rl_metrics.cli.commands import main
 
-REAL_BAGS = Path(__file__).resolve().parents[3] / "shared" / "real_bags"
+REAL_BAGS = Path(__file__).resolve().parents[4] / "shared" / "real_bags"
 
 
 class Expected(NamedTuple):
