@@ -10,8 +10,8 @@
   window ahead of the robot, and steers to the middle of the two: the lateral offset of the
   middle line balances the clearance to left and right, its slope gives the heading along the
   rows. With one side unseen (a gap, the row's end) it keeps the last lane width; with neither,
-  it drives straight on. The fit is ``pic4rl_metrics.core.crop_rows``': the row metrics of a bag with
-  no centre line read the lane the same way.
+  it drives straight on. The fit is ``pic4rl_metrics.core.crop_rows``': the row metrics of a
+  bag with no centre line read the lane the same way.
 
 Both command (v, ω) within the env's ranges as the task's 2-D normalised action; pure numpy
 over the env's decoded frame.

@@ -27,8 +27,8 @@ import yaml
 
 from .. import contract
 from ..contract import EpisodeFacts, parse_facts
-from ..errors import ConfigError, TopicError
 from ..core.roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
+from ..errors import ConfigError, TopicError
 
 
 def normalize_topic(name: str) -> str:

@@ -17,19 +17,19 @@ from pathlib import Path
 from typing import Any
 
 from .. import atomic
-from ..tables.aggregate import aggregate
-from ..tables.batch import MetricsResult, compute
+from ..bags.inputs import discover
+from ..bags.topics import TopicMap, load_topic_map, parse_frames
 from ..contract import EpisodeFacts, parse_facts
+from ..core.registry import METRICS, REGISTRY
+from ..core.roles import ROLES, Role
 from ..entry import entry_point
 from ..errors import ConfigError, OutputError
-from ..core.registry import METRICS, REGISTRY
-from ..bags.inputs import discover
+from ..tables.aggregate import aggregate
+from ..tables.batch import MetricsResult, compute
 from ..tables.layouts import FORMATS
 from ..tables.paired import render_paired
-from ..tables.text import EPISODE_VIEW, render_comparison, render_episodes
 from ..tables.results import METRIC_COLUMNS, table_columns
-from ..core.roles import ROLES, Role
-from ..bags.topics import TopicMap, load_topic_map, parse_frames
+from ..tables.text import EPISODE_VIEW, render_comparison, render_episodes
 from .video import add_video_options, run_video_command
 
 

@@ -26,8 +26,8 @@ from .kinematics import (
     seconds,
     velocity_series,
 )
-from .roles import SERIES_ROLES
 from .crop_rows import deviations
+from .roles import SERIES_ROLES
 from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
 from .series import Episode
 

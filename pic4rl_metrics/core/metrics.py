@@ -16,8 +16,8 @@ from ..contract import Outcome
 from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
-from .timebase import PLAUSIBLE_SPEED_MPS
 from .series import Episode
+from .timebase import PLAUSIBLE_SPEED_MPS
 
 #: Below these the robot counts as standing still (m/s, rad/s).
 STILL_SPEED_MPS = 0.05

@@ -31,8 +31,8 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any
 
-from .derived import INPUT_TESTS, Derived
 from ..errors import ConfigError
+from .derived import INPUT_TESTS, Derived
 
 log = logging.getLogger(__name__)
 

@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from ..contract import Outcome
-from ..errors import ConfigError
 from ..core.registry import REGISTRY
+from ..errors import ConfigError
 from .results import ERROR_COLUMN
 
 #: Group name of rows whose key is missing (and, for ``agent``, whose run is missing too).

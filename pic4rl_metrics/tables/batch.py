@@ -19,15 +19,15 @@ from typing import Any
 import pandas as pd
 from tqdm import tqdm
 
-from ..contract import EpisodeFacts
-from ..errors import ConfigError, MetricsError
 from ..bags.inputs import discover
-from ..core.metrics import compute_metrics
 from ..bags.reader import read_episode
-from ..core.registry import REGISTRY
-from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
-from ..core.series import Episode
 from ..bags.topics import TopicMap
+from ..contract import EpisodeFacts
+from ..core.metrics import compute_metrics
+from ..core.registry import REGISTRY
+from ..core.series import Episode
+from ..errors import ConfigError, MetricsError
+from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
 
 log = logging.getLogger(__name__)
 

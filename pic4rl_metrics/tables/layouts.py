@@ -11,8 +11,8 @@ import io
 import json
 from collections.abc import Sequence
 
-from .aggregate import DASH
 from ..errors import ConfigError
+from .aggregate import DASH
 
 FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")
 

@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from .aggregate import _error_mask, _group_keys
 from ..errors import ConfigError
+from .aggregate import _error_mask, _group_keys
 from .layouts import check_format, render_rows
 
 if TYPE_CHECKING:

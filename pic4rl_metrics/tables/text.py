@@ -17,10 +17,10 @@ from pathlib import PurePath
 import numpy as np
 import pandas as pd
 
+from ..core.registry import METRICS
+from ..errors import ConfigError
 from .aggregate import DASH, EPISODE_COUNTED
 from .layouts import check_format, csv_text, fixed_width, latex_escape, markdown, tabular
-from ..errors import ConfigError
-from ..core.registry import METRICS
 from .results import ERROR_COLUMN, TABLE1_COLUMNS
 
 #: Metric columns of the per-episode view and their short labels (units come from METRICS).

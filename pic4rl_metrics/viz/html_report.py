@@ -24,17 +24,17 @@ from urllib.parse import quote
 import pandas as pd
 
 from .. import atomic
-from . import html_page as hp
+from ..contract import Outcome
+from ..core.registry import METRICS
+from ..errors import ConfigError, OutputError
 from ..tables.aggregate import _group_keys, aggregate, wilson_interval
 from ..tables.batch import MetricsResult
-from ..contract import Outcome
-from ..errors import ConfigError, OutputError
 from ..tables.paired import N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, pair_labels, paired_cells
 from ..tables.paired import paired_table, seed_spread
-from ..core.registry import METRICS
-from ..tables.text import plain_text, short_bag
-from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
 from ..tables.results import ROW_COLUMNS
+from ..tables.text import plain_text, short_bag
+from . import html_page as hp
+from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
 
 #: A task's own columns, shown in the leaderboard when some episode has them.
 TASK_COLUMNS = ("barn_score", *ROW_COLUMNS, "follow_heading_mae_rad", "person_in_view_fraction",

@@ -20,12 +20,12 @@ from matplotlib.patches import Circle
 
 from .. import atomic
 from ..contract import EpisodeFacts, Outcome
-from ..geometry import Mount
-from ..errors import ConfigError
 from ..core.kinematics import differentiate, seconds, velocity_series
 from ..core.registry import METRICS
-from ..tables.results import EpisodeMetrics
 from ..core.series import Episode, ScanSeries
+from ..errors import ConfigError
+from ..geometry import Mount
+from ..tables.results import EpisodeMetrics
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.
 END_STYLE: dict[Outcome, tuple[str, str, str]] = {

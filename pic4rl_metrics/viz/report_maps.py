@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
+from ..core.series import Episode
 from . import raster
 from .plots import scan_hits_world
 from .raster import COLORS, View
-from ..core.series import Episode
 
 #: One colour per agent, in order (matplotlib's tab10).
 PALETTE: tuple[tuple[int, int, int], ...] = (

@@ -21,12 +21,12 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from . import raster
 from ..contract import Outcome
+from ..core.series import Episode
 from ..errors import ConfigError
+from . import raster
 from .plots import END_STYLE, plot_trajectory, plot_velocity_profile, scan_hits_world
 from .raster import COLORS, View
-from ..core.series import Episode
 
 #: Frame size (pixels): multiples of 16, as H.264 encoders want them.
 FRAME_SIZE = (960, 576)

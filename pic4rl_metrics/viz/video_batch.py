@@ -18,12 +18,12 @@ from typing import Any
 import numpy as np
 
 from .. import atomic
-from ..tables.batch import BagResult, judge_bag, resolve_jobs, run_parallel
+from ..bags.inputs import discover
+from ..bags.topics import TopicMap
 from ..contract import EpisodeFacts
 from ..errors import ConfigError, MetricsError, OutputError
-from ..bags.inputs import discover
+from ..tables.batch import BagResult, judge_bag, resolve_jobs, run_parallel
 from ..tables.paired import pair_key
-from ..bags.topics import TopicMap
 from .video import EpisodeScene, VideoOptions, extent, union
 
 log = logging.getLogger(__name__)

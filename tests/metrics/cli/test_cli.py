@@ -22,7 +22,8 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from pic4rl_metrics.cli import commands as cli
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, Obstacles, straight_line, write_episode_bag
+from pic4rl_metrics.testing.synthetic import (DEFAULT_T0_NS, Obstacles, straight_line,
+                                              write_episode_bag)
 
 EXACT = 1e-12
 F32 = 1e-6  # scan ranges travel as float32
