@@ -1,6 +1,6 @@
 """Peak memory and time of judging one long bag, against the bag's length (issue 27, item 8).
 
-Each length is a real-robot-shaped log (``pic4rl_metrics.synthetic.write_long_bag``: 50 Hz
+Each length is a real-robot-shaped log (``pic4rl_metrics.testing.synthetic.write_long_bag``: 50 Hz
 odometry, 40 Hz scans of 720 beams), judged by ``pic4rl_metrics.compute`` in a fresh
 subprocess that reports its own peak resident memory (``VmHWM``: ``ru_maxrss`` would carry a
 large parent's across exec) and wall time, so one length's memory never counts against the
@@ -22,7 +22,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pic4rl_metrics.synthetic import write_long_bag
+from pic4rl_metrics.testing.synthetic import write_long_bag
 
 #: Judges the bag given as argv[1] (none: only imports) and prints its figures as JSON.
 CHILD = """

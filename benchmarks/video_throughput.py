@@ -35,31 +35,32 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from pic4rl_metrics import read_episode
-from pic4rl_metrics.plots import scan_hits_world
-from pic4rl_metrics.synthetic import Obstacles, circle, write_episode_bag
-from pic4rl_metrics.video import VideoOptions, frame_count
-from pic4rl_metrics.video_batch import render_videos, write_video
-
+# The metrics load in the functions that use them: the env worker runs this file on an older
+# revision's packages (``old_packages``), whose metrics had other module paths.
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = REPO / "config" / "env_goto_lidar.yaml"
-ARENA = Obstacles(
-    circles=((6.0, 6.0, 0.5), (1.5, 1.5, 0.3), (10.5, 1.5, 0.3), (1.5, 10.5, 0.3)),
-    segments=((0, 0, 12, 0), (12, 0, 12, 12), (12, 12, 0, 12), (0, 12, 0, 0)),
-)
 FPS = 10.0
 TURN = np.array([-1.0, 0.5], dtype=np.float32)
 
 
 def episode_bag(folder: Path, seconds: float) -> Path:
+    from pic4rl_metrics.testing.synthetic import Obstacles, circle, write_episode_bag
+
+    arena = Obstacles(
+        circles=((6.0, 6.0, 0.5), (1.5, 1.5, 0.3), (10.5, 1.5, 0.3), (1.5, 10.5, 0.3)),
+        segments=((0, 0, 12, 0), (12, 0, 12, 12), (12, 12, 0, 12), (0, 12, 0, 0)),
+    )
     track = circle(3.0, 0.6, seconds, 0.05, center=(6.0, 6.0))
     facts = {"agent": "bench", "footprint": {"length_m": 0.508, "width_m": 0.430},
              "start": [6.0, 3.0, 0.0], "goal": [9.0, 6.0]}
-    return write_episode_bag(folder / "episode", track, obstacles=ARENA, scan_every=2,
+    return write_episode_bag(folder / "episode", track, obstacles=arena, scan_every=2,
                              goal=(9.0, 6.0), facts=facts, outcome="timeout")
 
 
 def ours(bag: Path, out: Path, seconds: float) -> float:
+    from pic4rl_metrics.viz.video import VideoOptions, frame_count
+    from pic4rl_metrics.viz.video_batch import render_videos
+
     start = time.perf_counter()
     rows = render_videos([bag], out, options=VideoOptions(fps=FPS), overwrite=True)
     took = time.perf_counter() - start
@@ -69,6 +70,10 @@ def ours(bag: Path, out: Path, seconds: float) -> float:
 
 def matplotlib_frames(bag: Path, seconds: float):  # noqa: ANN201 - a generator of frames
     """The plain way: one figure, its artists updated and the canvas redrawn every frame."""
+    from pic4rl_metrics import read_episode
+    from pic4rl_metrics.viz.plots import scan_hits_world
+    from pic4rl_metrics.viz.video import VideoOptions, frame_count
+
     ep = read_episode(bag, full_scans=True)
     t = (ep.pose.t_ns - ep.pose.t_ns[0]) / 1e9
     rows, sx, sy = scan_hits_world(ep)
@@ -95,6 +100,8 @@ def matplotlib_frames(bag: Path, seconds: float):  # noqa: ANN201 - a generator 
 
 
 def plain(bag: Path, out: Path, seconds: float) -> float:
+    from pic4rl_metrics.viz.video_batch import write_video
+
     start = time.perf_counter()
     write_video(matplotlib_frames(bag, seconds), out / "plain.mp4", fps=FPS, overwrite=True)
     return time.perf_counter() - start

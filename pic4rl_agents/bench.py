@@ -28,6 +28,7 @@ from typing import Any
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_metrics import atomic
+from pic4rl_metrics.entry import entry_point
 
 from . import benchcell
 from .benchtable import SuiteTable, write_results
@@ -265,27 +266,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+@entry_point("pic4rl-bench", BridgeError,
+             interrupted="interrupted; finished episodes are kept, a rerun resumes")
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the suite; print its table (markdown); exit 1 if a cell failed, 2 for bad input."""
     from .console import console_logging
 
     args = build_parser().parse_args(argv)
-    try:
-        if args.workers < 1:
-            raise ConfigError(f"--workers {args.workers}: expected a positive number")
-        suite = load_suite(args.suite, bags_dir=args.bags)
-        with console_logging(__name__):
-            start = time.monotonic()
-            table = run_suite(suite, workers=args.workers, address=args.address,
-                              local=args.local, retries=args.retries,
-                              progress=not args.no_progress)
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-bench: {err}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("pic4rl-bench: interrupted; finished episodes are kept, a rerun resumes",
-              file=sys.stderr)
-        return 130
+    if args.workers < 1:
+        raise ConfigError(f"--workers {args.workers}: expected a positive number")
+    suite = load_suite(args.suite, bags_dir=args.bags)
+    with console_logging(__name__):
+        start = time.monotonic()
+        table = run_suite(suite, workers=args.workers, address=args.address,
+                          local=args.local, retries=args.retries,
+                          progress=not args.no_progress)
     sys.stdout.write((suite.root / "results.md").read_text())
     for error in table.bag_errors:
         print(f"error: {error}", file=sys.stderr)

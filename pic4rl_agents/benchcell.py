@@ -25,7 +25,7 @@ from typing import Any
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
 from pic4rl_metrics import atomic
-from pic4rl_metrics.inputs import METADATA
+from pic4rl_metrics.bags.inputs import METADATA
 from pic4rl_sim import params_file
 
 from .suite import Cell

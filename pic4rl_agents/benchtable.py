@@ -18,15 +18,15 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
-from pic4rl_metrics.aggregate import aggregate, bootstrap_interval, wilson_interval
-from pic4rl_metrics.batch import MetricsResult, compute
-from pic4rl_metrics.html_report import write_report
-from pic4rl_metrics.paired import agent_names
-from pic4rl_metrics.plots import save_figure
-from pic4rl_metrics.registry import METRICS
-from pic4rl_metrics.layouts import render_rows
-from pic4rl_metrics.report import plain_text
-from pic4rl_metrics.results import TABLE1_COLUMNS
+from pic4rl_metrics.tables.aggregate import aggregate, bootstrap_interval, wilson_interval
+from pic4rl_metrics.tables.batch import MetricsResult, compute
+from pic4rl_metrics.viz.html_report import write_report
+from pic4rl_metrics.tables.paired import agent_names
+from pic4rl_metrics.viz.plots import save_figure
+from pic4rl_metrics.core.registry import METRICS
+from pic4rl_metrics.tables.layouts import render_rows
+from pic4rl_metrics.tables.text import plain_text
+from pic4rl_metrics.tables.results import TABLE1_COLUMNS
 
 from .suite import Cell, Suite
 
@@ -202,7 +202,7 @@ def comparison_figure(task: str, header: Sequence[str],
 
 
 def _report(suite: Suite, result: MetricsResult) -> Path:
-    """``report.html``: the suite's page (``pic4rl_metrics.html_report``), every agent
+    """``report.html``: the suite's page (``pic4rl_metrics.viz.html_report``), every agent
     compared with each of the suite's baselines that has episodes (else every pair)."""
     present = set(agent_names(result.frame))
     baselines = [b for b in dict.fromkeys(c.baseline for c in suite.cells) if b in present]

@@ -25,7 +25,8 @@ from pathlib import Path
 from types import FrameType
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import BridgeError, ConfigError
+from pic4rl_bridge.errors import BridgeError
+from pic4rl_metrics.entry import entry_point
 from pic4rl_sim import params_file
 
 from .envs import env_namespace
@@ -56,6 +57,7 @@ def _usage() -> str:
             "--ros-args --params-file FILE ...")
 
 
+@entry_point("pic4rl-run", BridgeError)
 def main(argv: Sequence[str] | None = None) -> int:
     """Run; the child's exit code (1 if a sim died under it, 2 for bad arguments)."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -72,9 +74,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         run_env, n_envs = _resolve(command, plain, ros)
     except SystemExit as exit_:  # argparse's --help or usage error, printed already
         return int(exit_.code or 0)
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-run: {err}", file=sys.stderr)
-        return 2
     env = dict(os.environ)
     if run_env.ros.domain_id >= 0:
         env["ROS_DOMAIN_ID"] = str(run_env.ros.domain_id)

@@ -48,6 +48,7 @@ from pic4rl_bridge.task_registry import TASKS
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic
+from pic4rl_metrics.entry import entry_point
 
 from . import runs
 from .config import ENV_NODE, SIM_NODE
@@ -69,7 +70,7 @@ class TestResult:
     run_dir: Path  # <bags>/<run>: <agent>/episode_NNNN/ bags, episodes.csv, table.md
     episode_set: str  # the episodes driven, in words
     outcomes: dict[str, list[str]]  # by agent, in episode order
-    table: pd.DataFrame  # pic4rl_metrics.aggregate by agent
+    table: pd.DataFrame  # pic4rl_metrics.tables.aggregate by agent
     failed: tuple[str, ...] = ()  # the errors of bags that could not be judged
     videos: tuple[str, ...] = ()  # with --video: one per episode, beside its bag
 
@@ -135,8 +136,8 @@ def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> l
 def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) -> str:
     """The test's table: the episodes per outcome, the task's headline first (a task without
     a goal shows no goals and no success rate), SPL where a row has it, then Table 1's."""
-    from pic4rl_metrics.report import OUTCOME_COUNTS, render_comparison
-    from pic4rl_metrics.results import table_columns
+    from pic4rl_metrics.tables.text import OUTCOME_COUNTS, render_comparison
+    from pic4rl_metrics.tables.results import table_columns
 
     headline, words = TASKS[task].headline
     key = "n_success" if headline == "goal" else f"n_{headline}"
@@ -154,9 +155,9 @@ def judge(run_dir: Path, task: str, *,
     agents' task, whose trajectory columns average its successful episodes, or all of them
     for a task without a goal) and the errors of the bags that could not be judged; the
     per-episode CSV and the table (markdown) are written into ``run_dir``."""
-    from pic4rl_metrics.aggregate import aggregate
-    from pic4rl_metrics.batch import compute
-    from pic4rl_metrics.report import render_episodes
+    from pic4rl_metrics.tables.aggregate import aggregate
+    from pic4rl_metrics.tables.batch import compute
+    from pic4rl_metrics.tables.text import render_episodes
 
     result = compute([run_dir])
     atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
@@ -170,7 +171,7 @@ def judge(run_dir: Path, task: str, *,
 def _check_video() -> None:
     """``--video``'s encoder is there, before any episode is driven."""
     from pic4rl_metrics.errors import MetricsError
-    from pic4rl_metrics.video_batch import ffmpeg_writer
+    from pic4rl_metrics.viz.video_batch import ffmpeg_writer
 
     try:
         ffmpeg_writer()
@@ -205,7 +206,7 @@ def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestR
     table, failed = judge(run_dir, specs[0].run.env.task, with_std=plan.with_std)
     videos: tuple[str, ...] = ()
     if plan.video:
-        from pic4rl_metrics.video_batch import render_videos
+        from pic4rl_metrics.viz.video_batch import render_videos
 
         rows = render_videos([run_dir], progress=plan.progress)
         videos = tuple(r.video for r in rows if r.video)
@@ -275,6 +276,8 @@ def build_plan(args: argparse.Namespace, ros: RosArgs) -> TestPlan:
         progress=not args.no_progress)
 
 
+@entry_point("pic4rl-test", BridgeError,
+             interrupted="interrupted; the finished episodes' bags are kept")
 def main(argv: Sequence[str] | None = None) -> int:
     """Test, record, report; exit 1 if a bag could not be judged, 2 for bad arguments."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -290,15 +293,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             result = run_test(plan, agents)
     except TransportError as err:
         env = agents[0].run.env if agents else None
-        print(f"pic4rl-test: {err}\n{no_sim_hint('test', env)}", file=sys.stderr)
-        return 2
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-test: {err}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("pic4rl-test: interrupted; the finished episodes' bags are kept",
-              file=sys.stderr)
-        return 130
+        raise TransportError(f"{err}\n{no_sim_hint('test', env)}") from err
     for error in result.failed:
         print(f"error: {error}", file=sys.stderr)
     text = render_table(result.table, agents[0].run.env.task, args.format,

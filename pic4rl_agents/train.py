@@ -27,9 +27,10 @@ from typing import Any
 import yaml
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
+from pic4rl_bridge.errors import BridgeError, TransportError
 
 from pic4rl_metrics import atomic
+from pic4rl_metrics.entry import entry_point
 
 from . import runs
 from .config import RunConfig
@@ -329,6 +330,7 @@ class Trainer:
 
 
 
+@entry_point("pic4rl-train", BridgeError)
 def main(argv: Sequence[str] | None = None) -> int:
     """Train; exit 0 when done (or interrupted and saved), 2 for bad arguments or config."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -340,12 +342,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with console_logging("pic4rl_agents", "pic4rl-train: %(message)s"):
             Trainer(run, resume=resume, progress=not args.no_progress, ros=ros).run()
     except TransportError as err:
-        print(f"pic4rl-train: {err}\n{no_sim_hint('train', run.env if run else None)}",
-              file=sys.stderr)
-        return 2
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-train: {err}", file=sys.stderr)
-        return 2
+        hint = no_sim_hint("train", run.env if run else None)
+        raise TransportError(f"{err}\n{hint}") from err
     return 0
 
 

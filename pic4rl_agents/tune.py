@@ -32,6 +32,7 @@ import optuna
 from stable_baselines3.common.callbacks import BaseCallback
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
+from pic4rl_metrics.entry import Interrupted, entry_point
 
 from .algorithm_table import ALGORITHM_TABLE
 from .callbacks import SeededEvalCallback
@@ -271,6 +272,7 @@ def settings_from(args: argparse.Namespace) -> TuneSettings:
                         args.objective)
 
 
+@entry_point("pic4rl-tune", BridgeError)
 def main(argv: Sequence[str] | None = None) -> int:
     """Tune; exit 0 when done, 2 for bad arguments, 130 after Ctrl-C (the summary written)."""
     args = build_parser().parse_args(argv)
@@ -300,11 +302,7 @@ def _tune(args: argparse.Namespace) -> int:
             with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C: the summary as is
                 write_summary(create_study(settings), settings, final=True)
         where = f"; the summary is in {settings.study_dir}" if settings is not None else ""
-        print(f"pic4rl-tune: interrupted{where}", file=sys.stderr)
-        return 130
-    except (ConfigError, BridgeError) as err:
-        print(f"pic4rl-tune: {err}", file=sys.stderr)
-        return 2
+        raise Interrupted(f"interrupted{where}") from None
     write_summary(study, settings, final=True)
     minutes = (time.perf_counter() - started) / 60
     try:

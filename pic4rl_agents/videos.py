@@ -18,7 +18,7 @@ from stable_baselines3.common.logger import TensorBoardOutputFormat
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_metrics.errors import MetricsError
-from pic4rl_metrics.video_batch import write_video
+from pic4rl_metrics.viz.video_batch import write_video
 
 log = logging.getLogger(__name__)
 

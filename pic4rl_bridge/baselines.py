@@ -27,6 +27,7 @@ import math
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+from pic4rl_metrics.geometry import wrap_angle
 
 from .baseline_config import BaselinesConfig
 from .config import EnvConfig
@@ -42,9 +43,8 @@ if TYPE_CHECKING:
 
 
 def _bearing(dx: float, dy: float, yaw: float) -> float:
-    """The angle (rad, in [-pi, pi]) of the vector (dx, dy) seen from heading ``yaw``."""
-    angle = math.atan2(dy, dx) - yaw
-    return math.atan2(math.sin(angle), math.cos(angle))
+    """The angle (rad, in [-pi, pi)) of the vector (dx, dy) seen from heading ``yaw``."""
+    return wrap_angle(math.atan2(dy, dx) - yaw)
 
 
 class Baseline(Protocol):

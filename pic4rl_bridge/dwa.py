@@ -8,12 +8,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from pic4rl_metrics.geometry import wrap_angle
 
 from .baseline_config import DwaConfig
 from .errors import ConfigError
 from .frame import SensorFrame
 from .robot_info import RobotInfo
-from .tasks.collision import footprint_clearance, sensed_points
+from .tasks.collision import sensed_points
 from .tasks.goto import normalized_action
 
 
@@ -150,7 +151,7 @@ class DwaController:
         local = np.empty((2, *x.shape, len(px)), dtype=np.float32)  # (2, S, K, N)
         local[0] = c * px + s * py - (c * tx + s * ty)
         local[1] = c * py - s * px + (s * tx - c * ty)
-        distance = footprint_clearance(np.moveaxis(local, 0, -1), self.robot.footprint)
+        distance = self.robot.footprint.signed_distance(np.moveaxis(local, 0, -1))
         return distance.min(axis=-1).astype(np.float64)
 
     def _target(self, frame: SensorFrame, points: np.ndarray) -> tuple[float, float]:
@@ -166,7 +167,7 @@ class DwaController:
         if len(points) == 0 or reach <= 0:
             return gx, gy
         bearing = math.atan2(gy, gx)
-        turns = np.angle(np.exp(1j * (self._lanes - bearing)))  # lanes as turns from the goal
+        turns = wrap_angle(self._lanes - bearing)  # lanes as turns from the goal
         c, s = np.cos(self._lanes)[:, None], np.sin(self._lanes)[:, None]
         px, py = points[:, 0][None, :], points[:, 1][None, :]
         along, across = c * px + s * py, np.abs(c * py - s * px)  # (lanes, points)
@@ -190,8 +191,7 @@ class DwaController:
         nearest = np.argmin(np.hypot(gx - x, gy - y), axis=1)[:, None]
         ex, ey = (np.take_along_axis(a, nearest, axis=1)[:, 0] for a in (x, y))
         eyaw = np.take_along_axis(yaw, nearest, axis=1)[:, 0]
-        angle = np.arctan2(gy - ey, gx - ex) - eyaw
-        bearing = np.arctan2(np.sin(angle), np.cos(angle))
+        bearing = wrap_angle(np.arctan2(gy - ey, gx - ex) - eyaw)
         c = self.config
         terms = ((c.heading_weight, 1.0 - np.abs(bearing) / np.pi),
                  (c.clearance_weight, np.minimum(free_m, c.clearance_cap_m)),

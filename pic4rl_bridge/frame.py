@@ -14,8 +14,8 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from pic4rl_metrics.geometry import yaw_from_quaternion
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D, yaw_to_quaternion
+from pic4rl_metrics.geometry import scan_points, yaw_from_quaternion, yaw_to_quaternion
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 
 def as_published(pose: Pose2D) -> Pose2D:
@@ -42,9 +42,20 @@ class ScanData:
 
     def base_angles(self) -> np.ndarray:
         """Beam directions (rad, not wrapped) in the robot's base frame: ``angles()`` turned by
-        the mount's yaw. ``pic4rl_bridge.tasks.collision.scan_points`` places the returns
-        along the same directions, from the mount's position."""
+        the mount's yaw. ``points`` places the returns along the same directions, from the
+        mount's position."""
         return self.angles() + self.mount.yaw
+
+    def points(self) -> np.ndarray:
+        """The returns as points (n, 2) in the base frame (m; ``geometry.scan_points``).
+
+        ``+inf`` (nothing in range) and NaN beams are dropped; ``-inf`` (REP 117: closer than
+        ``range_min_m``) counts as a return at ``range_min_m``.
+        """
+        ranges = np.asarray(self.ranges, dtype=np.float64)
+        ranges = np.where(np.isneginf(ranges), self.range_min_m, ranges)
+        keep = np.isfinite(ranges)
+        return np.column_stack(scan_points(ranges[keep], self.angles()[keep], self.mount))
 
 
 @dataclass(frozen=True, init=False)

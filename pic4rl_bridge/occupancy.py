@@ -1,6 +1,6 @@
 """A rolling occupancy grid of the robot's own scans: what a mapless robot can remember.
 
-Each scan's returns (``tasks.collision.scan_points``: the beams' angles and the LiDAR's
+Each scan's returns (``ScanData.points``: the beams' angles and the LiDAR's
 mount, REP 117's ±inf) are placed with the frame's pose (the pose topic's: wheel odometry by
 default) and mark world-fixed cells of ``resolution_m`` as occupied. Nothing else is marked:
 unknown space counts as free, the optimistic convention of nav2's rolling costmap with
@@ -23,7 +23,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from .frame import ScanData, SensorFrame
 from .robot_info import RobotInfo
-from .tasks.collision import depth_scan, scan_points
+from .tasks.collision import depth_scan
 
 #: Cell size (m) of the grids the explorer and the memory observation keep.
 GRID_RESOLUTION_M = 0.05
@@ -86,7 +86,7 @@ class OccupancyGrid:
 
     def mark_scan(self, scan: ScanData, pose: Pose2D) -> np.ndarray:
         """Mark the returns of ``scan`` taken at ``pose``; the cells new to the grid (k, 2)."""
-        return self.mark(to_world(scan_points(scan), pose), (pose.x, pose.y))
+        return self.mark(to_world(scan.points(), pose), (pose.x, pose.y))
 
     def mark(self, points: np.ndarray, centre: tuple[float, float]) -> np.ndarray:
         """Mark the cells of ``points`` (n, 2, m, world) seen from ``centre`` (the robot,

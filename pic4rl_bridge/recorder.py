@@ -1,7 +1,7 @@
 """Write each episode to its own rosbag2, as the bag contract says.
 
 Bags are the contract between running a robot and judging it, so the recorder writes through
-``pic4rl_metrics.bagwriter``, the metrics' one bag writer: the messages as on the wire, the
+``pic4rl_metrics.bags.bagwriter``, the metrics' one bag writer: the messages as on the wire, the
 typed ``EpisodeFacts`` on ``/episode/facts`` and in ``custom_data``, the outcome on
 ``/episode/outcome``, with the contract's storages and typestore. What the recorder adds is
 the run: the offered QoS of the sim's topics, the episode's run and name, the layout
@@ -25,7 +25,7 @@ import yaml
 from rosbags.interfaces import Qos
 
 from pic4rl_metrics import atomic
-from pic4rl_metrics.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
+from pic4rl_metrics.bags.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
 from pic4rl_metrics.contract import STORAGES, EpisodeFacts, Outcome, plain
 from pic4rl_metrics.errors import OutputError
 from pic4rl_sim.interfaces import QosKind, find

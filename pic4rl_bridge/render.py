@@ -5,7 +5,7 @@ The top-down view shows the world's obstacles (drawn once), the memory's occupie
 (goToPose's ``memory.enabled``), the plan, the row's centre line,
 the goal and its tolerance, the path so far, the scan's returns, the person, the robot's
 footprint and heading, and the depth image in an inset when the robot has one. It uses the
-episode videos' drawing (``pic4rl_metrics.raster``) and colours, so both look alike.
+episode videos' drawing (``pic4rl_metrics.viz.raster``) and colours, so both look alike.
 """
 
 from __future__ import annotations
@@ -17,14 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from pic4rl_metrics import raster
-from pic4rl_metrics.raster import COLORS, View
+from pic4rl_metrics.viz import raster
+from pic4rl_metrics.viz.raster import COLORS, View
 
 from .errors import ConfigError
 from .frame import SensorFrame
 from .scenario import Scenario
 from .tasks.base import EpisodeContext
-from .tasks.collision import scan_points
 
 #: ``render_view`` values: the drawn top-down view, or MuJoCo's camera.
 RENDER_VIEWS = ("top", "mujoco")
@@ -125,7 +124,7 @@ class TopDownView:
 def scan_world(frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
     """The scan's returns (the collision test's points) in the world (m)."""
     assert frame.scan is not None
-    base, pose = scan_points(frame.scan), frame.pose
+    base, pose = frame.scan.points(), frame.pose
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
     return (pose.x + c * base[:, 0] - s * base[:, 1], pose.y + s * base[:, 0] + c * base[:, 1])
 

@@ -10,8 +10,8 @@
   window ahead of the robot, and steers to the middle of the two: the lateral offset of the
   middle line balances the clearance to left and right, its slope gives the heading along the
   rows. With one side unseen (a gap, the row's end) it keeps the last lane width; with neither,
-  it drives straight on. The fit is ``pic4rl_metrics.rows``': the row metrics of a bag with
-  no centre line read the lane the same way.
+  it drives straight on. The fit is ``pic4rl_metrics.core.crop_rows``': the row metrics of a
+  bag with no centre line read the lane the same way.
 
 Both command (v, ω) within the env's ranges as the task's 2-D normalised action; pure numpy
 over the env's decoded frame.
@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from pic4rl_metrics.geometry import project
-from pic4rl_metrics.rows import LaneFit, LaneWindow, fit_lane
+from pic4rl_metrics.core.crop_rows import LaneFit, LaneWindow, fit_lane
 from pic4rl_sim.engine.geometry import point_along
 
 from .config import EnvConfig
@@ -99,7 +99,7 @@ class RowFollower:
         self.width_m = self.default_width_m
 
     def lane(self, frame: SensorFrame) -> LaneFit | None:
-        """The lane's middle line in the base frame (``pic4rl_metrics.rows.fit_lane``), or
+        """The lane's middle line in the base frame (``pic4rl_metrics.core.crop_rows.fit_lane``), or
         ``None`` when no row is seen."""
         points = sensed_points(frame, self.robot)
         fit = fit_lane(points[:, 0], points[:, 1], self.width_m, self.window)

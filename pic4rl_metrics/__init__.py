@@ -10,39 +10,35 @@ needs no ROS, MuJoCo or torch. Typical use::
 from __future__ import annotations
 
 from importlib import import_module
-from typing import Any
+
+from .lazy import lazy_exports
 
 #: Public name → the module that defines it, imported on first use (PEP 562): the sim imports
 #: ``pic4rl_metrics.errors`` and ``pic4rl_metrics.geometry`` alone and must not pay for pandas
 #: and rosbags.
 _HOMES = {
-    "BagResult": "batch", "MetricsResult": "batch", "compute": "batch", "judge_bag": "batch",
+    "BagResult": "tables.batch", "MetricsResult": "tables.batch", "compute": "tables.batch",
+    "judge_bag": "tables.batch",
     "EpisodeFacts": "contract", "Outcome": "contract",
     "BagError": "errors", "ConfigError": "errors", "CorruptBagError": "errors",
     "EpisodeError": "errors",
     "MetricsError": "errors", "TopicError": "errors",
-    "Footprint": "geometry", "Derived": "derived", "compute_metrics": "metrics",
-    "read_episode": "reader",
-    "METRICS": "registry", "REGISTRY": "registry", "Metric": "registry", "metric": "registry",
-    "TABLE1_COLUMNS": "results", "EpisodeMetrics": "results", "Episode": "series",
-    "TopicMap": "topics", "load_topic_map": "topics",
+    "Footprint": "geometry", "Derived": "core.derived", "compute_metrics": "core.metrics",
+    "read_episode": "bags.reader",
+    "METRICS": "core.registry", "REGISTRY": "core.registry", "Metric": "core.registry",
+    "metric": "core.registry",
+    "TABLE1_COLUMNS": "tables.results", "EpisodeMetrics": "tables.results",
+    "Episode": "core.series",
+    "TopicMap": "bags.topics", "load_topic_map": "bags.topics",
 }
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    if home == "registry":
-        import_module(".metrics", __name__)  # the built-in metrics register on import
-    value = getattr(import_module(f".{home}", __name__), name)
-    globals()[name] = value
-    return value
+def _builtins_first(home: str) -> None:
+    if home == "core.registry":
+        import_module(".core.metrics", __name__)  # the built-in metrics register on import
 
 
-def __dir__() -> list[str]:
-    return sorted({*globals(), *_HOMES})
-
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES, before=_builtins_first)
 
 __all__ = [
     "METRICS",

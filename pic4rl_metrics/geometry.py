@@ -1,11 +1,15 @@
-"""Planar geometry the metrics, the sim and the bridge share: a robot's footprint, a sensor's
-mount, a quaternion's yaw and the projection of points onto a polyline.
+"""Planar geometry the metrics, the sim and the bridge share: a robot's footprint and its
+distance to points, a sensor's mount and a scan's points, angle wrapping, a yaw as a quaternion
+and back, and the projection of points onto a polyline.
 
 ``Footprint`` is the sim's robot specs' footprint and the value type of an ``EpisodeFacts``
 field, ``Mount`` another field's (the facts themselves, their encoding and decoding are the bag
 contract's, ``contract``). The sim and the bridge import them from here (pic4rl_metrics may
 import no other pic4rl package; this module loads only numpy), so each is written once:
-``yaw_from_quaternion`` for every decoded pose, ``project`` for the row follower, the planner
+``wrap_angle`` for every heading difference, ``yaw_to_quaternion`` for every published pose and
+``yaw_from_quaternion`` for every decoded one, ``scan_points`` for the env's collisions, the
+renderer, the occupancy grid and the metrics' clearance, ``Footprint.signed_distance`` for the
+env's, the planner's and the metrics' collisions, ``project`` for the row follower, the planner
 and the tasks' progress, the same projection as the row metrics'.
 """
 
@@ -94,21 +98,21 @@ class Footprint:
         raise ConfigError(msg) from cause
 
     def signed_distance(self, points: np.ndarray) -> np.ndarray:
-        """Signed distance (m) of points (..., 2, base frame) from the footprint's boundary:
-        positive outside, negative inside; the env's collision geometry
-        (``pic4rl_bridge.tasks.collision.footprint_clearance``), re-implemented here because
-        the metrics import no other pic4rl package."""
-        p = np.asarray(points, dtype=float)
+        """Signed distance (m) of points (..., 2, base frame) from the footprint's boundary,
+        shape (...): positive outside, negative inside. Planners pass many poses' points at
+        once (float32 stays float32; the coordinates may be strided views)."""
+        p = np.asarray(points)
+        p = p if p.dtype in (np.float32, np.float64) else p.astype(np.float64)
         return self.signed_distance_xy(p[..., 0], p[..., 1])
 
     def signed_distance_xy(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """``signed_distance`` of the points with coordinates ``x`` and ``y`` (same shape)."""
         if self.radius_m is not None:
-            return np.hypot(x, y) - self.radius_m
-        qx = np.abs(x) - 0.5 * self.length_m  # type: ignore[operator]
+            return np.sqrt(x * x + y * y) - self.radius_m
+        qx = np.abs(x) - 0.5 * self.length_m  # type: ignore[operator]  # beyond each face
         qy = np.abs(y) - 0.5 * self.width_m  # type: ignore[operator]
-        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
-        return outside + np.minimum(np.maximum(qx, qy), 0.0)
+        ox, oy = np.maximum(qx, 0.0), np.maximum(qy, 0.0)
+        return np.sqrt(ox * ox + oy * oy) + np.minimum(np.maximum(qx, qy), 0.0)
 
 
 class Mount(NamedTuple):
@@ -117,6 +121,31 @@ class Mount(NamedTuple):
     x_m: float = 0.0
     y_m: float = 0.0
     yaw_rad: float = 0.0
+
+
+def sensor_to_base(forward: Any, left: Any, mount: Sequence[float]) -> tuple[Any, Any]:
+    """Points ``forward`` and ``left`` (m, arrays of one shape) of a sensor mounted at ``mount``
+    (x, y, yaw in the base frame: a ``Mount`` or the sim's ``Pose2D``), as base-frame x, y."""
+    mx, my, myaw = mount
+    c, s = math.cos(myaw), math.sin(myaw)
+    return mx + c * forward - s * left, my + s * forward + c * left
+
+
+def scan_points(ranges: Any, angles: Any, mount: Sequence[float]) -> tuple[Any, Any]:
+    """Returns at ``ranges`` (m) along beam ``angles`` (rad, the scan's frame; shapes that
+    broadcast) of a scanner mounted at ``mount``, as base-frame x and y; a NaN range gives NaN
+    points (callers drop or keep them)."""
+    return sensor_to_base(ranges * np.cos(angles), ranges * np.sin(angles), mount)
+
+
+def wrap_angle(angle: Any) -> Any:
+    """``angle`` (rad; a float or an array) wrapped to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """Quaternion ``(x, y, z, w)`` of a rotation by ``yaw`` about +z (ROS order)."""
+    return (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
 
 
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:

@@ -185,3 +185,23 @@ def test_no_two_package_modules_import_each_other_in_a_circle() -> None:
         if name not in state:
             visit(name, [name])
     assert not circles, f"import circles: {circles}"
+
+
+#: What the metrics' math may not reach, directly or through another module: reading bags,
+#: tables, pictures and the command line sit above it.
+CORE_NEVER = tuple(f"pic4rl_metrics.{room}" for room in ("bags", "tables", "viz", "cli", "testing"))
+
+
+def test_the_metrics_core_reaches_no_reading_table_picture_or_cli_module() -> None:
+    modules = {_module_name(p): p for p in _package_modules()}
+    core = sorted(m for m in modules if m.startswith("pic4rl_metrics.core"))
+    assert len(core) > 5
+    reached, todo = set(core), list(core)
+    while todo:
+        name = todo.pop()
+        for dep in _imports(modules[name], name):
+            if dep in modules and dep not in reached:
+                reached.add(dep)
+                todo.append(dep)
+    above = sorted(m for m in reached if m.startswith(CORE_NEVER))
+    assert not above, f"pic4rl_metrics/core/ reaches {above}"

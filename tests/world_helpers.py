@@ -1,4 +1,4 @@
-"""The MJCF worlds the tests write. Free of ROS (tests/metrics uses it too)."""
+"""The MJCF worlds the tests write. Free of ROS."""
 
 from __future__ import annotations
 

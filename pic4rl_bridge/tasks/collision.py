@@ -2,7 +2,8 @@
 
 The paper's collision test: any scan point closer to the footprint than
 ``collision_tolerance_m``. It runs every step on every beam, so it is plain vectorized numpy:
-beams to points in the base frame, then the exact signed distance to a circle or a box.
+beams to points in the base frame (``ScanData.points``), then the exact signed distance to the
+footprint, a circle or a box (``Footprint.signed_distance``).
 Robots without a LiDAR fall back on the depth image (each column's nearest pixel).
 """
 
@@ -12,47 +13,12 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from pic4rl_metrics.geometry import Footprint
+from pic4rl_metrics.geometry import sensor_to_base
 from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
 from ..frame import ScanData, SensorFrame
 from ..robot_info import RobotInfo
-
-
-def _to_base(forward: np.ndarray, left: np.ndarray, mount: Pose2D) -> np.ndarray:
-    """Points (n, 2) given in a sensor frame mounted at ``mount``, in the base frame (m)."""
-    c, s = math.cos(mount.yaw), math.sin(mount.yaw)
-    return np.column_stack((mount.x + c * forward - s * left, mount.y + s * forward + c * left))
-
-
-def scan_points(scan: ScanData) -> np.ndarray:
-    """The scan's returns as points (n, 2) in the base frame (m).
-
-    ``+inf`` (nothing in range) and NaN beams are dropped; ``-inf`` (REP 117: closer than
-    ``range_min_m``) counts as a return at ``range_min_m``.
-    """
-    ranges = np.asarray(scan.ranges, dtype=np.float64)
-    ranges = np.where(np.isneginf(ranges), scan.range_min_m, ranges)
-    keep = np.isfinite(ranges)
-    r, a = ranges[keep], scan.angles()[keep]
-    return _to_base(r * np.cos(a), r * np.sin(a), scan.mount)
-
-
-def footprint_clearance(points: np.ndarray, footprint: Footprint) -> np.ndarray:
-    """Signed distance (m) of each point (..., 2, base frame) from the footprint's boundary,
-    shape (...): positive outside, negative inside. A rectangle is centred on the base,
-    ``length_m`` along x and ``width_m`` along y. Planners pass many poses' points at once
-    (float32 stays float32; the coordinates may be strided views)."""
-    p = np.asarray(points)
-    p = p if p.dtype in (np.float32, np.float64) else p.astype(np.float64)
-    x, y = p[..., 0], p[..., 1]
-    if footprint.radius_m is not None:
-        return np.sqrt(x * x + y * y) - footprint.radius_m
-    qx = np.abs(x) - 0.5 * footprint.length_m  # per axis: how far beyond the box's face
-    qy = np.abs(y) - 0.5 * footprint.width_m
-    ox, oy = np.maximum(qx, 0.0), np.maximum(qy, 0.0)
-    return np.sqrt(ox * ox + oy * oy) + np.minimum(np.maximum(qx, qy), 0.0)
 
 
 def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarray:
@@ -68,7 +34,7 @@ def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarra
     right = (np.arange(width) + 0.5 - 0.5 * width) / focal_px  # tan of the bearing, right +
     keep = np.isfinite(nearest)
     d = nearest[keep]
-    return _to_base(d, -d * right[keep], mount)
+    return np.column_stack(sensor_to_base(d, -d * right[keep], mount))
 
 
 def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float,
@@ -100,7 +66,7 @@ def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
     """The obstacle points (n, 2, base frame, m) the robot senses: the scan's, else the depth
     image's, else none."""
     if frame.scan is not None:
-        return scan_points(frame.scan)
+        return frame.scan.points()
     if frame.depth is not None:
         mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
         return depth_points(frame.depth, mount, robot.depth_hfov_rad)
@@ -113,7 +79,7 @@ def obstacle_distance(frame: SensorFrame, robot: RobotInfo) -> float:
     points = sensed_points(frame, robot)
     if len(points) == 0:
         return math.inf
-    return float(footprint_clearance(points, robot.footprint).min())
+    return float(robot.footprint.signed_distance(points).min())
 
 
 class Safety(NamedTuple):

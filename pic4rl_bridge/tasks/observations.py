@@ -16,7 +16,8 @@ from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_sim.engine.geometry import Pose2D, wrap_angle
+from pic4rl_metrics.geometry import wrap_angle
+from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import DepthObsConfig, LidarObsConfig
 from ..errors import ConfigError

@@ -14,9 +14,11 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
+from pic4rl_metrics.geometry import wrap_angle
+
 from ..errors import WorldError, require
 from .engine_config import EngineConfig
-from .geometry import Pose2D, Twist2D, wrap_angle
+from .geometry import Pose2D, Twist2D
 from .model import build_model
 from .paths import plan_path
 from .robot_specs import Drive, RobotSpec

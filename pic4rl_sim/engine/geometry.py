@@ -1,5 +1,6 @@
-"""Planar poses: the few shapes every part of the sim shares (the robot's ``Footprint`` is
-``pic4rl_metrics.geometry``'s, shared with the bag facts)."""
+"""Planar poses: the few shapes every part of the sim shares (the robot's ``Footprint``, angle
+wrapping and a yaw's quaternion are ``pic4rl_metrics.geometry``'s, shared with the bridge and
+the metrics)."""
 
 from __future__ import annotations
 
@@ -23,16 +24,6 @@ class Twist2D(NamedTuple):
     vx: float = 0.0
     vy: float = 0.0
     wz: float = 0.0
-
-
-def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
-    """Quaternion ``(x, y, z, w)`` of a rotation by ``yaw`` about +z (ROS order)."""
-    return (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
-
-
-def wrap_angle(angle: float) -> float:
-    """``angle`` wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 # -- polylines (a row's centre line, a global plan) ------------------------------------------

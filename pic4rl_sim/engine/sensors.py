@@ -17,8 +17,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from pic4rl_metrics.geometry import wrap_angle, yaw_to_quaternion
+
 from ..schema import FRACTION, Range, check, param
-from .geometry import Pose2D, Twist2D, wrap_angle, yaw_to_quaternion
+from .geometry import Pose2D, Twist2D
 from .ray_sensors import DepthCamera, DepthCameraSpec, Lidar, LidarSpec
 
 STANDARD_GRAVITY_M_S2 = 9.80665

@@ -26,8 +26,10 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
+from pic4rl_metrics.geometry import yaw_to_quaternion
+
 from ..engine.core import Engine
-from ..engine.geometry import Pose2D, yaw_to_quaternion
+from ..engine.geometry import Pose2D
 from ..engine.sensors import EXACT_VARIANCE
 from ..engine.world_spec import WorldSpec
 from ..interfaces import (

@@ -50,8 +50,8 @@ def test_pic4rl_test_reads_each_params_file_once(tmp_path: Path, reads: Counter[
     driven: list[Any] = []
     monkeypatch.setattr(tester, "run_agent", lambda spec, **_: driven.append(spec) or ["goal"])
     monkeypatch.setattr(tester, "judge", lambda run_dir, *_, **__: (pd.DataFrame(), ()))
-    monkeypatch.setattr("pic4rl_metrics.report.render_comparison", lambda *a, **k: "")
-    monkeypatch.setattr("pic4rl_metrics.results.table_columns", lambda table: [])
+    monkeypatch.setattr("pic4rl_metrics.tables.text.render_comparison", lambda *a, **k: "")
+    monkeypatch.setattr("pic4rl_metrics.tables.results.table_columns", lambda table: [])
     code = tester.main(["--agent", str(AGENT), "--baseline", "dwa", "--bags", str(tmp_path),
                         "--no-progress", "--format", "csv",
                         "--ros-args", "--params-file", str(extra)])

@@ -34,8 +34,8 @@ from ros_helpers import SimProcess, next_domain, sim_command, sim_env
 
 from pic4rl_agents import train
 from pic4rl_agents.algorithms import ALGORITHMS, load_model
-from pic4rl_metrics.aggregate import aggregate
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.aggregate import aggregate
+from pic4rl_metrics.tables.batch import compute
 
 pytestmark = pytest.mark.integration
 

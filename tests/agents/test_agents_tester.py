@@ -27,9 +27,9 @@ from pic4rl_agents.config import load_run_config
 from pic4rl_agents.rosargs import split_ros_args
 from pic4rl_agents.testplan import DEFAULT_PAIRS, AgentSpec, resolve_agents
 from pic4rl_bridge.config import load_env_config
-from pic4rl_metrics.aggregate import aggregate
+from pic4rl_metrics.tables.aggregate import aggregate
 from pic4rl_metrics.atomic import claim_dir
-from pic4rl_metrics.batch import MetricsResult, compute
+from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_sim.engine.core import EngineConfig
 from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.sampling import check_free

@@ -12,7 +12,7 @@ import pytest
 from agents_helpers import LIDAR_TD3, ROOT
 
 from pic4rl_agents import tester
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.batch import compute
 
 SHORT = ["--baseline", "proportional", "--no-progress", "--env-kwargs", "episode_max_steps:5",
          "--ros-args", "--params-file", str(LIDAR_TD3)]

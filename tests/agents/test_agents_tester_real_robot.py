@@ -16,7 +16,7 @@ import yaml
 from agents_helpers import ROOT
 from ros_helpers import SimProcess, sim_env
 
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.batch import compute
 
 pytestmark = pytest.mark.integration
 

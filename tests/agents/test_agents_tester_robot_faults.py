@@ -60,7 +60,7 @@ def test_a_lidar_that_dies_mid_episode_is_one_line_and_an_aborted_episode(tmp_pa
     assert said[0].startswith("episode 0 aborted, the robot stopped: topic /scan: no message "
                               "for "), said[0]
     (bag,) = (tmp_path / "bags" / "real" / "proportional").glob("episode_*")
-    from pic4rl_metrics.batch import compute
+    from pic4rl_metrics.tables.batch import compute
 
     row = compute([bag]).frame.to_dict("records")[0]
     assert row["outcome"] == "aborted" and math.isnan(row["success"])

@@ -13,7 +13,7 @@ from pathlib import Path
 from agents_helpers import CONFIG, LIDAR_TD3
 
 from pic4rl_agents import tester
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.batch import compute
 
 
 def run_main(argv: list[str]) -> tuple[int, str, str]:

@@ -18,7 +18,7 @@ import yaml
 from pic4rl_agents import bench, benchcell, benchtable
 from pic4rl_agents.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_metrics.aggregate import wilson_interval
+from pic4rl_metrics.tables.aggregate import wilson_interval
 
 REPO = Path(__file__).resolve().parents[2]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"

@@ -15,7 +15,7 @@ from pic4rl_agents import bench
 from pic4rl_agents.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import compute
-from pic4rl_metrics.aggregate import bootstrap_interval, wilson_interval
+from pic4rl_metrics.tables.aggregate import bootstrap_interval, wilson_interval
 
 REPO = Path(__file__).resolve().parents[2]
 SUITE, CI = REPO / "config" / "suite_barn.yaml", REPO / "config" / "suite_barn_ci.yaml"

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pic4rl_metrics import compute
-from pic4rl_metrics.reader import read_episode
+from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_sim.engine.barn_world import barn_data
 
 from pic4rl_bridge.baselines import make_baseline

@@ -11,7 +11,8 @@ import pytest
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D, yaw_to_quaternion
+from pic4rl_metrics.geometry import yaw_to_quaternion
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Image, LaserScan
 

@@ -19,7 +19,7 @@ from sensor_msgs.msg import LaserScan
 
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import TransportError
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.batch import compute
 
 pytestmark = pytest.mark.integration
 

@@ -23,7 +23,7 @@ from std_srvs.srv import Empty
 import pic4rl_bridge  # noqa: F401 - registers the envs
 from pic4rl_bridge.config import load_env_config
 from pic4rl_bridge.errors import SimConflict
-from pic4rl_metrics.batch import compute
+from pic4rl_metrics.tables.batch import compute
 
 pytestmark = pytest.mark.integration
 

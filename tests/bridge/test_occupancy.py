@@ -13,7 +13,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from pic4rl_bridge.frame import ScanData
 from pic4rl_bridge.occupancy import OccupancyGrid
-from pic4rl_bridge.tasks.collision import depth_scan, scan_points
+from pic4rl_bridge.tasks.collision import depth_scan
 
 
 def _scan(angle: float, r: float, mount: Pose2D = Pose2D(0.0, 0.0, 0.0)) -> ScanData:
@@ -46,7 +46,7 @@ def test_the_scan_is_placed_with_the_pose_and_the_mount():
     grid.mark_scan(_scan(0.0, 1.0, mount), Pose2D(2.01, 1.01, math.pi / 2))
     # base frame: (0.2 - 1.0, 0) = (-0.8, 0); the robot faces +y: world (2.01, 1.01 - 0.8)
     assert np.array_equal(grid.cells, [[40, 4]])
-    assert np.allclose(scan_points(_scan(0.0, 1.0, mount)), [[-0.8, 0.0]])
+    assert np.allclose(_scan(0.0, 1.0, mount).points(), [[-0.8, 0.0]])
 
 
 def test_it_remembers_what_left_the_view_marks_once_and_resets():
@@ -80,7 +80,7 @@ def test_the_depth_pseudo_scan_reads_a_square_wall_s_ranges():
     seen = np.isfinite(scan.ranges)
     assert not seen[0] and seen[width // 2:].all()  # the right edge: the lowest angles
     assert np.allclose(scan.ranges[seen], wall / np.cos(angles[seen]), rtol=1e-6)
-    points = scan_points(scan)
+    points = scan.points()
     assert np.allclose(points[:, 0], 0.1 + wall, atol=1e-5)  # on the wall, in the base frame
     blinded = depth_scan(np.full((6, width), -np.inf, np.float32), Pose2D(0, 0, 0), hfov)
     assert np.isneginf(blinded.ranges).all()

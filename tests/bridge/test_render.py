@@ -22,7 +22,7 @@ import pic4rl_bridge  # noqa: F401 - registers the envs
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_bridge.render import make_view
-from pic4rl_metrics.raster import COLORS
+from pic4rl_metrics.viz.raster import COLORS
 from bridge_helpers import ENV_CONFIGS, LIDAR_CONFIG, REPO
 
 FORWARD = np.array([1.0, 0.0], np.float32)  # full speed ahead, no turn

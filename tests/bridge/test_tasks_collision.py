@@ -12,8 +12,7 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.tasks.collision import (assess, depth_points, footprint_clearance,
-                                           obstacle_distance, scan_points)
+from pic4rl_bridge.tasks.collision import assess, depth_points, obstacle_distance
 
 CIRCLE = Footprint(radius_m=0.3)
 RECT = Footprint(length_m=0.6, width_m=0.4)
@@ -43,7 +42,7 @@ def frame(scan: ScanData | None = None, depth: np.ndarray | None = None) -> Sens
 def test_scan_points_use_the_mount_and_rep117():
     ranges = np.array([1.0, np.inf, np.nan, -np.inf], np.float32)
     scan = ScanData(ranges, 0.0, math.pi / 2, 0.25, 10.0, Pose2D(0.2, 0.1, math.pi / 2))
-    pts = scan_points(scan)
+    pts = scan.points()
     # beam 0 (along the LiDAR's x = base +y) at 1 m; beam 3 (LiDAR -y = base +x) at range_min
     np.testing.assert_allclose(pts, [[0.2, 1.1], [0.45, 0.1]], atol=1e-12)
 
@@ -66,9 +65,9 @@ def test_off_centre_and_backward_lidar_see_the_same_wall():
 
 def test_rectangle_distance_is_the_exact_box_distance():
     pts = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 0.1], [0.6, 0.6], [0.25, 0.0], [0.3, 0.2]])
-    np.testing.assert_allclose(footprint_clearance(pts, RECT),
+    np.testing.assert_allclose(RECT.signed_distance(pts),
                                [-0.2, 0.8, 0.7, math.hypot(0.3, 0.4), -0.05, 0.0], atol=1e-12)
-    np.testing.assert_allclose(footprint_clearance(pts[:2], CIRCLE), [-0.3, 0.7])
+    np.testing.assert_allclose(CIRCLE.signed_distance(pts[:2]), [-0.3, 0.7])
 
 
 def test_no_returns_is_infinitely_far():

@@ -12,7 +12,6 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.frame import ScanData
-from pic4rl_bridge.tasks.collision import scan_points
 from pic4rl_bridge.tasks.observations import (clipped_action, depth_observation, depth_space,
                                               lidar_sectors, target_polar)
 
@@ -96,12 +95,12 @@ def test_one_world_through_scans_of_other_geometries_gives_the_same_sectors():
 
 
 def test_the_collision_check_uses_the_same_angles():
-    """``scan_points`` places each scan's returns on the same obstacles."""
+    """``ScanData.points`` places each scan's returns on the same obstacles."""
     scans = [world_scan(-math.pi, 2 * math.pi / 360, 360), world_scan(0.0, 2 * math.pi / 360, 360),
              world_scan(-0.75 * math.pi, 1.5 * math.pi / 1080, 1081),
              world_scan(-math.pi, 2 * math.pi / 360, 360, yaw=math.pi)]
     for s in scans:
-        points = scan_points(s) - [s.mount.x, s.mount.y]
+        points = s.points() - [s.mount.x, s.mount.y]
         nearest = points[np.argmin(np.hypot(*points.T))]
         np.testing.assert_allclose(nearest, [0.98 * math.cos(math.radians(35)),
                                              0.98 * math.sin(math.radians(35))], atol=1e-5)

@@ -1,5 +1,6 @@
-"""The bag contract as code: ``EpisodeFacts`` survives its encoders and the decoder, and both
-writers (the bridge's recorder and the synthetic bags) write the same facts the same way."""
+"""The bag contract as code: ``EpisodeFacts`` survives its encoders and the decoder. That the
+bridge's recorder writes the facts as the synthetic bags do is
+tests/bridge/test_recorder_contract.py's."""
 
 from __future__ import annotations
 
@@ -9,17 +10,12 @@ import math
 import re
 from pathlib import Path
 
-import pytest
-import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rosbags.rosbag2 import Reader
 
-from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
 from pic4rl_metrics.geometry import Footprint, Mount
-from pic4rl_metrics.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
 POSITIVE = st.floats(min_value=1e-6, max_value=1e6, allow_nan=False)
@@ -117,33 +113,3 @@ def test_the_outcome_event_reads_back() -> None:
     assert contract.parse_outcome_event(contract.outcome_event(Outcome.GOAL, 12)) == (
         Outcome.GOAL, 12)
     assert contract.parse_outcome_event("timeout") == (Outcome.TIMEOUT, None)
-
-
-def _metadata_custom(bag: Path) -> list[tuple[str, str]]:
-    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    return list(info["custom_data"].items())
-
-
-def _facts_message(bag: Path) -> str:
-    ts = contract.typestore()
-    with Reader(bag) as reader:
-        conns = [c for c in reader.connections if c.topic == contract.FACTS_TOPIC]
-        (_, _, raw), = list(reader.messages(connections=conns))
-    return ts.deserialize_cdr(raw, "std_msgs/msg/String").data
-
-
-@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
-def test_the_recorder_and_the_synthetic_writer_write_the_same_facts(
-    tmp_path: Path, storage: str
-) -> None:
-    facts = EpisodeFacts(**{**vars(ENV_FACTS), "row_centerline": ((0.0, 0.0), (2.0, 0.5))})
-    recorded = RunRecorder(tmp_path / "rec", "run1", storage=storage).begin("episode_0000")
-    recorded.facts(facts, DEFAULT_T0_NS)
-    recorded_path = recorded.close(Outcome.COLLISION, DEFAULT_T0_NS)
-    synthetic = write_episode_bag(tmp_path / "syn" / "run1" / "episode_0000",
-                                  straight_line(0.5, 1.0), facts=facts, outcome="collision",
-                                  storage=storage)
-    assert _metadata_custom(recorded_path) == _metadata_custom(synthetic)
-    assert dict(_metadata_custom(synthetic)) == (
-        EpisodeFacts(**{**vars(facts), "outcome": Outcome.COLLISION}).custom_data())
-    assert _facts_message(recorded_path) == _facts_message(synthetic) == facts.facts_json()

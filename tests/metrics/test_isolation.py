@@ -20,12 +20,14 @@ SIBLINGS = ("pic4rl_sim", "pic4rl_bridge", "pic4rl_agents")
 def test_importing_the_package_cli_plots_and_videos_pulls_in_no_heavy_module() -> None:
     code = (
         "import json, sys\n"
-        "import pic4rl_metrics, pic4rl_metrics.cli, pic4rl_metrics.plots\n"
-        "import pic4rl_metrics.video, pic4rl_metrics.video_batch, pic4rl_metrics.html_report\n"
-        "pic4rl_metrics.video_batch.ffmpeg_writer()\n"
+        "import pic4rl_metrics, pic4rl_metrics.cli.commands, pic4rl_metrics.viz.plots\n"
+        "import pic4rl_metrics.viz.video, pic4rl_metrics.viz.video_batch\n"
+        "import pic4rl_metrics.viz.html_report\n"
+        "pic4rl_metrics.viz.video_batch.ffmpeg_writer()\n"
         f"heavy = {HEAVY!r}\n"
         "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in heavy)))\n"
-        "ours = ('pic4rl_metrics.cli', 'pic4rl_metrics.plots', 'pic4rl_metrics.video_batch')\n"
+        "ours = ('pic4rl_metrics.cli.commands', 'pic4rl_metrics.viz.plots',\n"
+        "        'pic4rl_metrics.viz.video_batch')\n"
         "print(json.dumps(all(m in sys.modules for m in ours)))\n"
     )
     done = subprocess.run(

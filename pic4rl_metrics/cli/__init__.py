@@ -1,0 +1,13 @@
+"""``pic4rl-metrics``: its commands (``commands``: compute, compare, plot, report) and its
+``video`` command's options and run (``video``).
+"""
+
+from __future__ import annotations
+
+from ..lazy import lazy_exports
+
+_HOMES = {
+    "main": "commands", "build_parser": "commands",
+}
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__all__ = sorted(_HOMES)

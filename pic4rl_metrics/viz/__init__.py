@@ -1,0 +1,15 @@
+"""Pictures: figures (``plots``), drawing on arrays (``raster``), episode videos (``video``,
+``video_batch``) and the one-page HTML report (``html_report`` with ``html_page`` and
+``report_maps``). Matplotlib, Pillow and imageio load only here.
+"""
+
+from __future__ import annotations
+
+from ..lazy import lazy_exports
+
+_HOMES = {
+    "episode_figure": "plots", "trajectories_figure": "plots", "View": "raster",
+    "EpisodeScene": "video", "render_videos": "video_batch", "write_report": "html_report",
+}
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__all__ = sorted(_HOMES)
