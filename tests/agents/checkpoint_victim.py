@@ -16,7 +16,7 @@ from typing import Any
 
 from stable_baselines3.common import base_class, off_policy_algorithm
 
-from pic4rl_agents import train
+from pic4rl_agents.training import train
 
 
 def main() -> None:

@@ -22,10 +22,10 @@ from agents_helpers import LIDAR_TD3, ROOT, SHORT_EPISODES, TINY, TRAINED_STEPS,
 
 from stable_baselines3.common.save_util import load_from_pkl
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import load_model
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import load_model
 from pic4rl_metrics.atomic import replacing
-from pic4rl_agents.runs import find_resume
+from pic4rl_agents.rundir import find_resume
 from pic4rl_bridge.errors import ConfigError
 
 VICTIM = Path(__file__).with_name("checkpoint_victim.py")
@@ -221,12 +221,12 @@ def test_a_kill_in_the_middle_of_a_checkpoint_write_leaves_a_run_that_resumes(
 
 @pytest.mark.slow
 def test_a_kill_at_any_moment_leaves_a_run_that_resumes(tmp_path: Path) -> None:
-    """``python -m pic4rl_agents.train`` SIGKILLed at a random moment after its first
+    """``python -m pic4rl_agents.training.train`` SIGKILLed at a random moment after its first
     checkpoint, while it writes one every 40 steps: every checkpoint left loads, and the run
     resumes from the newest."""
     runs = tmp_path / "runs"
     log = (tmp_path / "train.log").open("wb")
-    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.train",
+    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.training.train",
                              *killed_run_args(runs, 1_000_000)],
                             cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
                             start_new_session=True, env={**os.environ, "PYTHONPATH": str(ROOT)})

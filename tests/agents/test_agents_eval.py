@@ -15,10 +15,12 @@ import pandas as pd
 import pytest
 from agents_helpers import LIDAR_TD3, PNG_MAGIC, SHORT_EPISODES, TINY
 
-from pic4rl_agents import curves, train
-from pic4rl_agents.callbacks import CSV_COLUMNS, OUTCOME_COLUMNS
+from pic4rl_agents.training import curves
+
+from pic4rl_agents.training import train
+from pic4rl_agents.training.callbacks import CSV_COLUMNS, OUTCOME_COLUMNS
 from pic4rl_agents.config import EvalConfig, load_run_config
-from pic4rl_agents.envs import eval_env_config
+from pic4rl_agents.training.envs import eval_env_config
 from pic4rl_bridge.config import EpisodesConfig
 from pic4rl_bridge.errors import ConfigError
 

@@ -1,5 +1,5 @@
 """The paper's ε-greedy exploration: ε_t = max(min, initial · decay^t) with t the env steps
-since the warm-up, on real SB3 models built by ``build_model`` on the in-process LiDAR env:
+since the warm-up, on real SB3 models built by ``new_model`` on the in-process LiDAR env:
 no ε during the warm-up, the schedule after it, uniform random actions when ε is 1, exactly
 the algorithm's own exploration when ε is 0, and ``rollout/epsilon`` in a run's progress.csv."""
 
@@ -15,12 +15,12 @@ import torch
 from agents_helpers import LIDAR_TD3, TINY, TrainedRun
 from stable_baselines3.common.logger import configure
 
-from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.algorithms import ALGORITHMS, build_model
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.models.algorithms import ALGORITHMS, new_model
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
-from pic4rl_agents.envs import make_vec_env
-from pic4rl_agents.exploration import EpsilonGreedy, epsilon_at
+from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.models.exploration import EpsilonGreedy, epsilon_at
 
 OFF_POLICY = sorted(name for name in ALGORITHMS if ALGORITHM_TABLE[name].off_policy)
 LEARNING_STARTS = 100
@@ -81,7 +81,7 @@ def make_model(env: Any, algorithm: str, **epsilon: float) -> Any:
     train = parse_overrides(TINY, flag="--hyperparams")
     train.update({"algorithm": algorithm, "learning_starts": LEARNING_STARTS,
                   **{f"epsilon.{k}": v for k, v in epsilon.items()}})
-    model = build_model(load_run_config([LIDAR_TD3], train=train).train, env)
+    model = new_model(load_run_config([LIDAR_TD3], train=train).train, env)
     model._last_obs = env.reset()
     model.set_logger(configure(None, []))
     return model
@@ -196,7 +196,7 @@ def test_the_warm_up_is_uniform_whatever_epsilon(lidar_env: Any) -> None:
 def test_ppo_has_no_epsilon(lidar_env: Any) -> None:
     train = parse_overrides(TINY, flag="--hyperparams")
     train.update({"algorithm": "ppo", "epsilon.initial": 0.0, "ppo.n_steps": 64})
-    model = build_model(load_run_config([LIDAR_TD3], train=train).train, lidar_env)
+    model = new_model(load_run_config([LIDAR_TD3], train=train).train, lidar_env)
     assert not isinstance(model, EpsilonGreedy)
 
 

@@ -12,7 +12,7 @@ import pytest
 from agents_helpers import CONFIG
 
 from pic4rl_agents.config import CurriculumConfig, TrainConfig, load_run_config
-from pic4rl_agents.curriculum import STAGE_KEY, Curriculum
+from pic4rl_agents.training.curriculum import STAGE_KEY, Curriculum
 from pic4rl_bridge.errors import ConfigError
 
 THREE = CurriculumConfig(min_distance_m=(1.0, 1.0, 4.0), max_distance_m=(3.0, 5.0, 8.0),
@@ -104,7 +104,7 @@ def test_max_wall_s_stops_a_run_on_time(tmp_path):
 
     from agents_helpers import TINY
 
-    from pic4rl_agents.train import main
+    from pic4rl_agents.training.train import main
 
     started = time.perf_counter()
     code = main(["--run", "timed", "-n", "1000000", "--no-progress", "--hyperparams", *TINY,

@@ -1,5 +1,5 @@
 """The models: ``DepthGoalExtractor`` (a small CNN on the depth image beside the goal vector),
-``build_model`` for every algorithm on the LiDAR env (``MlpPolicy``), the depth env
+``new_model`` for every algorithm on the LiDAR env (``MlpPolicy``), the depth env
 (``MultiInputPolicy`` with the extractor) and the vineyard's bare image (``CnnPolicy`` with
 it), with the configured network sizes, each algorithm table entry's declared class and
 off-policy flag, and ``load_model``'s round trip and errors."""
@@ -19,19 +19,19 @@ from agents_helpers import CONFIG, DEPTH_TD3, LIDAR_TD3, TINY
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from torch import nn
 
-from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.algorithms import (
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.models.algorithms import (
     ALGORITHMS,
     AtomicSave,
     algorithm_class,
-    build_model,
+    new_model,
     load_model,
 )
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
-from pic4rl_agents.envs import make_vec_env
-from pic4rl_agents.exploration import EpsilonGreedy
-from pic4rl_agents.extractors import DepthGoalExtractor
+from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.models.exploration import EpsilonGreedy
+from pic4rl_agents.models.extractors import DepthGoalExtractor
 from pic4rl_bridge.errors import ConfigError
 
 VINEYARD = CONFIG / "env_vineyard_depth.yaml"  # a bare depth image, no goal vector
@@ -138,7 +138,7 @@ def test_every_image_entry_gets_its_own_cnn_depth_keeping_the_old_names() -> Non
     assert alone.image_keys == ["memory"] and not len(alone.more)
 
 
-# --- build_model --------------------------------------------------------------------------------
+# --- new_model --------------------------------------------------------------------------------
 
 
 def train_config(algorithm: str, **extra: Any) -> Any:
@@ -173,7 +173,7 @@ def test_build_model_follows_the_config(envs: dict[str, Any], algorithm: str,
                                         sensor: str) -> None:
     env = envs[sensor]
     config = train_config(algorithm)
-    model = build_model(config, env)
+    model = new_model(config, env)
     assert isinstance(model, ALGORITHMS[algorithm])
     alias = {"lidar": "MlpPolicy", "depth": "MultiInputPolicy", "image": "CnnPolicy"}[sensor]
     assert isinstance(model.policy, model.policy_aliases[alias])
@@ -208,7 +208,7 @@ def test_every_table_entry_builds_its_declared_class_and_off_policy_kind(
     module, _, class_name = entry.cls.rpartition(".")
     declared = getattr(importlib.import_module(module), class_name)
     config = train_config(name)
-    model = build_model(config, envs["lidar"])
+    model = new_model(config, envs["lidar"])
     assert isinstance(model, declared) and type(model).__name__ == class_name
     assert isinstance(model, AtomicSave)
     assert isinstance(model, OffPolicyAlgorithm) == entry.off_policy == config.off_policy
@@ -216,9 +216,9 @@ def test_every_table_entry_builds_its_declared_class_and_off_policy_kind(
 
 
 def test_td3_action_noise_has_the_configured_std(envs: dict[str, Any]) -> None:
-    model = build_model(train_config("td3", action_noise_std=0.3), envs["lidar"])
+    model = new_model(train_config("td3", action_noise_std=0.3), envs["lidar"])
     np.testing.assert_array_equal(model.action_noise._sigma, [0.3, 0.3])
-    assert build_model(train_config("td3", action_noise_std=0.0), envs["lidar"]).action_noise \
+    assert new_model(train_config("td3", action_noise_std=0.0), envs["lidar"]).action_noise \
         is None
 
 
@@ -226,7 +226,7 @@ def test_td3_action_noise_has_the_configured_std(envs: dict[str, Any]) -> None:
 @pytest.mark.parametrize("algorithm", ["td3", "sac"])
 def test_actor_and_critic_share_the_cnn_only_when_asked(envs: dict[str, Any], algorithm: str,
                                                         share: bool) -> None:
-    model = build_model(train_config(algorithm, **{"policy.share_features_extractor": share}),
+    model = new_model(train_config(algorithm, **{"policy.share_features_extractor": share}),
                         envs["depth"])
     actor, critic = model.policy.actor, model.policy.critic
     assert isinstance(actor.features_extractor, DepthGoalExtractor)
@@ -234,7 +234,7 @@ def test_actor_and_critic_share_the_cnn_only_when_asked(envs: dict[str, Any], al
 
 
 def test_the_activation_follows_the_config(envs: dict[str, Any]) -> None:
-    model = build_model(train_config("sac", **{"policy.activation": "tanh"}), envs["lidar"])
+    model = new_model(train_config("sac", **{"policy.activation": "tanh"}), envs["lidar"])
     kinds = {type(m) for m in model.policy.actor.latent_pi.modules()}
     assert nn.Tanh in kinds and nn.ReLU not in kinds
 
@@ -244,7 +244,7 @@ def test_the_activation_follows_the_config(envs: dict[str, Any]) -> None:
 
 @pytest.fixture(scope="module")
 def saved_td3(envs: dict[str, Any], tmp_path_factory: pytest.TempPathFactory) -> Path:
-    model = build_model(train_config("td3"), envs["lidar"])
+    model = new_model(train_config("td3"), envs["lidar"])
     model.num_timesteps = 42
     path = tmp_path_factory.mktemp("models") / "td3.zip"
     model.save(path)
@@ -255,7 +255,7 @@ def test_a_saved_model_loads_back_the_same(envs: dict[str, Any], saved_td3: Path
     model = load_model(saved_td3, "td3", env=envs["lidar"])
     assert isinstance(model, ALGORITHMS["td3"]) and model.num_timesteps == 42
     assert model.epsilon_initial == 0.2  # the schedule is saved with the model
-    again = build_model(train_config("td3"), envs["lidar"])  # same seed: same initial weights
+    again = new_model(train_config("td3"), envs["lidar"])  # same seed: same initial weights
     for a, b in zip(model.policy.parameters(), again.policy.parameters()):
         assert torch.equal(a, b)
     bare = load_model(saved_td3, "td3")

@@ -1,7 +1,7 @@
 """The normalisation round trip: an agent trained with ``normalize_observations`` and a
 ``reward_scale`` is tested on the observations it learned from. For a short run of each
 sensor's recipe, the env ``pic4rl-test`` builds from the run (``resolve_agents``, then
-``NavEnv`` and ``Policy`` as ``run_agent`` does) and the trainer's env (``make_vec_env`` from
+``NavEnv`` and ``Policy`` as ``drive_agent`` does) and the trainer's env (``make_vec_env`` from
 the run's config.yaml, as ``Trainer.run`` builds it) drive the same pair with the agent's
 actions: every observation is equal, scaled to [0, 1] (ranges, goal distance, depth once SB3
 scales the image) or [-1, 1] (goal angle, last action), the agent acts the same on both, and
@@ -22,9 +22,13 @@ import torch as th
 from agents_helpers import DEPTH_TD3, LIDAR_TD3, SHORT_EPISODES, TINY
 from stable_baselines3.common.preprocessing import preprocess_obs
 
-from pic4rl_agents import tester, testplan, train
+from pic4rl_agents.testing import tester
+
+from pic4rl_agents.testing import plan as testplan
+
+from pic4rl_agents.training import train
 from pic4rl_agents.config import load_run_config
-from pic4rl_agents.envs import make_vec_env
+from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.rosargs import split_ros_args
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.tasks.observations import NORMALIZED_GOAL_DISTANCE_M

@@ -21,12 +21,12 @@ import pytest
 import yaml
 from agents_helpers import CONFIG, ROS_ARGS, ROS_TIMEOUT_S, SHORT_EPISODES, Launcher
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import load_model
-from pic4rl_agents.callbacks import CSV_COLUMNS
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import load_model
+from pic4rl_agents.training.callbacks import CSV_COLUMNS
 from pic4rl_agents.config import RunConfig, load_run_config
-from pic4rl_agents.curriculum import STAGE_KEY
-from pic4rl_agents.curves import episode_table
+from pic4rl_agents.training.curriculum import STAGE_KEY
+from pic4rl_agents.training.curves import episode_table
 
 RECIPES = sorted(CONFIG.glob("train_*.yaml"))
 STEPS = 300

@@ -22,10 +22,10 @@ import pytest
 import yaml
 from agents_helpers import CONFIG, LIDAR_TD3, TrainedRun
 
-from pic4rl_agents import tester
+from pic4rl_agents.testing import tester
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.rosargs import split_ros_args
-from pic4rl_agents.testplan import DEFAULT_PAIRS, AgentSpec, resolve_agents
+from pic4rl_agents.testing.plan import DEFAULT_PAIRS, AgentSpec, resolve_agents
 from pic4rl_bridge.config import load_env_config
 from pic4rl_metrics.aggregate import aggregate
 from pic4rl_metrics.atomic import claim_dir

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from agents_helpers import LIDAR_TD3, ROOT
 
-from pic4rl_agents import tester
+from pic4rl_agents.testing import tester
 from pic4rl_metrics.batch import compute
 
 SHORT = ["--baseline", "proportional", "--no-progress", "--env-kwargs", "episode_max_steps:5",
@@ -68,8 +68,8 @@ def test_pairs_without_random_is_refused_when_a_file_gives_the_pairs(tmp_path: P
 def test_a_baseline_drives_the_robot_full_speed_range(tmp_path):
     """An agent's speed floor (min_linear_m_s) is not imposed on the baselines beside it."""
     from pic4rl_agents.rosargs import split_ros_args
-    from pic4rl_agents.tester import build_parser, build_plan
-    from pic4rl_agents.testplan import resolve_agents
+    from pic4rl_agents.testing.tester import build_parser, build_plan
+    from pic4rl_agents.testing.plan import resolve_agents
 
     def specs(*extra: str) -> list:
         plain, ros = split_ros_args(["--agent", str(ROOT / "checkpoints" / "td3_lidar"),

@@ -28,7 +28,7 @@ REAL = ["transport:ros", "ros.sim_node:", "ros.reset_service:", "ros.step_mode:r
 
 def run_tester(argv: list[str], domain: int) -> tuple[int, str, str]:
     """``pic4rl-test argv`` as its own process, as a user runs it."""
-    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.tester", *argv],
+    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.testing.tester", *argv],
                           env=sim_env(domain), capture_output=True, text=True, timeout=300,
                           check=False)
     return done.returncode, done.stdout, done.stderr

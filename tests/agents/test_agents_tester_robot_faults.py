@@ -42,7 +42,7 @@ def run_tester(tmp_path: Path, robot_args: list[str], *params: str) -> tuple[int
     robot = SimProcess([sys.executable, str(ROBOT), *robot_args], domain, tmp_path / "robot.log")
     try:
         done = subprocess.run(
-            [sys.executable, "-m", "pic4rl_agents.tester", "--baseline", "proportional",
+            [sys.executable, "-m", "pic4rl_agents.testing.tester", "--baseline", "proportional",
              "--episodes", "1", "--bags", str(tmp_path / "bags"), "--run", "real",
              "--no-progress", "--ros-args", "--params-file", str(config), *params],
             cwd=ROOT, env={**sim_env(domain), "PYTHONPATH": os.environ.get("PYTHONPATH", "")},

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from agents_helpers import CONFIG, LIDAR_TD3
 
-from pic4rl_agents import tester
+from pic4rl_agents.testing import tester
 from pic4rl_metrics.batch import compute
 
 

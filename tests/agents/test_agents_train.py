@@ -34,12 +34,12 @@ from agents_helpers import (
     TrainedRun,
 )
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import load_model
-from pic4rl_agents.callbacks import StopWhenSet, stopped_by_signal
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import load_model
+from pic4rl_agents.training.callbacks import StopWhenSet, stopped_by_signal
 from pic4rl_agents.config import load_run_config
-from pic4rl_agents.exploration import epsilon_at
-from pic4rl_agents.runs import find_resume
+from pic4rl_agents.models.exploration import epsilon_at
+from pic4rl_agents.rundir import find_resume
 from pic4rl_bridge.errors import ConfigError
 
 
@@ -390,11 +390,11 @@ def test_a_stop_that_python_drops_still_ends_training() -> None:
 
 @pytest.mark.slow
 def test_an_interrupted_training_saves_its_model_and_exits_0(tmp_path: Path) -> None:
-    """Ctrl-C (SIGINT) to ``python -m pic4rl_agents.train`` during training: the model, its
+    """Ctrl-C (SIGINT) to ``python -m pic4rl_agents.training.train`` during training: the model, its
     replay buffer and a summary are saved, and the exit code is 0."""
     log = (tmp_path / "train.log").open("wb")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "pic4rl_agents.train", "--hyperparams", *TINY,
+        [sys.executable, "-m", "pic4rl_agents.training.train", "--hyperparams", *TINY,
          "checkpoint.interval_steps:60", "eval.interval_steps:0", "-n", "1000000",
          "--run", "long", "--no-progress", "--ros-args", "--params-file", str(LIDAR_TD3),
          "-p", f"runs_dir:={tmp_path / 'runs'}"],

@@ -20,8 +20,10 @@ import pytest
 import yaml
 from agents_helpers import LIDAR_TD3
 
-from pic4rl_agents import tune, tune_space
-from pic4rl_agents.tune_summary import write_summary
+from pic4rl_agents.tune import search as tune
+
+from pic4rl_agents.tune import space as tune_space
+from pic4rl_agents.tune.summary import write_summary
 from pic4rl_agents.config import ALGORITHM_NAMES, load_run_config
 
 #: Trials of seconds: tiny nets, 200 steps, 2 evaluations of 1 episode each. Episodes of 30
@@ -143,7 +145,7 @@ def test_a_learning_start_beyond_the_trials_budget_is_warned(
         tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
     settings = tune.settings_from(tune.build_parser().parse_args([
         "--base", str(LIDAR_TD3), "--study-dir", str(tmp_path), "--max-steps", "2000"]))
-    with caplog.at_level(logging.WARNING, logger="pic4rl_agents.tune_settings"):
+    with caplog.at_level(logging.WARNING, logger="pic4rl_agents.tune.settings"):
         settings.trial_run(3, {"algorithm": "td3", "learning_starts": 1000})
         assert not caplog.records
         settings.trial_run(4, {"algorithm": "td3", "learning_starts": 5000})
@@ -152,7 +154,7 @@ def test_a_learning_start_beyond_the_trials_budget_is_warned(
 
 def test_ctrl_c_ends_the_study_in_one_line_with_exit_130(tmp_path: Path) -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "pic4rl_agents.tune", "--base", str(LIDAR_TD3), "--study-dir",
+        [sys.executable, "-m", "pic4rl_agents.tune.search", "--base", str(LIDAR_TD3), "--study-dir",
          str(tmp_path), "--n-trials", "1", *TINY_TRIAL, "--max-steps", "100000"],
         env={**os.environ, "PYTHONPATH": str(Path(tune.__file__).parents[1])},
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -14,7 +14,9 @@ import pandas as pd
 from agents_helpers import LIDAR_TD3, SHORT_EPISODES, TINY, TrainedRun
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-from pic4rl_agents import tester, train
+from pic4rl_agents.testing import tester
+
+from pic4rl_agents.training import train
 from pic4rl_agents.config import EvalConfig
 from pic4rl_metrics import read_episode
 

@@ -15,8 +15,12 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents import bench, benchcell, benchtable
-from pic4rl_agents.suite import load_suite
+from pic4rl_agents.bench import runner as bench
+
+from pic4rl_agents.bench import cell as benchcell
+
+from pic4rl_agents.bench import table as benchtable
+from pic4rl_agents.bench.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics.aggregate import wilson_interval
 
@@ -105,7 +109,7 @@ def test_cli_says_bad_suite_in_one_line(tmp_path: Path, capsys: pytest.CaptureFi
 def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) -> None:
     suite = load_suite(_files(tmp_path, baselines=["proportional", "dwa"], pairs=[
         {"file": str(PAIRS), "episodes": 2}, {"random": 2, "kind": "paper", "seed": 1}]))
-    table = bench.run_suite(suite, workers=2, local=True, progress=False)
+    table = bench.bench_suite(suite, workers=2, local=True, progress=False)
     assert [r[:2] for r in table.rows] == [("goto", "proportional")] * 2 + [("goto", "dwa")] * 2
     n, status = table.header.index("n"), table.header.index("status")
     assert [r[n] for r in table.rows] == ["2"] * 4 and {r[status] for r in table.rows} == {"ok"}
@@ -120,7 +124,7 @@ def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) 
     assert page.count('class="bag"') == 8
     before, text = _bags(suite.root), (suite.root / "results.md").read_text()
     assert len(before) == 4 * 2 * 2  # 4 cells x 2 episodes x (.db3, metadata.yaml)
-    again = bench.run_suite(suite, workers=2, local=True, progress=False)
+    again = bench.bench_suite(suite, workers=2, local=True, progress=False)
     assert _bags(suite.root) == before and again.rows == table.rows
     assert (suite.root / "results.md").read_text() == text
 
@@ -130,7 +134,7 @@ def test_a_cell_that_keeps_failing_is_a_failed_row(tmp_path: Path) -> None:
     pairs.write_text(json.dumps({"goals": [[100.0, 100.0]], "poses": [[100.0, 100.0, 0.0]]}))
     suite = load_suite(_files(tmp_path, baselines=["proportional"],
                               pairs=[{"file": str(pairs)}, {"file": str(PAIRS), "episodes": 1}]))
-    table = bench.run_suite(suite, workers=1, local=True, retries=1, progress=False)
+    table = bench.bench_suite(suite, workers=1, local=True, retries=1, progress=False)
     status = [r[-1] for r in table.rows]
     assert status[0].startswith("failed: goto-proportional-indoor0-jackal-file_bad_pairs-r0: ")
     assert status[1] == "ok" and not (suite.root / suite.cells[0].name / benchcell.DONE).exists()
@@ -146,7 +150,7 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
         {"file": str(PAIRS), "episodes": 4}, {"random": 3, "kind": "paper", "seed": 2}])
     suite = load_suite(suite_file)
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.bench", str(suite_file),
+    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.bench.runner", str(suite_file),
                              "--local", "--workers", "1", "--no-progress"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = suite.root / suite.cells[0].name / "dwa"
@@ -180,7 +184,7 @@ def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     pytest.importorskip("ray")
     suite = load_suite(_files(tmp_path, baselines=["proportional", "dwa"],
                               pairs=[{"file": str(PAIRS), "episodes": 1}]))
-    table = bench.run_suite(suite, workers=2, progress=False)
+    table = bench.bench_suite(suite, workers=2, progress=False)
     assert [(r[1], r[5], r[-1]) for r in table.rows] == [("proportional", "1", "ok"),
                                                           ("dwa", "1", "ok")]
     assert all((suite.root / c.name / benchcell.DONE).is_file() for c in suite.cells)
@@ -193,7 +197,7 @@ def test_the_comparison_figure_draws_each_rows_success_and_its_wilson_interval()
             ("goto", "b", "indoor:0", "jackal", "paper", "4", "4/4", None, "ok"),
             ("goto", "c", "indoor:0", "jackal", "paper", "0", None, None, "failed: x"),
             ("person", "d", "person:0", "omni", "env", "1", "1/1", None, "ok")]
-    fig = benchtable.comparison_figure("goto", header, rows)
+    fig = benchtable.success_figure("goto", header, rows)
     bars = fig.axes[0].patches
     assert [round(b.get_width(), 6) for b in bars] == [0.5, 1.0, 0.0]
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels()]

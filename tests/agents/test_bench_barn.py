@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from pic4rl_agents import bench
-from pic4rl_agents.suite import load_suite
+from pic4rl_agents.bench import runner as bench
+from pic4rl_agents.bench.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import compute
 from pic4rl_metrics.aggregate import bootstrap_interval, wilson_interval
@@ -58,7 +58,7 @@ def test_bad_table_and_world_group_keys_are_named(tmp_path: Path, change: dict,
 
 def test_the_ci_suite_runs_in_process_into_barns_table(tmp_path: Path) -> None:
     suite = load_suite(CI, bags_dir=tmp_path)
-    table = bench.run_suite(suite, workers=2, local=True, progress=False)
+    table = bench.bench_suite(suite, workers=2, local=True, progress=False)
     h = table.header
     assert h[5:] == ("n", "success", "success 95% CI", "collision", "collision 95% CI",
                      "timeout", "timeout 95% CI", "BARN time [s]", "BARN time 95% CI",

@@ -18,12 +18,12 @@ from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.utils import obs_as_tensor
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import ALGORITHMS, build_model, load_model
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
 from pic4rl_agents.config import ImitationConfig, load_run_config
 from pic4rl_agents.overrides import parse_overrides
-from pic4rl_agents.envs import make_vec_env
-from pic4rl_agents.imitation import EXPERT, STUDENT, Imitation, actor_loss
+from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation, actor_loss
 from pic4rl_bridge.errors import ConfigError
 
 IMITATION = ["imitation.enabled:true", "imitation.bc_steps:40", "imitation.dagger_rounds:1",
@@ -36,7 +36,7 @@ def _setup(algorithm: str = "td3", n_envs: int = 2):
                                               "algorithm": algorithm},
                           env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
     env = make_vec_env(run.env, n_envs=n_envs, seed=0, vec_env="dummy")
-    model = build_model(run.train, env)
+    model = new_model(run.train, env)
     model.set_logger(configure(None, []))
     callback = CallbackList([])
     callback.init_callback(model)
@@ -137,7 +137,7 @@ def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
                                               "imitation.expert": "explorer"},
                           env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
-    model = build_model(run.train, env)
+    model = new_model(run.train, env)
     model.set_logger(configure(None, []))
     callback = CallbackList([])
     callback.init_callback(model)
@@ -223,7 +223,7 @@ def test_imitation_trains_through_ros(tmp_path: Path) -> None:
 def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
     """In a hybrid person env the expert labels ω alone, end to end (vx, vy, ω); it drives
     personMonitoring only, and the planner goToPose only."""
-    from pic4rl_agents.imitation import make_expert
+    from pic4rl_agents.training.imitation import make_expert
     from pic4rl_bridge.config import load_env_config
     from pic4rl_bridge.follow import HeadingController
 

@@ -13,11 +13,11 @@ from agents_helpers import CONFIG, label_error, LIDAR_TD3, TINY
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import ALGORITHMS, build_model, load_model
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
 from pic4rl_agents.config import ImitationConfig, load_run_config
-from pic4rl_agents.envs import make_vec_env
-from pic4rl_agents.imitation import EXPERT, Imitation, make_expert
+from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.training.imitation import EXPERT, Imitation, make_expert
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.row_followers import CenterlineFollower
@@ -40,7 +40,7 @@ def test_the_cnn_on_depth_learns_the_experts_labels() -> None:
                           env={"episode_max_steps": 300})
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
     try:
-        model = build_model(run.train, env)
+        model = new_model(run.train, env)
         model.set_logger(configure(None, []))
         callback = CallbackList([])
         callback.init_callback(model)

@@ -23,8 +23,14 @@ import pytest
 import yaml
 from docs_helpers import anchors, parameter_rows, section, table_rows
 
-from pic4rl_agents import tester, testplan, train, tune
-from pic4rl_agents.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.testing import tester
+
+from pic4rl_agents.testing import plan as testplan
+
+from pic4rl_agents.training import train
+
+from pic4rl_agents.tune import search as tune
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -6,9 +6,9 @@ trains an SB3 agent on it, with checkpoints, resume, evaluation, logs and a rewa
         --env-kwargs transport:ros --ros-args --params-file config/train_goto_lidar_td3.yaml
     pic4rl-train --resume runs/td3_lidar            # the run's newest checkpoint that loads
 
-A run lives in ``<runs_dir>/<run>/`` (``pic4rl_agents.runs`` has its layout). A new run with a
+A run lives in ``<runs_dir>/<run>/`` (``pic4rl_agents.rundir`` has its layout). A new run with a
 taken name gets ``<run>-2``; a resume continues the run's model, replay buffer, curriculum and
-curve, as a new session. The command line is read by ``pic4rl_agents.trainargs``.
+curve, as a new session. The command line is read by ``pic4rl_agents.training.args``.
 """
 
 from __future__ import annotations
@@ -31,11 +31,11 @@ from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 
 from pic4rl_metrics import atomic
 
-from . import runs
-from .config import RunConfig
-from .console import console_logging
-from .rosargs import RosArgs, no_sim_hint, split_ros_args
-from .trainargs import build_parser, resolve
+from pic4rl_agents import rundir
+from pic4rl_agents.config import RunConfig
+from pic4rl_agents.console import console_logging
+from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_agents.training.args import build_parser, resolve
 
 log = logging.getLogger(__name__)
 
@@ -85,7 +85,7 @@ class Trainer:
     """One training run: envs, model, callbacks; ``run()`` trains and saves, and returns the
     run directory."""
 
-    def __init__(self, run: RunConfig, *, resume: runs.Resume | None = None, progress: bool = True,
+    def __init__(self, run: RunConfig, *, resume: rundir.Resume | None = None, progress: bool = True,
                  ros: RosArgs | None = None, after_eval: Any = None) -> None:
         """``after_eval``: an SB3 callback run after each evaluation (its ``parent`` is the
         ``SeededEvalCallback``); returning False ends the training, which is then saved."""
@@ -96,8 +96,8 @@ class Trainer:
         self.after_eval = after_eval
         self.interrupted = False  # Ctrl-C or SIGTERM ended the last run()
         self._stop = threading.Event()  # set by that signal (``stop_on_signal``)
-        self.layout = (runs.RunDir.resume(resume.run_dir) if resume is not None
-                       else runs.RunDir.new(Path(run.train.runs_dir), run.name))
+        self.layout = (rundir.RunDir.resume(resume.run_dir) if resume is not None
+                       else rundir.RunDir.new(Path(run.train.runs_dir), run.name))
 
     @property
     def run_dir(self) -> Path:
@@ -107,7 +107,7 @@ class Trainer:
         """Train this session (resumed where the run was), save, and close what it opened."""
         import torch
 
-        from .callbacks import StopWhenSet
+        from pic4rl_agents.training.callbacks import StopWhenSet
 
         cfg = self.config.train
         session = self._session_env()
@@ -138,8 +138,8 @@ class Trainer:
         has imitated already); False when a callback (the clock) ended training during it."""
         from stable_baselines3.common.callbacks import CallbackList
 
-        from .callbacks import stopped_by_signal
-        from .imitation import DecayingCloning, Imitation
+        from pic4rl_agents.training.callbacks import stopped_by_signal
+        from pic4rl_agents.training.imitation import DecayingCloning, Imitation
 
         cfg = self.config.train
         if not cfg.imitation.enabled or self.resume is not None:
@@ -168,12 +168,12 @@ class Trainer:
         """This session's env and seed; None when the resumed model has trained enough.
         A resume goes on where the run was: the curriculum's episodes already driven are not
         repeated, and the session's seed gives new episodes."""
-        from .curves import episode_table
+        from pic4rl_agents.training.curves import episode_table
 
         cfg, env_cfg = self.config.train, self.config.env
         if self.resume is None:
             return env_cfg, cfg.seed
-        done = runs.steps_in(self.resume.model)
+        done = rundir.steps_in(self.resume.model)
         self._announce(self.resume, done)
         if done >= cfg.max_steps:
             log.info("%s has trained %d steps already (max_steps=%d); nothing to do",
@@ -184,7 +184,7 @@ class Trainer:
         return (env_cfg.replace(**{"episodes.starting_episodes": starting}),
                 cfg.seed + self.layout.session)
 
-    def _announce(self, resume: runs.Resume, steps: int) -> None:
+    def _announce(self, resume: rundir.Resume, steps: int) -> None:
         """Which checkpoint this session resumes from, which newer ones do not load and why;
         the temporary files of a killed session are removed."""
         for line in resume.skipped:
@@ -199,7 +199,7 @@ class Trainer:
 
     def _training_env(self, stack: contextlib.ExitStack, env_cfg: EnvConfig, seed: int,
                       node: Any) -> Any:
-        from .envs import make_vec_env
+        from pic4rl_agents.training.envs import make_vec_env
 
         cfg = self.config.train
         env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed, reward_scale=cfg.reward_scale,
@@ -214,11 +214,11 @@ class Trainer:
         this session's ``logs/``."""
         from stable_baselines3.common.logger import configure
 
-        from .algorithms import build_model, load_model
+        from pic4rl_agents.models.algorithms import new_model, load_model
 
         cfg = self.config.train
         if self.resume is None:
-            model = build_model(cfg, env)
+            model = new_model(cfg, env)
         else:
             model = load_model(
                 self.resume.model, cfg.algorithm, env=env, device=cfg.device,
@@ -235,7 +235,7 @@ class Trainer:
     def _callbacks(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                    started: float) -> list[Any]:
         """The reward curve, checkpoints, evaluation, wall-clock limit and progress bar."""
-        from .callbacks import Checkpoints, ProgressCallback, RewardCurveCallback, WallClockLimit
+        from pic4rl_agents.training.callbacks import Checkpoints, ProgressCallback, RewardCurveCallback, WallClockLimit
 
         cfg = self.config.train
         every = max(cfg.checkpoint.interval_steps // cfg.n_envs, 1)
@@ -245,13 +245,13 @@ class Trainer:
             window=cfg.reward_window, title=self._title())]
         if cfg.checkpoint.interval_steps:
             callbacks.append(Checkpoints(
-                every, str(self.layout.checkpoints), name_prefix=runs.CHECKPOINT_PREFIX,
+                every, str(self.layout.checkpoints), name_prefix=rundir.CHECKPOINT_PREFIX,
                 save_replay_buffer=cfg.checkpoint.replay_buffer and cfg.off_policy))
         if cfg.eval.enabled:
             callbacks.append(self._evaluation(stack, env_cfg, started))
             if cfg.eval.video_episodes:
-                from .envs import eval_env_config
-                from .videos import EvalVideoCallback
+                from pic4rl_agents.training.envs import eval_env_config
+                from pic4rl_agents.training.videos import EvalVideoCallback
 
                 callbacks.append(EvalVideoCallback(
                     callbacks[-1], eval_env_config(env_cfg, cfg.eval),
@@ -266,8 +266,8 @@ class Trainer:
     def _evaluation(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                     started: float) -> Any:
         """The seeded evaluation on its own in-process env."""
-        from .callbacks import SeededEvalCallback
-        from .envs import eval_env_config, make_vec_env
+        from pic4rl_agents.training.callbacks import SeededEvalCallback
+        from pic4rl_agents.training.envs import eval_env_config, make_vec_env
 
         cfg = self.config.train
         eval_env = make_vec_env(eval_env_config(env_cfg, cfg.eval), seed=cfg.eval.seed)
@@ -283,7 +283,7 @@ class Trainer:
 
     def _learn(self, model: Any, callbacks: list[Any]) -> None:
         """Train up to ``max_steps``; Ctrl-C or SIGTERM ends it (the caller saves)."""
-        from .callbacks import stopped_by_signal
+        from pic4rl_agents.training.callbacks import stopped_by_signal
 
         cfg = self.config.train
         with stop_on_signal(self._stop):
@@ -308,7 +308,7 @@ class Trainer:
     def _save_if_trained(self, model: Any, started: float, start_steps: int) -> None:
         """The final (or interrupted) model, its replay buffer, the curve and a summary, once
         this session has trained at all."""
-        from .curves import episode_table, save_reward_curve
+        from pic4rl_agents.training.curves import episode_table, save_reward_curve
 
         if model.num_timesteps <= start_steps:
             return
@@ -319,7 +319,7 @@ class Trainer:
         model.save(self.layout.model)
         save_reward_curve(self.layout.monitor, self.layout.reward_curve,
                           window=cfg.reward_window, title=self._title())
-        summary = runs.session_summary(self.config, self.layout.session, model.num_timesteps,
+        summary = rundir.session_summary(self.config, self.layout.session, model.num_timesteps,
                                   model.num_timesteps - start_steps, wall_s,
                                   episode_table(self.layout.monitor))
         self.layout.write_summary(yaml.safe_dump(summary, sort_keys=False))

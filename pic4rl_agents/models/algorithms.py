@@ -1,7 +1,7 @@
-"""The SB3 classes of the algorithm table (``pic4rl_agents.algorithm_table``), with atomic saves
+"""The SB3 classes of the algorithm table (``pic4rl_agents.models.algorithm_table``), with atomic saves
 and ε-greedy on the off-policy ones, and their networks.
 
-``build_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
+``new_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
 (depth + goal), ``CnnPolicy`` with it on bare images (vineyard). ``load_model`` reads a
 saved zip back with the same classes.
@@ -24,15 +24,15 @@ from torch import nn
 from pic4rl_bridge.errors import ConfigError
 
 from pic4rl_metrics.atomic import replacing
-from .algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
-from .config import TrainConfig
-from .exploration import EpsilonGreedy
-from .extractors import DepthGoalExtractor
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
+from pic4rl_agents.config import TrainConfig
+from pic4rl_agents.models.exploration import EpsilonGreedy
+from pic4rl_agents.models.extractors import DepthGoalExtractor
 
 
 class AtomicSave:
     """Mixin for an SB3 algorithm: ``save`` and ``save_replay_buffer`` to a path write a
-    temporary file and rename it (``pic4rl_agents.atomic``), so that a kill mid-save leaves the
+    temporary file and rename it (``pic4rl_metrics.atomic``), so that a kill mid-save leaves the
     previous file, not a truncated one; SB3's callbacks (checkpoints, the best model) save
     through them too."""
 
@@ -99,7 +99,7 @@ def _policy(config: TrainConfig, observation_space: gym.Space) -> tuple[str, dic
     return "MlpPolicy", kwargs
 
 
-def build_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = None,
+def new_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = None,
                 verbose: int = 0) -> BaseAlgorithm:
     """A new model of ``config.algorithm`` on ``env`` (a VecEnv), seeded with ``config.seed``."""
     cls = algorithm_class(config.algorithm)

@@ -33,14 +33,14 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
 
-from .algorithm_table import ALGORITHM_TABLE
-from .callbacks import SeededEvalCallback
-from .config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
-from .overrides import check_overrides, parse_overrides
-from .console import console_logging
-from .tune_settings import TrialSeeded, TuneSettings
-from .tune_space import Fixing
-from .tune_summary import log_trial, write_summary
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.training.callbacks import SeededEvalCallback
+from pic4rl_agents.config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
+from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.console import console_logging
+from pic4rl_agents.tune.settings import TrialSeeded, TuneSettings
+from pic4rl_agents.tune.space import Fixing
+from pic4rl_agents.tune.summary import log_trial, write_summary
 
 OBJECTIVES = ("success_rate", "mean_reward")
 
@@ -83,8 +83,8 @@ def suggest(trial: Any, base: RunConfig, fixed: dict[str, Any]) -> dict[str, Any
 def objective(trial: optuna.Trial, settings: TuneSettings) -> float:
     """Train trial ``trial`` and return its last evaluation's objective; raise
     ``optuna.TrialPruned`` when the pruner stopped it."""
-    from .curves import eval_curves
-    from .train import Trainer
+    from pic4rl_agents.training.curves import eval_curves
+    from pic4rl_agents.training.train import Trainer
 
     params = suggest(trial, settings.base, settings.fixed)
     run = settings.trial_run(trial.number, params)
@@ -168,7 +168,7 @@ def _optimize_on_ray(settings: TuneSettings, n_jobs: int, options: dict[str, Any
     except ImportError as err:
         raise ConfigError("--address: Ray is not installed (pip install 'pic4rl[cluster]')") \
             from err
-    from . import raycluster
+    from pic4rl_agents import raycluster
 
     shares = _shares(settings, n_jobs, options)
     raycluster.init(address, num_cpus=n_jobs if address == "local" else None,
@@ -191,9 +191,9 @@ def _console() -> Iterator[None]:
     """The trials on stdout; each trial's training summary and the summary's warnings on
     stderr."""
     with console_logging(__name__, "pic4rl-tune: %(message)s", stream=sys.stdout), \
-            console_logging("pic4rl_agents.tune_summary", "pic4rl-tune: %(message)s"), \
-            console_logging("pic4rl_agents.tune_settings", "pic4rl-tune: %(message)s"), \
-            console_logging("pic4rl_agents.train", "pic4rl-train: %(message)s"):
+            console_logging("pic4rl_agents.tune.summary", "pic4rl-tune: %(message)s"), \
+            console_logging("pic4rl_agents.tune.settings", "pic4rl-tune: %(message)s"), \
+            console_logging("pic4rl_agents.training.train", "pic4rl-train: %(message)s"):
         yield
 
 

@@ -18,10 +18,10 @@ from pic4rl_metrics import atomic
 if TYPE_CHECKING:
     import pandas as pd
 
-    from .tune_settings import TuneSettings
+    from pic4rl_agents.tune.settings import TuneSettings
 
 log = logging.getLogger(__name__)
-trial_log = logging.getLogger("pic4rl_agents.tune")  # the trials' lines, on stdout
+trial_log = logging.getLogger("pic4rl_agents.tune.search")  # the trials' lines, on stdout
 
 
 def log_trial(study: Any, trial: Any) -> None:
@@ -93,7 +93,7 @@ def _write_importances(study: Any, folder: Path) -> None:
 
 
 def _write_curves(complete: list[Any], folder: Path, top: int = 8) -> None:
-    from .curves import eval_curves, save_eval_curves
+    from pic4rl_agents.training.curves import eval_curves, save_eval_curves
 
     curves = {}
     for trial in sorted(complete, key=lambda t: t.value, reverse=True)[:top]:

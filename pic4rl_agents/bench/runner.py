@@ -1,5 +1,5 @@
 """``pic4rl-bench``: a benchmark suite (agents and baselines × worlds × robots × pair sets ×
-repetitions, see ``pic4rl_agents.suite``) run as cells, each one ``pic4rl-test`` run, then one
+repetitions, see ``pic4rl_agents.bench.suite``) run as cells, each one ``pic4rl-test`` run, then one
 results table and a leaderboard per task from the bags.
 
     pic4rl-bench config/suite_table1.yaml                 # a local Ray, or a process pool
@@ -29,9 +29,9 @@ from typing import Any
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_metrics import atomic
 
-from . import benchcell
-from .benchtable import SuiteTable, write_results
-from .suite import Cell, Suite, load_suite
+from pic4rl_agents.bench import cell as bench_cell
+from pic4rl_agents.bench.table import SuiteTable, write_results
+from pic4rl_agents.bench.suite import Cell, Suite, load_suite
 
 log = logging.getLogger(__name__)
 POLL_S = 0.5
@@ -46,16 +46,16 @@ def _cell_process(cell: Cell, root: Path) -> None:
     """A pool worker: one attempt at one cell; its error, if any, in ``<cell>/cell.error``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops its workers itself
     try:
-        benchcell.run_cell(cell, root)
+        bench_cell.drive_cell(cell, root)
     except Exception as err:  # noqa: BLE001 - any failure of a cell is reported, not raised
-        atomic.write_text(benchcell.cell_dir(root, cell) / benchcell.ERROR, _one_line(err))
+        atomic.write_text(bench_cell.cell_dir(root, cell) / bench_cell.ERROR, _one_line(err))
         os._exit(1)
 
 
 def _ray_cell(cell: Cell, root: str) -> str | None:
     """A Ray task: one attempt at one cell; its error in one line, or None."""
     try:
-        benchcell.run_cell(cell, Path(root))
+        bench_cell.drive_cell(cell, Path(root))
     except Exception as err:  # noqa: BLE001 - returned to the driver, which retries
         return _one_line(err)
     return None
@@ -103,7 +103,7 @@ class LocalPool:
         handle.join()
         if handle.exitcode == 0:
             return None
-        path = benchcell.cell_dir(self.root, cell) / benchcell.ERROR
+        path = bench_cell.cell_dir(self.root, cell) / bench_cell.ERROR
         return path.read_text().strip() if path.is_file() and handle.exitcode == 1 else (
             f"worker died (exit code {handle.exitcode})")
 
@@ -120,7 +120,7 @@ class RayPool:
     def __init__(self, root: Path, workers: int, address: str | None) -> None:
         import ray
 
-        from . import raycluster
+        from pic4rl_agents import raycluster
 
         self._ray = ray
         raycluster.init(address, num_cpus=None if address else workers,
@@ -193,14 +193,14 @@ def make_pool(root: Path, *, workers: int, address: str | None, local: bool) -> 
     return LocalPool(root, workers)
 
 
-def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[str, str]:
+def dispatch_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[str, str]:
     """Run every unfinished cell of ``suite`` on ``pool``, retrying each failed one up to
     ``retries`` times; the errors of the cells that failed for good, by name."""
     from tqdm import tqdm
 
     root = suite.root
-    todo = deque(c for c in suite.cells if not benchcell.state(root, c).done)
-    total = {c.name: benchcell.expected_episodes(c) for c in suite.cells}
+    todo = deque(c for c in suite.cells if not bench_cell.state(root, c).done)
+    total = {c.name: bench_cell.expected_episodes(c) for c in suite.cells}
     counted = {c.name: total[c.name] for c in suite.cells if c not in todo}
     cells_bar = tqdm(total=len(suite.cells), initial=len(counted), desc="cells", unit="cell",
                      disable=not progress, position=0)
@@ -229,7 +229,7 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
                     cells_bar.update(1)
             for cell in suite.cells:
                 if cell.name not in counted or cell in running.values():
-                    done = len(benchcell.state(root, cell).finished)
+                    done = len(bench_cell.state(root, cell).finished)
                     episodes_bar.update(done - counted.get(cell.name, 0))
                     counted[cell.name] = done
     finally:
@@ -239,14 +239,14 @@ def run_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[
     return failed
 
 
-def run_suite(suite: Suite, *, workers: int = 1, address: str | None = None,
+def bench_suite(suite: Suite, *, workers: int = 1, address: str | None = None,
               local: bool = False, retries: int | None = None,
               progress: bool = True) -> SuiteTable:
     """Run ``suite``'s unfinished cells and write its results; its table."""
     check_bags(suite.root)
     pool = make_pool(suite.root, workers=workers, address=address, local=local)
     log.info("%d cells on %s", len(suite.cells), pool.name)
-    failed = run_cells(suite, pool, retries=suite.retries if retries is None else retries,
+    failed = dispatch_cells(suite, pool, retries=suite.retries if retries is None else retries,
                        progress=progress)
     return write_results(suite, failed)
 
@@ -267,7 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the suite; print its table (markdown); exit 1 if a cell failed, 2 for bad input."""
-    from .console import console_logging
+    from pic4rl_agents.console import console_logging
 
     args = build_parser().parse_args(argv)
     try:
@@ -276,7 +276,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         suite = load_suite(args.suite, bags_dir=args.bags)
         with console_logging(__name__):
             start = time.monotonic()
-            table = run_suite(suite, workers=args.workers, address=args.address,
+            table = bench_suite(suite, workers=args.workers, address=args.address,
                               local=args.local, retries=args.retries,
                               progress=not args.no_progress)
     except (ConfigError, BridgeError) as err:

@@ -1,6 +1,6 @@
 """The algorithms, each declared once: its SB3 class, whether it is off-policy, its search space
-and the keyword groups ``build_model`` gives it. ``TrainConfig``'s ``Algorithm`` and
-``OFF_POLICY``, ``pic4rl_agents.algorithms.ALGORITHMS`` and ``pic4rl-tune``'s sampler read it.
+and the keyword groups ``new_model`` gives it. ``TrainConfig``'s ``Algorithm`` and
+``OFF_POLICY``, ``pic4rl_agents.models.algorithms.ALGORITHMS`` and ``pic4rl-tune``'s sampler read it.
 
 Light on purpose: ``pic4rl_agents.config`` imports it for ``--help`` and config checks, so a
 class is named by its import path, imported only when a model is built or loaded.
@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from .tune_space import sample_off_policy, sample_ppo, sample_td3
+from pic4rl_agents.tune.space import sample_off_policy, sample_ppo, sample_td3
 
 #: A trial and the run's ``n_envs`` → dotted trainer parameters.
 Sampler = Callable[..., dict[str, Any]]
@@ -22,8 +22,8 @@ Sampler = Callable[..., dict[str, Any]]
 class AlgorithmEntry:
     cls: str  # "package.Class" of SB3 or sb3-contrib
     off_policy: bool  # a replay buffer; ε-greedy, imitation and shared CNNs apply
-    sampler: Sampler  # pic4rl-tune's search space (pic4rl_agents.tune_space)
-    #: ``build_model``'s keyword groups beyond every algorithm's and every off-policy one's:
+    sampler: Sampler  # pic4rl-tune's search space (pic4rl_agents.tune.space)
+    #: ``new_model``'s keyword groups beyond every algorithm's and every off-policy one's:
     #: "action_noise" (Gaussian, ``action_noise_std``), "ent_coef" (SAC's entropy
     #: coefficient), "ppo" (the ``ppo.*`` section and ``batch_size``).
     kwargs: tuple[str, ...] = ()

@@ -12,8 +12,8 @@ from pic4rl_bridge.errors import ConfigError, unknown_key
 from pic4rl_sim import params_file
 from pic4rl_sim.schema import help_text, param_names, specs
 
-from . import runs
-from .config import (
+from pic4rl_agents import rundir
+from pic4rl_agents.config import (
     ENV_NODE,
     NODES,
     SIM_NODE,
@@ -22,8 +22,8 @@ from .config import (
     TrainConfig,
     run_config,
 )
-from .overrides import check_overrides, parse_overrides
-from .rosargs import RosArgs
+from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.rosargs import RosArgs
 
 DESCRIPTION = ("pic4rl-train: the training node. It owns the env (the paper's "
                "training(env(Node))) and trains an SB3 agent on it, with checkpoints, resume, "
@@ -90,16 +90,16 @@ def _overrides(args: argparse.Namespace, ros: RosArgs) -> dict[str, dict[str, An
     return {TRAINER_NODE: train, ENV_NODE: env, SIM_NODE: sim}
 
 
-def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, runs.Resume | None]:
+def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, rundir.Resume | None]:
     """The run's config from params files, -p items and the flags (in that order), and the
     checkpoint to resume from; each file is read once."""
     overrides = _overrides(args, ros)
-    resume = runs.find_resume(args.resume) if args.resume else None
-    latest = runs.run_config_file(resume.run_dir) if resume is not None else None
+    resume = rundir.find_resume(args.resume) if args.resume else None
+    latest = rundir.run_config_file(resume.run_dir) if resume is not None else None
     files = list(ros.params_files)
     if not files and resume is not None:
         if latest is None:
-            raise ConfigError(f"--resume {args.resume}: no {runs.CONFIG} in {resume.run_dir}; "
+            raise ConfigError(f"--resume {args.resume}: no {rundir.CONFIG} in {resume.run_dir}; "
                               "give the params file with --ros-args --params-file FILE")
         files = [str(latest)]
     if not files:

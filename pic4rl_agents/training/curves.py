@@ -3,7 +3,7 @@ and its moving average, from the run's Monitor CSVs, one per env), and the evalu
 several runs in one figure (eval success against the clock and against env steps, from their
 ``evaluations.csv``), so that two recipes compare on one plot::
 
-    python -m pic4rl_agents.curves runs/td3_lidar sac=runs/sac_lidar -o curves.png
+    python -m pic4rl_agents.training.curves runs/td3_lidar sac=runs/sac_lidar -o curves.png
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from pic4rl_bridge.errors import ConfigError
 
 from pic4rl_metrics import atomic
 
-from . import runs
+from pic4rl_agents import rundir
 
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:
@@ -70,7 +70,7 @@ EVAL_METRICS = ("success_rate", "mean_reward", "mean_length")
 
 
 def eval_table(path: str | Path) -> pd.DataFrame:
-    """One ``evaluations.csv`` (``pic4rl_agents.callbacks.CSV_COLUMNS``)."""
+    """One ``evaluations.csv`` (``pic4rl_agents.training.callbacks.CSV_COLUMNS``)."""
     path = Path(path)
     try:
         df = pd.read_csv(path)
@@ -88,8 +88,8 @@ def eval_curves(source: str | Path, label: str | None = None) -> dict[str, pd.Da
     clock starts at 0), by label (``label``, else the run's name)."""
     path = Path(source)
     if path.is_file():
-        return {label or runs.run_of_evaluations(path): eval_table(path)}
-    files = runs.evaluation_files(path)
+        return {label or rundir.run_of_evaluations(path): eval_table(path)}
+    files = rundir.evaluation_files(path)
     if not files:
         raise ConfigError(f"{path}: no evaluations (expected a run directory with "
                           "eval/<session>/evaluations.csv, or such a file)")
@@ -144,7 +144,7 @@ def save_eval_curves(curves: Mapping[str, pd.DataFrame], out: Path, *,
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="python -m pic4rl_agents.curves",
+        prog="python -m pic4rl_agents.training.curves",
         description="Evaluation curves of several runs in one PNG: eval success against the "
                     "training wall-clock and against env steps.")
     parser.add_argument("runs", nargs="+", metavar="[LABEL=]PATH",

@@ -3,7 +3,7 @@ go), and the agents it names, each with its test env (``resolve_agents``).
 
 An agent's env is its training config, then the plan's params files key by key, then its
 overrides; a baseline's is the first agent's at the robot's full speed range, or the params
-files alone. All drive the same test episodes (``pic4rl_agents.tester`` says which).
+files alone. All drive the same test episodes (``pic4rl_agents.testing.tester`` says which).
 """
 
 from __future__ import annotations
@@ -21,13 +21,13 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim import params_file
 
-from . import runs
-from .config import ENV_NODE, NODES, RunConfig, run_config
+from pic4rl_agents import rundir
+from pic4rl_agents.config import ENV_NODE, NODES, RunConfig, run_config
 
 Sections = dict[str, dict[str, Any]]
 
 #: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
-DEFAULT_PAIRS = Path(__file__).resolve().parent / "data" / "goals_indoor_test.json"
+DEFAULT_PAIRS = Path(__file__).resolve().parents[1] / "data" / "goals_indoor_test.json"
 DEFAULT_PAIRS_WORLD = ("indoor", 0)  # the world and variant those pairs are in
 
 
@@ -79,15 +79,15 @@ def _agent_files(path: Path) -> tuple[Path, Path | None]:
     """The model zip and its run's config, from a directory or a zip (the config is looked
     for beside the zip and up to two folders above: checkpoints/, best/<session>/)."""
     if path.is_dir():
-        model = path / runs.MODEL
+        model = path / rundir.MODEL
         if not model.is_file():
-            raise ConfigError(f"--agent {path}: no {runs.MODEL} in it")
-        return model, runs.run_config_file(path)
+            raise ConfigError(f"--agent {path}: no {rundir.MODEL} in it")
+        return model, rundir.run_config_file(path)
     if path.is_file() and path.suffix == ".zip":
-        run_dir = runs.run_of(path)
-        return path, runs.run_config_file(run_dir) if run_dir is not None else None
+        run_dir = rundir.run_of(path)
+        return path, rundir.run_config_file(run_dir) if run_dir is not None else None
     raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
-                      f"{runs.MODEL} and {runs.CONFIG}, or a model .zip)")
+                      f"{rundir.MODEL} and {rundir.CONFIG}, or a model .zip)")
 
 
 def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
@@ -100,7 +100,7 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         path = Path(location if sep else item)
         model, config = _agent_files(path)
         if config is None and not plan.params_files:
-            raise ConfigError(f"--agent {path}: no {runs.CONFIG} beside the model; give the "
+            raise ConfigError(f"--agent {path}: no {rundir.CONFIG} beside the model; give the "
                               "env with --ros-args --params-file FILE and --algorithm")
         own = params_file.load([config], NODES) if config else {}
         sources = ([str(config)] if config else []) + list(plan.params_files)

@@ -21,8 +21,8 @@ from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_sim.schema import to_params
 
-from .config import CurriculumConfig, EvalConfig
-from .curriculum import STAGE_KEY, Curriculum
+from pic4rl_agents.config import CurriculumConfig, EvalConfig
+from pic4rl_agents.training.curriculum import STAGE_KEY, Curriculum
 
 #: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
 INFO_KEYWORDS = ("is_success", "outcome")

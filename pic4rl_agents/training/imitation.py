@@ -38,7 +38,7 @@ from pic4rl_bridge.planner import PlannerController
 from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
 
-from .config import ImitationConfig
+from pic4rl_agents.config import ImitationConfig
 
 log = logging.getLogger(__name__)
 

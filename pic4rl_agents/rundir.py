@@ -11,7 +11,7 @@
 A session is one ``pic4rl-train`` process on the run: 0, then one more per resume. Files that
 every session writes anew (``config``, ``summary``) are named after it (``session_file``):
 session 1 writes ``config-2.yaml`` and ``summary-2.yaml``, and nothing is overwritten.
-Every file is written whole or not at all (``pic4rl_agents.atomic``).
+Every file is written whole or not at all (``pic4rl_metrics.atomic``).
 """
 
 from __future__ import annotations

@@ -21,8 +21,8 @@ from tqdm import tqdm
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 
 from pic4rl_metrics import atomic
-from .curves import save_reward_curve
-from .runs import EVALUATIONS
+from pic4rl_agents.training.curves import save_reward_curve
+from pic4rl_agents.rundir import EVALUATIONS
 
 
 class ProgressCallback(BaseCallback):

@@ -14,8 +14,8 @@ from typing import Any
 
 import optuna
 
-from .algorithm_table import ALGORITHM_TABLE
-from .config import RunConfig
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.config import RunConfig
 
 log = logging.getLogger(__name__)
 

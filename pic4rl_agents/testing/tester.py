@@ -21,7 +21,7 @@ testing.
 Bags go to ``<bags>/<run>/<agent>/episode_NNNN/`` (with ``--video``, each episode's video
 beside it, ``episode_NNNN.mp4``, drawn from the bag by ``pic4rl_metrics``); the table is
 ``pic4rl_metrics``'s own (``pic4rl-metrics compare`` on those bags prints the same). The
-command line builds a ``TestPlan``; ``run_test(plan)`` does the test and returns a
+command line builds a ``TestPlan``; ``drive_and_judge(plan)`` does the test and returns a
 ``TestResult``.
 """
 
@@ -49,12 +49,12 @@ from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic
 
-from . import runs
-from .config import ENV_NODE, SIM_NODE
-from .overrides import check_overrides, parse_overrides
-from .console import console_logging
-from .rosargs import RosArgs, no_sim_hint, split_ros_args
-from .testplan import AgentSpec, TestPlan, recorded, resolve_agents
+from pic4rl_agents import rundir
+from pic4rl_agents.config import ENV_NODE, SIM_NODE
+from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.console import console_logging
+from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_agents.testing.plan import AgentSpec, TestPlan, recorded, resolve_agents
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -83,7 +83,7 @@ class Policy:
         self.model = None
         self.controller = None
         if spec.model is not None:
-            from .algorithms import check_spaces, load_model
+            from pic4rl_agents.models.algorithms import check_spaces, load_model
 
             self.model = load_model(spec.model, spec.run.train.algorithm)
             check_spaces(self.model.observation_space, self.model.action_space, env,
@@ -106,7 +106,7 @@ class Policy:
         return self.controller.action(env.frame)
 
 
-def run_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> list[str]:
+def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> list[str]:
     """Drive ``episodes`` episodes of ``spec``, recorded; their outcomes in order."""
     from tqdm import tqdm
 
@@ -178,7 +178,7 @@ def _check_video() -> None:
         raise ConfigError(f"--video: {err}") from err
 
 
-def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestResult:
+def drive_and_judge(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestResult:
     """Drive every agent and baseline of ``plan`` (``agents``: as ``resolve_agents(plan)``
     gave them, when resolved already) on the same episodes, each recorded to a bag in a new
     ``<bags>/<run>`` (claimed atomically; removed again when an agent is refused before its
@@ -193,7 +193,7 @@ def run_test(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -> TestR
     outcomes: dict[str, list[str]] = {}
     try:
         for spec in specs:
-            outcomes[spec.name] = run_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
+            outcomes[spec.name] = drive_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
                                             progress=plan.progress)
             headline, words = TASKS[spec.run.env.task].headline
             log.info("%s: %d/%d %s", spec.name, outcomes[spec.name].count(headline),
@@ -287,7 +287,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         plan = build_plan(args, ros)
         agents = resolve_agents(plan)
         with console_logging(__name__):
-            result = run_test(plan, agents)
+            result = drive_and_judge(plan, agents)
     except TransportError as err:
         env = agents[0].run.env if agents else None
         print(f"pic4rl-test: {err}\n{no_sim_hint('test', env)}", file=sys.stderr)

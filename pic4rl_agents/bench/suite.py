@@ -40,8 +40,8 @@ from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.schema import read_yaml
 
-from .config import SIM_NODE
-from .testplan import DEFAULT_PAIRS, TestPlan, resolve_agents
+from pic4rl_agents.config import SIM_NODE
+from pic4rl_agents.testing.plan import DEFAULT_PAIRS, TestPlan, resolve_agents
 
 SUITE_KEYS = ("suite", "bags", "transport", "retries", "table", "tasks")
 #: The results table's layouts (``benchtable.LAYOUTS``): the paper's columns, or BARN's.

@@ -28,11 +28,11 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_sim import params_file
 
-from .envs import env_namespace
+from pic4rl_agents.training.envs import env_namespace
 from .rosargs import RosArgs, split_ros_args
 from .simproc import start_sim, stop_group
 
-COMMANDS = {"train": "pic4rl_agents.train", "test": "pic4rl_agents.tester"}
+COMMANDS = {"train": "pic4rl_agents.training.train", "test": "pic4rl_agents.testing.tester"}
 STOP_TIMEOUT_S = 30.0  # a trainer saving its replay buffer may need a while
 
 
@@ -40,13 +40,13 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
     """The env the child will drive (its sim section, its ROS domain), and its number of
     envs."""
     if command == "train":
-        from .trainargs import build_parser, resolve
+        from pic4rl_agents.training.args import build_parser, resolve
 
         run, _ = resolve(build_parser().parse_args(plain), ros)
         return run.env, run.train.n_envs
-    from .tester import build_parser as test_parser
-    from .tester import build_plan
-    from .testplan import first_env
+    from pic4rl_agents.testing.tester import build_parser as test_parser
+    from pic4rl_agents.testing.tester import build_plan
+    from pic4rl_agents.testing.plan import first_env
 
     return first_env(build_plan(test_parser().parse_args(plain), ros)), 1
 

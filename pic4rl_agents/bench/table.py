@@ -28,7 +28,7 @@ from pic4rl_metrics.layouts import render_rows
 from pic4rl_metrics.report import plain_text
 from pic4rl_metrics.results import TABLE1_COLUMNS
 
-from .suite import Cell, Suite
+from pic4rl_agents.bench.suite import Cell, Suite
 
 ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
 METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
@@ -100,7 +100,7 @@ def _header(layout: Layout) -> tuple[str, ...]:
     return (*ROW_KEYS, "n", *rates, *means, "status")
 
 
-def _row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
+def _table_row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
          episodes: pd.DataFrame) -> list[str | None]:
     """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals)."""
     cells: list[str | None] = list(key.values())
@@ -142,7 +142,7 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
     out = []
     for key, (row, errs) in rows.items():
         stats = agg.loc[key] if agg is not None and key in agg.index else None
-        out.append(_row(row, stats, "; ".join(errs), layout,
+        out.append(_table_row(row, stats, "; ".join(errs), layout,
                         groups.get(key, pd.DataFrame(columns=["success"]))))
     return header, out, bad
 
@@ -175,7 +175,7 @@ def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]],
     return boards
 
 
-def comparison_figure(task: str, header: Sequence[str],
+def success_figure(task: str, header: Sequence[str],
                       rows: Sequence[Sequence[str | None]]) -> Figure:
     """One task's rows as bars of their success rate with its Wilson 95 % interval (a failed
     or unjudged row is an empty bar, labelled so)."""
@@ -223,7 +223,7 @@ def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
         files.append(_report(suite, judged[2]))
     files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
               for task, text in leaderboards(header, rows, LAYOUTS[suite.table]).items()]
-    files += [save_figure(comparison_figure(task, header, rows),
+    files += [save_figure(success_figure(task, header, rows),
                           suite.root / f"comparison_{task}.png", overwrite=True)
               for task in dict.fromkeys(r[0] for r in rows)]
     return SuiteTable(tuple(header), tuple(tuple(r) for r in rows), tuple(files), bad)

@@ -1,5 +1,5 @@
-"""One cell of a benchmark suite, resumable: ``run_cell`` drives only the episodes whose bags
-are not finished yet, through the tester (``resolve_agents``, ``run_agent``).
+"""One cell of a benchmark suite, resumable: ``drive_cell`` drives only the episodes whose bags
+are not finished yet, through the tester (``resolve_agents``, ``drive_agent``).
 
 A cell's bags are ``<suite root>/<cell>/<agent>/episode_NNNN/``. A bag is finished when its
 ``metadata.yaml`` is there (the recorder writes it on close). A worker killed mid-episode
@@ -28,8 +28,8 @@ from pic4rl_metrics import atomic
 from pic4rl_metrics.inputs import METADATA
 from pic4rl_sim import params_file
 
-from .suite import Cell
-from .testplan import AgentSpec, TestPlan, resolve_agents
+from pic4rl_agents.bench.suite import Cell
+from pic4rl_agents.testing.plan import AgentSpec, TestPlan, resolve_agents
 
 DONE = "cell.json"  # a finished cell's marker
 ERROR = "cell.error"  # the last attempt's error, in one line
@@ -120,11 +120,11 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
            domain: int) -> None:
     """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
     drives sim nodes."""
-    from .simproc import start_sim, stop_group
-    from .tester import run_agent
+    from pic4rl_agents.simproc import start_sim, stop_group
+    from pic4rl_agents.testing.tester import drive_agent
 
     if cell.transport != "ros":
-        run_agent(spec, episodes=episodes, seed=seed, progress=False)
+        drive_agent(spec, episodes=episodes, seed=seed, progress=False)
         return
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
            os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
@@ -132,15 +132,15 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
                                  params_file.dump({"/**": spec.run.env.sim_params}))
     sim = start_sim(["--params-file", str(sim_file)], env)
     try:
-        run_agent(spec, episodes=episodes, seed=seed, progress=False)
+        drive_agent(spec, episodes=episodes, seed=seed, progress=False)
     finally:
         stop_group(sim, 10.0)
 
 
-def run_cell(cell: Cell, root: Path) -> str:
+def drive_cell(cell: Cell, root: Path) -> str:
     """Drive what is missing of ``cell`` and mark it done; ``"skipped"`` when it was done
     already, else ``"done"``. Errors propagate (the caller retries)."""
-    from .simproc import domain_lease
+    from pic4rl_agents.simproc import domain_lease
 
     current = state(root, cell)
     if current.done:
