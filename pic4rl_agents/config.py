@@ -147,7 +147,7 @@ class CheckpointConfig:
 
 @dataclass(frozen=True)
 class ImitationConfig:
-    """Expert-guided training before RL (``pic4rl_agents.training.imitation``): behaviour cloning from
+    """Expert-guided training before RL (``pic4rl_agents.training.imitation``): cloning
     ``bc_steps`` env steps the expert drives, then ``dagger_rounds`` rounds of DAgger (the
     student drives ``dagger_steps`` env steps, the expert labels every state, the labels are
     aggregated and the actor regressed on all of them), then RL from the imitation-initialised

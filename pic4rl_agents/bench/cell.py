@@ -28,7 +28,7 @@ from pic4rl_metrics import atomic
 from pic4rl_metrics.inputs import METADATA
 from pic4rl_sim import params_file
 
-from pic4rl_agents.bench.suite import Cell
+from .suite import Cell
 from pic4rl_agents.testing.plan import AgentSpec, TestPlan, resolve_agents
 
 DONE = "cell.json"  # a finished cell's marker

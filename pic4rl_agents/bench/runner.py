@@ -29,9 +29,9 @@ from typing import Any
 from pic4rl_bridge.errors import BridgeError, ConfigError
 from pic4rl_metrics import atomic
 
-from pic4rl_agents.bench import cell as bench_cell
-from pic4rl_agents.bench.table import SuiteTable, write_results
-from pic4rl_agents.bench.suite import Cell, Suite, load_suite
+from . import cell as bench_cell
+from .table import SuiteTable, write_results
+from .suite import Cell, Suite, load_suite
 
 log = logging.getLogger(__name__)
 POLL_S = 0.5

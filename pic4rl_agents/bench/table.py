@@ -28,7 +28,7 @@ from pic4rl_metrics.layouts import render_rows
 from pic4rl_metrics.report import plain_text
 from pic4rl_metrics.results import TABLE1_COLUMNS
 
-from pic4rl_agents.bench.suite import Cell, Suite
+from .suite import Cell, Suite
 
 ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
 METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")

@@ -1,6 +1,7 @@
 """The algorithms, each declared once: its SB3 class, whether it is off-policy, its search space
 and the keyword groups ``new_model`` gives it. ``TrainConfig``'s ``Algorithm`` and
-``OFF_POLICY``, ``pic4rl_agents.models.algorithms.ALGORITHMS`` and ``pic4rl-tune``'s sampler read it.
+``OFF_POLICY``, ``pic4rl_agents.models.algorithms.ALGORITHMS`` and ``pic4rl-tune``'s sampler
+read it.
 
 Light on purpose: ``pic4rl_agents.config`` imports it for ``--help`` and config checks, so a
 class is named by its import path, imported only when a model is built or loaded.

@@ -1,5 +1,5 @@
-"""The SB3 classes of the algorithm table (``pic4rl_agents.models.algorithm_table``), with atomic saves
-and ε-greedy on the off-policy ones, and their networks.
+"""The SB3 classes of the algorithm table (``pic4rl_agents.models.algorithm_table``), with
+atomic saves and ε-greedy on the off-policy ones, and their networks.
 
 ``new_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
@@ -24,10 +24,10 @@ from torch import nn
 from pic4rl_bridge.errors import ConfigError
 
 from pic4rl_metrics.atomic import replacing
-from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
+from .algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
 from pic4rl_agents.config import TrainConfig
-from pic4rl_agents.models.exploration import EpsilonGreedy
-from pic4rl_agents.models.extractors import DepthGoalExtractor
+from .exploration import EpsilonGreedy
+from .extractors import DepthGoalExtractor
 
 
 class AtomicSave:

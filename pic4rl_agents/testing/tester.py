@@ -49,12 +49,11 @@ from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic
 
-from pic4rl_agents import rundir
 from pic4rl_agents.config import ENV_NODE, SIM_NODE
 from pic4rl_agents.overrides import check_overrides, parse_overrides
 from pic4rl_agents.console import console_logging
 from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
-from pic4rl_agents.testing.plan import AgentSpec, TestPlan, recorded, resolve_agents
+from .plan import AgentSpec, TestPlan, recorded, resolve_agents
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -5,11 +5,14 @@ stop on an evaluation's success or the clock."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
+import signal
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +24,7 @@ from tqdm import tqdm
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 
 from pic4rl_metrics import atomic
-from pic4rl_agents.training.curves import save_reward_curve
+from .curves import save_reward_curve
 from pic4rl_agents.rundir import EVALUATIONS
 
 
@@ -225,9 +228,29 @@ class WallClockLimit(BaseCallback):
         return time.perf_counter() - self.start < self.limit_s
 
 
+@contextlib.contextmanager
+def stop_on_signal(stop: threading.Event) -> Iterator[None]:
+    """Ctrl-C and SIGTERM (``pic4rl-run`` stopping us, a cluster's scheduler) end training the
+    way Ctrl-C does: the model and replay buffer are saved first. The signal sets ``stop``
+    and raises ``KeyboardInterrupt``; Python drops an exception raised while a weakref
+    callback or ``__del__`` runs (drawing the reward curve makes many), so ``StopWhenSet``
+    ends training at the next step from the flag as well. Setting the SIGINT handler also
+    undoes the ignored SIGINT that a process started in the background by a shell inherits."""
+    def handler(signum: int, frame: object) -> None:
+        stop.set()
+        raise KeyboardInterrupt
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
 class StopWhenSet(BaseCallback):
     """Ends training at the next step once ``event`` is set: a stop signal that Python could
-    not raise as ``KeyboardInterrupt`` (see ``train.stop_on_signal``) still stops."""
+    not raise as ``KeyboardInterrupt`` (see ``stop_on_signal``) still stops."""
 
     def __init__(self, event: threading.Event) -> None:
         super().__init__()
@@ -257,7 +280,7 @@ class StopAfterEval(BaseCallback):
 
 
 def stopped_by_signal(err: BaseException, stop: threading.Event) -> bool:
-    """Whether ``err`` is ``train.stop_on_signal``'s interrupt: the ``KeyboardInterrupt``,
+    """Whether ``err`` is ``stop_on_signal``'s interrupt: the ``KeyboardInterrupt``,
     or, when it lands inside an extension (rclpy deserializing a message), the error that
     extension turns it into, chained from it."""
     if isinstance(err, KeyboardInterrupt):

@@ -22,7 +22,7 @@ from pic4rl_bridge.env import NavEnv
 from pic4rl_sim.schema import to_params
 
 from pic4rl_agents.config import CurriculumConfig, EvalConfig
-from pic4rl_agents.training.curriculum import STAGE_KEY, Curriculum
+from .curriculum import STAGE_KEY, Curriculum
 
 #: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
 INFO_KEYWORDS = ("is_success", "outcome")

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import signal
 import sys
 import threading
 import time
@@ -35,29 +34,9 @@ from pic4rl_agents import rundir
 from pic4rl_agents.config import RunConfig
 from pic4rl_agents.console import console_logging
 from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
-from pic4rl_agents.training.args import build_parser, resolve
+from .args import build_parser, resolve
 
 log = logging.getLogger(__name__)
-
-
-@contextlib.contextmanager
-def stop_on_signal(stop: threading.Event) -> Iterator[None]:
-    """Ctrl-C and SIGTERM (``pic4rl-run`` stopping us, a cluster's scheduler) end training the
-    way Ctrl-C does: the model and replay buffer are saved first. The signal sets ``stop``
-    and raises ``KeyboardInterrupt``; Python drops an exception raised while a weakref
-    callback or ``__del__`` runs (drawing the reward curve makes many), so ``StopWhenSet``
-    ends training at the next step from the flag as well. Setting the SIGINT handler also
-    undoes the ignored SIGINT that a process started in the background by a shell inherits."""
-    def handler(signum: int, frame: object) -> None:
-        stop.set()
-        raise KeyboardInterrupt
-
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGTERM, signal.SIGINT)}
-    try:
-        yield
-    finally:
-        for signum, old in previous.items():
-            signal.signal(signum, old)
 
 
 @contextlib.contextmanager
@@ -85,8 +64,8 @@ class Trainer:
     """One training run: envs, model, callbacks; ``run()`` trains and saves, and returns the
     run directory."""
 
-    def __init__(self, run: RunConfig, *, resume: rundir.Resume | None = None, progress: bool = True,
-                 ros: RosArgs | None = None, after_eval: Any = None) -> None:
+    def __init__(self, run: RunConfig, *, resume: rundir.Resume | None = None,
+                 progress: bool = True, ros: RosArgs | None = None, after_eval: Any = None) -> None:
         """``after_eval``: an SB3 callback run after each evaluation (its ``parent`` is the
         ``SeededEvalCallback``); returning False ends the training, which is then saved."""
         self.config = run
@@ -107,7 +86,7 @@ class Trainer:
         """Train this session (resumed where the run was), save, and close what it opened."""
         import torch
 
-        from pic4rl_agents.training.callbacks import StopWhenSet
+        from .callbacks import StopWhenSet
 
         cfg = self.config.train
         session = self._session_env()
@@ -138,8 +117,8 @@ class Trainer:
         has imitated already); False when a callback (the clock) ended training during it."""
         from stable_baselines3.common.callbacks import CallbackList
 
-        from pic4rl_agents.training.callbacks import stopped_by_signal
-        from pic4rl_agents.training.imitation import DecayingCloning, Imitation
+        from .callbacks import stop_on_signal, stopped_by_signal
+        from .imitation import DecayingCloning, Imitation
 
         cfg = self.config.train
         if not cfg.imitation.enabled or self.resume is not None:
@@ -168,7 +147,7 @@ class Trainer:
         """This session's env and seed; None when the resumed model has trained enough.
         A resume goes on where the run was: the curriculum's episodes already driven are not
         repeated, and the session's seed gives new episodes."""
-        from pic4rl_agents.training.curves import episode_table
+        from .curves import episode_table
 
         cfg, env_cfg = self.config.train, self.config.env
         if self.resume is None:
@@ -199,7 +178,7 @@ class Trainer:
 
     def _training_env(self, stack: contextlib.ExitStack, env_cfg: EnvConfig, seed: int,
                       node: Any) -> Any:
-        from pic4rl_agents.training.envs import make_vec_env
+        from .envs import make_vec_env
 
         cfg = self.config.train
         env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed, reward_scale=cfg.reward_scale,
@@ -235,7 +214,8 @@ class Trainer:
     def _callbacks(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                    started: float) -> list[Any]:
         """The reward curve, checkpoints, evaluation, wall-clock limit and progress bar."""
-        from pic4rl_agents.training.callbacks import Checkpoints, ProgressCallback, RewardCurveCallback, WallClockLimit
+        from .callbacks import (Checkpoints, ProgressCallback, RewardCurveCallback,
+                                WallClockLimit)
 
         cfg = self.config.train
         every = max(cfg.checkpoint.interval_steps // cfg.n_envs, 1)
@@ -250,8 +230,8 @@ class Trainer:
         if cfg.eval.enabled:
             callbacks.append(self._evaluation(stack, env_cfg, started))
             if cfg.eval.video_episodes:
-                from pic4rl_agents.training.envs import eval_env_config
-                from pic4rl_agents.training.videos import EvalVideoCallback
+                from .envs import eval_env_config
+                from .videos import EvalVideoCallback
 
                 callbacks.append(EvalVideoCallback(
                     callbacks[-1], eval_env_config(env_cfg, cfg.eval),
@@ -266,8 +246,8 @@ class Trainer:
     def _evaluation(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                     started: float) -> Any:
         """The seeded evaluation on its own in-process env."""
-        from pic4rl_agents.training.callbacks import SeededEvalCallback
-        from pic4rl_agents.training.envs import eval_env_config, make_vec_env
+        from .callbacks import SeededEvalCallback
+        from .envs import eval_env_config, make_vec_env
 
         cfg = self.config.train
         eval_env = make_vec_env(eval_env_config(env_cfg, cfg.eval), seed=cfg.eval.seed)
@@ -283,7 +263,7 @@ class Trainer:
 
     def _learn(self, model: Any, callbacks: list[Any]) -> None:
         """Train up to ``max_steps``; Ctrl-C or SIGTERM ends it (the caller saves)."""
-        from pic4rl_agents.training.callbacks import stopped_by_signal
+        from .callbacks import stop_on_signal, stopped_by_signal
 
         cfg = self.config.train
         with stop_on_signal(self._stop):
@@ -308,7 +288,7 @@ class Trainer:
     def _save_if_trained(self, model: Any, started: float, start_steps: int) -> None:
         """The final (or interrupted) model, its replay buffer, the curve and a summary, once
         this session has trained at all."""
-        from pic4rl_agents.training.curves import episode_table, save_reward_curve
+        from .curves import episode_table, save_reward_curve
 
         if model.num_timesteps <= start_steps:
             return

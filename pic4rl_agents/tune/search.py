@@ -38,9 +38,9 @@ from pic4rl_agents.training.callbacks import SeededEvalCallback
 from pic4rl_agents.config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
 from pic4rl_agents.overrides import check_overrides, parse_overrides
 from pic4rl_agents.console import console_logging
-from pic4rl_agents.tune.settings import TrialSeeded, TuneSettings
-from pic4rl_agents.tune.space import Fixing
-from pic4rl_agents.tune.summary import log_trial, write_summary
+from .settings import TrialSeeded, TuneSettings
+from .space import Fixing
+from .summary import log_trial, write_summary
 
 OBJECTIVES = ("success_rate", "mean_reward")
 

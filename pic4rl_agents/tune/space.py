@@ -1,6 +1,7 @@
 """The search space of ``pic4rl-tune``: hyperparameter samplers as RL Zoo's, each an Optuna
-trial and the run's ``n_envs`` → dotted trainer parameters; ``pic4rl_agents.models.algorithm_table``
-gives each algorithm its own (the pair samplers are ``pic4rl_sim.engine.sampling``'s).
+trial and the run's ``n_envs`` → dotted trainer parameters;
+``pic4rl_agents.models.algorithm_table`` gives each algorithm its own (the pair samplers are
+``pic4rl_sim.engine.sampling``'s).
 
 ``Fixing`` draws nothing for a parameter that ``--hyperparams`` fixes (the draws' seeds:
 ``pic4rl_agents.tune.settings.TrialSeeded``)."""

@@ -18,7 +18,7 @@ from pic4rl_metrics import atomic
 if TYPE_CHECKING:
     import pandas as pd
 
-    from pic4rl_agents.tune.settings import TuneSettings
+    from .settings import TuneSettings
 
 log = logging.getLogger(__name__)
 trial_log = logging.getLogger("pic4rl_agents.tune.search")  # the trials' lines, on stdout

@@ -36,7 +36,7 @@ from agents_helpers import (
 
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import load_model
-from pic4rl_agents.training.callbacks import StopWhenSet, stopped_by_signal
+from pic4rl_agents.training.callbacks import StopWhenSet, stop_on_signal, stopped_by_signal
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.models.exploration import epsilon_at
 from pic4rl_agents.rundir import find_resume
@@ -337,7 +337,7 @@ def test_a_stop_signal_is_an_interrupt_while_training(signum: int) -> None:
     previous = signal.getsignal(signum)
     stop = threading.Event()
     with pytest.raises(KeyboardInterrupt):
-        with train.stop_on_signal(stop):
+        with stop_on_signal(stop):
             os.kill(os.getpid(), signum)
             time.sleep(5)  # the handler runs at once; this is never reached in full
     assert stop.is_set()
@@ -379,7 +379,7 @@ def test_a_stop_that_python_drops_still_ends_training() -> None:
         os.kill(os.getpid(), signal.SIGINT)
         time.sleep(0.5)  # the KeyboardInterrupt is raised here, and dropped
 
-    with train.stop_on_signal(stop):
+    with stop_on_signal(stop):
         owner = Owner()
         ref = weakref.ref(owner, on_collect)
         del owner  # runs on_collect; no exception leaves it
