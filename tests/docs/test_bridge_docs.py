@@ -5,7 +5,7 @@ documented. The envs run in process for two steps each; no ROS graph is started.
 
 After changing a parameter, print the table's first three columns and update docs/bridge.md:
 
-    PYTHONPATH=tests .venv/bin/python tests/bridge/test_bridge_docs.py
+    PYTHONPATH=tests .venv/bin/python tests/docs/test_bridge_docs.py
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ robot is documented, and the tables generated from the code are current. Starts 
 After changing a parameter, a robot or an interface, print the tables and paste them into
 docs/sim.md:
 
-    .venv/bin/python tests/sim/test_docs.py
+    .venv/bin/python tests/docs/test_sim_docs.py
 """
 
 from __future__ import annotations
@@ -179,7 +179,7 @@ def test_every_parameter_is_named_in_the_doc(doc):
 def test_the_parameter_tables_are_current(doc):
     stale = [row for rows in parameter_tables().values() for row in _missing(doc, rows)]
     assert not stale, ("docs/sim.md's parameter tables differ from the code; regenerate them "
-                       f"with `python tests/sim/test_docs.py`. Rows not found: {stale}")
+                       f"with `python tests/docs/test_sim_docs.py`. Rows not found: {stale}")
 
 
 def test_every_topic_and_service_of_the_node_is_in_the_doc(doc):
@@ -196,7 +196,7 @@ def test_the_interface_table_is_current(doc):
     stale = [name for name, cells in rows.items()
              if cells[:FRAME] + cells[FRAME + 1:] != expected[name]]
     assert not stale, ("docs/sim.md's interface table differs from interfaces.py; regenerate "
-                       f"it with `python tests/sim/test_docs.py`. Rows: {stale}")
+                       f"it with `python tests/docs/test_sim_docs.py`. Rows: {stale}")
 
 
 def test_every_config_file_is_in_the_doc(doc):
@@ -214,7 +214,7 @@ def test_every_built_in_robot_and_world_is_in_the_doc(doc):
 def test_the_robot_tables_are_current(doc):
     stale = [row for rows in robot_tables().values() for row in _missing(doc, rows)]
     assert not stale, ("docs/sim.md's robot tables differ from robot_specs.py; regenerate them "
-                       f"with `python tests/sim/test_docs.py`. Rows not found: {stale}")
+                       f"with `python tests/docs/test_sim_docs.py`. Rows not found: {stale}")
 
 
 def test_the_doc_links_resolve(doc):

@@ -22,7 +22,7 @@ import yaml
 
 from pic4rl_agents.bench import runner as bench
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"
 RAY = Path(sys.executable).with_name("ray")
 

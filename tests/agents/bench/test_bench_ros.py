@@ -17,7 +17,7 @@ import yaml
 from pic4rl_agents import simproc
 
 pytestmark = pytest.mark.integration
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"
 
 

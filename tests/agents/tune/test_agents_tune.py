@@ -156,7 +156,7 @@ def test_ctrl_c_ends_the_study_in_one_line_with_exit_130(tmp_path: Path) -> None
     proc = subprocess.Popen(
         [sys.executable, "-m", "pic4rl_agents.tune.search", "--base", str(LIDAR_TD3), "--study-dir",
          str(tmp_path), "--n-trials", "1", *TINY_TRIAL, "--max-steps", "100000"],
-        env={**os.environ, "PYTHONPATH": str(Path(tune.__file__).parents[1])},
+        env={**os.environ, "PYTHONPATH": str(Path(tune.__file__).parents[2])},
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while not (tmp_path / "trials" / "trial_0" / "config.yaml").is_file():

@@ -24,7 +24,7 @@ from pic4rl_agents.bench.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics.aggregate import wilson_interval
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"
 
 

@@ -17,7 +17,7 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import compute
 from pic4rl_metrics.aggregate import bootstrap_interval, wilson_interval
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 SUITE, CI = REPO / "config" / "suite_barn.yaml", REPO / "config" / "suite_barn_ci.yaml"
 
 

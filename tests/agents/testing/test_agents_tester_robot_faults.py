@@ -16,7 +16,7 @@ from ros_helpers import SimProcess, next_domain, sim_env
 
 pytestmark = pytest.mark.integration
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 ROBOT = ROOT / "tests" / "bridge" / "fake_robot.py"
 SCAN = f"scan:{-math.pi!r}:{2 * math.pi / 360!r}:360"
 REAL_ROBOT = """nav_env:

@@ -8,7 +8,7 @@ training of a few dozen steps, resumed once, and a one-episode test, all in ``tm
 After changing a trainer parameter, print the table's first three columns and update
 docs/agents.md:
 
-    PYTHONPATH=tests .venv/bin/python tests/agents_docs/test_agents_docs.py
+    PYTHONPATH=tests .venv/bin/python tests/docs/test_agents_docs.py
 """
 
 from __future__ import annotations
