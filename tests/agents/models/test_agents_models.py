@@ -7,6 +7,7 @@ off-policy flag, and ``load_model``'s round trip and errors."""
 from __future__ import annotations
 
 import importlib
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from agents_helpers import CONFIG, DEPTH_TD3, LIDAR_TD3, TINY
+from agents_helpers import CONFIG, DEPTH_TD3, LIDAR_TD3, ROOT, TINY
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from torch import nn
 
@@ -286,3 +287,12 @@ def test_a_model_of_another_algorithm_is_refused_when_attached_to_an_env(
 def test_a_model_of_another_algorithm_is_refused(saved_td3: Path, algorithm: str) -> None:
     with pytest.raises(ConfigError, match=rf"{saved_td3}: cannot load it as a {algorithm}"):
         load_model(saved_td3, algorithm)
+
+
+def test_a_depth_model_saved_before_the_sub_packages_loads_with_its_extractor() -> None:
+    """SB3 pickles ``policy_kwargs`` by reference: the shipped depth checkpoints name
+    ``pic4rl_agents.extractors.DepthGoalExtractor``, the path before ``models/`` existed."""
+    model_zip = ROOT / "checkpoints" / "td3_depth" / "model.zip"
+    assert b"pic4rl_agents.extractors" in zipfile.ZipFile(model_zip).read("data")
+    model = load_model(model_zip, "td3")
+    assert isinstance(model.policy.actor.features_extractor, DepthGoalExtractor)
