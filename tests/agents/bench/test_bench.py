@@ -190,7 +190,7 @@ def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     assert all((suite.root / c.name / benchcell.DONE).is_file() for c in suite.cells)
 
 
-def test_the_comparison_figure_draws_each_rows_success_and_its_wilson_interval() -> None:
+def test_the_success_figure_draws_each_rows_success_and_its_wilson_interval() -> None:
     header = ("task", "agent", "world", "robot", "pairs", "n", "success", "success 95% CI",
               "status")
     rows = [("goto", "a", "indoor:0", "jackal", "paper", "2", "1/2", None, "ok"),
