@@ -145,6 +145,7 @@ def _children(pid: int) -> list[int]:
     return [int(p) for p in text.split()]
 
 
+@pytest.mark.heavy
 def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> None:
     suite_file = _files(tmp_path, steps=120, baselines=["dwa"], pairs=[
         {"file": str(PAIRS), "episodes": 4}, {"random": 3, "kind": "paper", "seed": 2}])
@@ -179,6 +180,7 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
     assert out.count("| goto | dwa |") == 2 and "failed" not in out
 
 
+@pytest.mark.heavy
 @pytest.mark.ray
 def test_cells_run_as_tasks_of_a_local_ray(tmp_path: Path) -> None:
     pytest.importorskip("ray")

@@ -56,6 +56,7 @@ def test_bad_table_and_world_group_keys_are_named(tmp_path: Path, change: dict,
     assert str(err.value).endswith(message)
 
 
+@pytest.mark.heavy
 def test_the_ci_suite_runs_in_process_into_barns_table(tmp_path: Path) -> None:
     suite = load_suite(CI, bags_dir=tmp_path)
     table = bench.bench_suite(suite, workers=2, local=True, progress=False)

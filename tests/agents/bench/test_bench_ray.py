@@ -101,6 +101,7 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
             return
 
 
+@pytest.mark.heavy
 @pytest.mark.ray
 def test_the_cluster_recipe_runs_a_suite_on_two_nodes(tmp_path: Path) -> None:
     """docs/bench.md's three commands (each node of one CPU and in a temp dir of its own,

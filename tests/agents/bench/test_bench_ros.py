@@ -53,6 +53,7 @@ def _domain_of(pid: int) -> int:
     return int(env["ROS_DOMAIN_ID"])
 
 
+@pytest.mark.heavy
 def test_two_ros_suites_hold_their_own_domains_and_a_killed_worker_takes_its_sim(
         tmp_path: Path, domain: int) -> None:
     (tmp_path / "tmp").mkdir()

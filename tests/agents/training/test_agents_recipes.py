@@ -96,6 +96,7 @@ def test_the_recipes_cover_both_sensors() -> None:
     assert {recipe(path).env.sensor for path in RECIPES} == {"lidar", "depth"}
 
 
+@pytest.mark.heavy
 @pytest.mark.slow
 @pytest.mark.parametrize("path", RECIPES, ids=lambda p: p.stem)
 def test_each_recipe_trains_in_process(path: Path, tmp_path: Path) -> None:
@@ -106,6 +107,7 @@ def test_each_recipe_trains_in_process(path: Path, tmp_path: Path) -> None:
     check_run(tmp_path / path.stem, path, n_envs=recipe(path).train.n_envs)
 
 
+@pytest.mark.heavy
 @pytest.mark.slow
 @pytest.mark.integration
 @pytest.mark.parametrize("path", RECIPES, ids=lambda p: p.stem)

@@ -102,6 +102,7 @@ def test_two_tiny_trials_one_pruned_share_a_sqlite_study(tmp_path: Path) -> None
     assert (study_dir / "eval_curves.png").is_file()
 
 
+@pytest.mark.heavy
 @pytest.mark.slow
 @pytest.mark.ray
 def test_trials_run_as_tasks_of_a_ray_cluster_sharing_the_study(tmp_path: Path) -> None:
