@@ -29,8 +29,10 @@ from pathlib import Path
 
 import yaml
 
-from pic4rl_agents import bench, benchtable
-from pic4rl_agents.suite import PairSet, load_suite
+from pic4rl_agents.bench import runner as bench
+
+from pic4rl_agents.bench import table as benchtable
+from pic4rl_agents.bench.suite import PairSet, load_suite
 
 SUITE = Path(__file__).resolve().parents[1] / "config" / "suite_barn.yaml"
 
@@ -61,7 +63,7 @@ def main() -> int:
         suite = dataclasses.replace(suite, cells=tuple(cells))
         episodes = len(cells) * args.runs
         start = time.perf_counter()
-        table = bench.run_suite(suite, workers=args.workers, local=True, progress=False)
+        table = bench.bench_suite(suite, workers=args.workers, local=True, progress=False)
         total = time.perf_counter() - start
         start = time.perf_counter()
         benchtable.build_rows(suite, {})

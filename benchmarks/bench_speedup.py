@@ -20,8 +20,8 @@ from pathlib import Path
 
 import yaml
 
-from pic4rl_agents.bench import run_suite
-from pic4rl_agents.suite import load_suite
+from pic4rl_agents.bench.runner import bench_suite
+from pic4rl_agents.bench.suite import load_suite
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
@@ -46,7 +46,7 @@ def _time(workers: int, args: argparse.Namespace) -> tuple[float, int]:
         suite = load_suite(_suite(Path(tmp), episodes=args.episodes, max_steps=args.max_steps))
         assert len(suite.cells) == 8
         start = time.perf_counter()
-        table = run_suite(suite, workers=workers, local=True, progress=False)
+        table = bench_suite(suite, workers=workers, local=True, progress=False)
         seconds = time.perf_counter() - start
         assert all(r[-1] == "ok" for r in table.rows), table.rows
         return seconds, sum(int(r[table.header.index("n")]) for r in table.rows)

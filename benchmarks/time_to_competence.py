@@ -2,7 +2,7 @@
 reaches ``--target`` (90 %) eval success on ``--eval-episodes`` (100) seeded test-kind pairs.
 
 The recipe (``--config``, default ``config/train_goto_lidar_td3.yaml``) trains in this process
-exactly as ``pic4rl-train`` trains it (``pic4rl_agents.train.Trainer``; imitation of the
+exactly as ``pic4rl-train`` trains it (``pic4rl_agents.training.train.Trainer``; imitation of the
 privileged planner included, whose labelling counts in the clock), with three changes
 that do not touch learning: no checkpoints, no progress bar, and no step limit (the clock
 decides: training stops at the first evaluation that reaches the target, or at the first one
@@ -34,11 +34,11 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from pic4rl_agents.callbacks import StopAfterEval
+from pic4rl_agents.training.callbacks import StopAfterEval
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
-from pic4rl_agents.curves import eval_curves
-from pic4rl_agents.train import Trainer
+from pic4rl_agents.training.curves import eval_curves
+from pic4rl_agents.training.train import Trainer
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "config" / "train_goto_lidar_td3.yaml"

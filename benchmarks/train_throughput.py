@@ -3,8 +3,8 @@
 One run, one task (goToPose with the Jackal's LiDAR in the seeded ``indoor`` world, the
 trainer's own file ``config/train_goto_lidar_td3.yaml``: nets [128, 128], batch 128, one torch
 thread), with the algorithm switched per case. For each of ``--algorithms`` (ddpg, td3, sac,
-ppo) it builds the model as ``pic4rl-train`` does (``pic4rl_agents.algorithms.build_model``
-on ``pic4rl_agents.envs.make_vec_env``) and times ``model.learn``:
+ppo) it builds the model as ``pic4rl-train`` does (``pic4rl_agents.models.algorithms.new_model``
+on ``pic4rl_agents.training.envs.make_vec_env``) and times ``model.learn``:
 
 - in-process, ``n_envs`` 1: the env's engine in this process;
 - ROS 2, ``n_envs`` 1: the env over a real ``pic4rl-sim`` process (lockstep), started as
@@ -49,9 +49,9 @@ import torch
 import yaml
 from _sim import stop_sim
 
-from pic4rl_agents.algorithms import build_model
+from pic4rl_agents.models.algorithms import new_model
 from pic4rl_agents.config import RunConfig, load_run_config
-from pic4rl_agents.envs import env_namespace, make_vec_env
+from pic4rl_agents.training.envs import env_namespace, make_vec_env
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "config" / "train_goto_lidar_td3.yaml"
@@ -158,7 +158,7 @@ def set_up(case: Case, sizes: Sizes) -> None:
         case.env.reset()
         env_steps(case, sizes.after_warmup)
         return
-    case.model = build_model(case.run.train, case.env)
+    case.model = new_model(case.run.train, case.env)
     if case.algorithm == "ppo":
         warm_up = case.run.train.ppo.n_steps * case.n_envs
     else:
@@ -243,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
     # SubprocVecEnv's workers fork from a server that imported these once (setup time only).
-    multiprocessing.set_forkserver_preload(["pic4rl_agents.envs"])
+    multiprocessing.set_forkserver_preload(["pic4rl_agents.training.envs"])
     cases = make_cases(args.algorithms, [a for a in args.nenvs2_ros if a in args.algorithms],
                        sizes)
     torch.set_num_threads(cases[0].run.train.torch_threads or torch.get_num_threads())

@@ -31,7 +31,7 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
-from .algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 
 #: ``trainer.algorithm``'s choices: the algorithm table's names.
 Algorithm = ParamEnum("Algorithm", [(name.upper(), name) for name in ALGORITHM_TABLE],
@@ -147,7 +147,7 @@ class CheckpointConfig:
 
 @dataclass(frozen=True)
 class ImitationConfig:
-    """Expert-guided training before RL (``pic4rl_agents.imitation``): behaviour cloning from
+    """Expert-guided training before RL (``pic4rl_agents.training.imitation``): cloning
     ``bc_steps`` env steps the expert drives, then ``dagger_rounds`` rounds of DAgger (the
     student drives ``dagger_steps`` env steps, the expert labels every state, the labels are
     aggregated and the actor regressed on all of them), then RL from the imitation-initialised

@@ -2,9 +2,10 @@
 
 It knows what no agent observes (the world's geometry), so it is the map-aware reference in
 the tables (what a planner with a known map, as nav2's, achieves) and the expert that labels
-states for imitation (``pic4rl_agents.imitation``). Its plan is ``pic4rl_sim``'s ``plan_path``
-(the shortest path with a clearance margin: the same plan the sim publishes on ``plan``), made
-again from the robot's position whenever the robot is more than ``replan_distance_m`` off it.
+states for imitation (``pic4rl_agents.training.imitation``). Its plan is ``pic4rl_sim``'s
+``plan_path`` (the shortest path with a clearance margin: the same plan the sim publishes on
+``plan``), made again from the robot's position whenever the robot is more than
+``replan_distance_m`` off it.
 It keeps to its plan until then: a route planned anew at every step flips between the two
 ways round an obstacle near the middle, and a student imitating those labels averages them
 and stalls (in a DAgger probe, such students reached 5 of 50 goals after two rounds, with 35

@@ -3,7 +3,7 @@
 - ``centerline``: the privileged follower. It reads the row's centre line (the world's lane
   the task judges by, or ``vineyard.centerline``) and pursues a point ``lookahead_m`` ahead on
   it. No agent sees that line: it is the reference for what the task allows, and the expert
-  that labels states for imitation (``pic4rl_agents.imitation``).
+  that labels states for imitation (``pic4rl_agents.training.imitation``).
 - ``row_follower``: the classical follower with no privileged information (Martini et al.
   2022 compare their agent with such a one). From the sensed points (the scan's, else the
   depth image's nearest pixel per column) it fits a line to the nearest row on each side, a

@@ -1,4 +1,4 @@
-"""What the docs-vs-code tests share (tests/bridge, tests/agents_docs): a config dataclass's
+"""What the docs-vs-code tests share (tests/docs): a config dataclass's
 parameter rows as the docs write them, and reading Markdown sections, tables and anchors."""
 
 from __future__ import annotations

@@ -21,10 +21,10 @@ from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.logger import configure
 
-from pic4rl_agents.algorithms import build_model
+from pic4rl_agents.models.algorithms import new_model
 from pic4rl_agents.config import load_run_config
-from pic4rl_agents.envs import eval_env_config, make_vec_env
-from pic4rl_agents.imitation import EXPERT, STUDENT, Imitation
+from pic4rl_agents.training.envs import eval_env_config, make_vec_env
+from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -39,7 +39,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     env = make_vec_env(run.env, n_envs=cfg.n_envs, seed=cfg.seed, vec_env="dummy",
                        reward_scale=cfg.reward_scale)
     evaluation = make_vec_env(eval_env_config(run.env, cfg.eval), seed=cfg.eval.seed)
-    model = build_model(cfg, env)
+    model = new_model(cfg, env)
     model.set_logger(configure(None, []))
     callback = CallbackList([])
     callback.init_callback(model)

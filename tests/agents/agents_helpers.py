@@ -38,11 +38,11 @@ EVAL_STEPS = 150
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 #: ``pic4rl-run``, as ``python -m`` (the console script runs the same ``main``).
-LAUNCHER = [sys.executable, "-m", "pic4rl_agents.launch"]
+LAUNCHER = [sys.executable, "-m", "pic4rl_agents.run"]
 #: Generous ROS waits: sims and trainers start slowly on a loaded machine.
 ROS_TIMEOUT_S = 60.0
 ROS_ARGS = ["-p", f"ros.timeout_s:={ROS_TIMEOUT_S}"]
-SIM, TRAINER = "pic4rl_sim.node", "pic4rl_agents.train"
+SIM, TRAINER = "pic4rl_sim.node", "pic4rl_agents.training.train"
 
 
 @dataclass(frozen=True)

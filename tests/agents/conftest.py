@@ -34,7 +34,7 @@ def trained_run(tmp_path_factory: pytest.TempPathFactory) -> TrainedRun:
     """``pic4rl-train`` in process on config/train_goto_lidar_td3.yaml: TD3, tiny nets, 300
     steps, checkpoints every 100 with replay buffers, an evaluation every 150, ε-greedy as
     shipped (0.2, decaying), TensorBoard on, episodes of at most 60 steps."""
-    from pic4rl_agents import train
+    from pic4rl_agents.training import train
 
     runs = tmp_path_factory.mktemp("runs")
     stderr = io.StringIO()

@@ -16,7 +16,7 @@ from agents_helpers import CONFIG, LIDAR_TD3
 from pic4rl_agents.config import RunConfig, TrainConfig, load_run_config, train_config_from_params
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.rosargs import RosArgs, split_ros_args
-from pic4rl_agents.trainargs import route_params
+from pic4rl_agents.training.args import route_params
 from pic4rl_bridge.errors import ConfigError
 
 SHIPPED = {
@@ -296,7 +296,8 @@ def test_a_commands_flag_inside_ros_args_is_refused_in_one_line(
         command: str, capsys: pytest.CaptureFixture[str]) -> None:
     """``--no-progress`` after ``--params-file FILE`` is inside the ROS segment: refused (exit
     2, one line saying where it belongs), never silently dropped; after ``--`` it counts."""
-    from pic4rl_agents import tester, train
+    from pic4rl_agents.testing import tester
+    from pic4rl_agents.training import train
 
     main = tester.main if command == "test" else train.main
     code = main(["--ros-args", "--params-file", "x.yaml", "--no-progress"])

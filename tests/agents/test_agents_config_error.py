@@ -15,7 +15,8 @@ import pic4rl_bridge.errors
 import pic4rl_metrics
 import pic4rl_metrics.errors
 import pic4rl_sim.errors
-from pic4rl_agents import tester, train
+from pic4rl_agents.testing import tester
+from pic4rl_agents.training import train
 
 # What the bag contract says of a bad fact (pic4rl_metrics.contract.Outcome.parse).
 MESSAGE = "outcome: 'won' is not an outcome; expected one of goal, collision, timeout"
@@ -43,7 +44,7 @@ def _raise(*_args, **_kwargs):
 @pytest.mark.bad_input
 def test_pic4rl_test_reports_the_metrics_config_error_in_one_line(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(tester, "run_test", _raise)
+    monkeypatch.setattr(tester, "drive_and_judge", _raise)
     code, out, err = _main(tester.main, [
         "--baseline", "proportional", "--bags", str(tmp_path / "bags"), "--no-progress",
         "--ros-args", "--params-file", str(LIDAR_TD3)])

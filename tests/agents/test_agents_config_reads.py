@@ -12,7 +12,9 @@ import pandas as pd
 import pytest
 from agents_helpers import ROOT
 
-from pic4rl_agents import tester, trainargs
+from pic4rl_agents.testing import tester
+
+from pic4rl_agents.training import args as trainargs
 from pic4rl_agents.rosargs import split_ros_args
 from pic4rl_sim import params_file
 
@@ -45,10 +47,10 @@ def _test_file(tmp_path: Path) -> Path:
 def test_pic4rl_test_reads_each_params_file_once(tmp_path: Path, reads: Counter[str],
                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     """An agent (its run's config), a baseline beside it and a test params file: main resolves
-    the plan once and ``run_test`` drives what it was handed."""
+    the plan once and ``drive_and_judge`` drives what it was handed."""
     extra = _test_file(tmp_path)
     driven: list[Any] = []
-    monkeypatch.setattr(tester, "run_agent", lambda spec, **_: driven.append(spec) or ["goal"])
+    monkeypatch.setattr(tester, "drive_agent", lambda spec, **_: driven.append(spec) or ["goal"])
     monkeypatch.setattr(tester, "judge", lambda run_dir, *_, **__: (pd.DataFrame(), ()))
     monkeypatch.setattr("pic4rl_metrics.tables.text.render_comparison", lambda *a, **k: "")
     monkeypatch.setattr("pic4rl_metrics.tables.results.table_columns", lambda table: [])
@@ -79,7 +81,7 @@ def test_pic4rl_train_resume_reads_the_run_config_once(tmp_path: Path,
 def test_the_latest_of_a_runs_configs_is_found_by_the_recorders_naming(tmp_path: Path) -> None:
     """``config.yaml``, ``config-2.yaml``, ...: one naming rule (``atomic.numbered``) for the
     recorder that writes them and the runs that read the newest back."""
-    from pic4rl_agents.runs import run_config_file
+    from pic4rl_agents.rundir import run_config_file
     from pic4rl_bridge.recorder import RunRecorder
 
     written = [RunRecorder(tmp_path, "run", config={"n": n}).config_path for n in range(11)]

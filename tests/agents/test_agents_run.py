@@ -12,15 +12,15 @@ import uuid
 import pytest
 from agents_helpers import LIDAR_TD3, ROOT, processes_with
 
-from pic4rl_agents import launch
+from pic4rl_agents import run as pic4rl_run
 from pic4rl_agents.config import load_run_config
-from pic4rl_agents.envs import env_for_rank, env_namespace
+from pic4rl_agents.training.envs import env_for_rank, env_namespace
 
 
 def run_main(argv: list[str]) -> tuple[int, str, str]:
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = launch.main(argv)
+        code = pic4rl_run.main(argv)
     return code, out.getvalue(), err.getvalue()
 
 
@@ -54,13 +54,13 @@ def test_bad_arguments_exit_2_before_any_sim_starts(
 
 def test_an_argparse_error_of_the_child_command_exits_2(
         capsys: pytest.CaptureFixture[str]) -> None:
-    assert launch.main(["train", "--no-such-flag", "--ros-args", "--params-file",
+    assert pic4rl_run.main(["train", "--no-such-flag", "--ros-args", "--params-file",
                      str(LIDAR_TD3)]) == 2
     assert "unrecognized arguments: --no-such-flag" in capsys.readouterr().err
 
 
 def test_python_m_runs_the_launcher() -> None:
-    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.launch"], cwd=ROOT,
+    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.run"], cwd=ROOT,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "usage: pic4rl-run" in done.stdout
 

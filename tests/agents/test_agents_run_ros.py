@@ -32,8 +32,8 @@ from agents_helpers import (
 )
 from ros_helpers import SimProcess, next_domain, sim_command, sim_env
 
-from pic4rl_agents import train
-from pic4rl_agents.algorithms import ALGORITHMS, load_model
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import ALGORITHMS, load_model
 from pic4rl_metrics.tables.aggregate import aggregate
 from pic4rl_metrics.tables.batch import compute
 
@@ -222,7 +222,7 @@ def test_a_sim_killed_mid_episode_leaves_an_aborted_episode_out_of_the_success_r
     bags = tmp_path / "bags"
     log = (tmp_path / "tester.log").open("wb")
     tester = subprocess.Popen(
-        [sys.executable, "-m", "pic4rl_agents.tester", "--baseline", "proportional",
+        [sys.executable, "-m", "pic4rl_agents.testing.tester", "--baseline", "proportional",
          "--episodes", "2", "--bags", str(bags), "--run", "killed", "--no-progress",
          "--env-kwargs", "episode_max_steps:600", "--ros-args", "--params-file", str(LIDAR_TD3),
          "-p", "transport:=ros", "-p", "ros.timeout_s:=20.0"],

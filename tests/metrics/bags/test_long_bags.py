@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from bench_helpers import read_results, run_benchmark
 
 from pic4rl_metrics.testing.synthetic import write_long_bag
 
@@ -50,12 +49,3 @@ def test_a_30_minute_log_is_judged_in_bounded_memory(tmp_path: Path) -> None:
     assert got["collision_count"] == 0
     assert "long:" in done.stderr and "msg" in done.stderr  # the long bag's progress bar
 
-
-def test_the_memory_benchmark_ends_with_its_figures() -> None:
-    """``benchmarks/metrics_memory.py`` on two tiny lengths: its figures, never a bound (the
-    numbers belong to docs/performance.md)."""
-    done = run_benchmark("metrics_memory.py", "--minutes", "0.05", "0.1")
-    figures = read_results(done.stdout, (
-        "metrics_memory_baseline_mb", "metrics_peak_mb_0.05min", "metrics_s_0.05min",
-        "metrics_peak_mb_0.1min", "metrics_s_0.1min", "metrics_peak_mb_per_min"))
-    assert figures["metrics_peak_mb_0.1min"] >= figures["metrics_memory_baseline_mb"] > 0

@@ -1,0 +1,14 @@
+"""``pic4rl-bench``: benchmark suites of agents and baselines (not the speed scripts of
+``benchmarks/``): the suite file and its cells (``suite``), one resumable cell (``cell``), the
+cells on a process pool or Ray and the command (``runner``), and the suite's table,
+leaderboards and report from its bags (``table``).
+"""
+
+from pic4rl_agents.lazy import lazy_exports
+
+__all__, __getattr__ = lazy_exports(__name__, {
+    "suite": ("Cell", "PairSet", "Suite", "load_suite"),
+    "cell": ("drive_cell",),
+    "runner": ("bench_suite", "main"),
+    "table": ("SuiteTable", "write_results"),
+})

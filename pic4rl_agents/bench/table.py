@@ -1,0 +1,229 @@
+"""A suite's results, from its bags alone through ``pic4rl_metrics``: one table (one row per
+task × agent × world × robot × pair set, every repetition's episodes together) in the suite's
+layout (``LAYOUTS``): the paper's columns, SPL, the success rate's Wilson 95 % interval and n;
+or BARN's, success, collision and timeout rates with their Wilson intervals and the mean BARN
+time and score with bootstrap intervals. A leaderboard per task ranks by success, then SPL (the
+BARN score). A cell that failed makes its row read ``failed: <error>``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from pic4rl_metrics import atomic
+from pic4rl_metrics.tables.aggregate import aggregate, bootstrap_interval, wilson_interval
+from pic4rl_metrics.tables.batch import MetricsResult, compute
+from pic4rl_metrics.viz.html_report import write_report
+from pic4rl_metrics.tables.paired import agent_names
+from pic4rl_metrics.viz.plots import save_figure
+from pic4rl_metrics.core.registry import METRICS
+from pic4rl_metrics.tables.layouts import render_rows
+from pic4rl_metrics.tables.text import plain_text
+from pic4rl_metrics.tables.results import TABLE1_COLUMNS
+
+from .suite import Cell, Suite
+
+ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
+METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
+TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
+REPORT = "report.html"  # the suite's page, beside its tables
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A table's columns after the row keys and n: ``rates`` (outcomes as k/n over the judged
+    episodes, each with its Wilson 95 % interval; success first), ``means`` (metrics' means,
+    each with a bootstrap 95 % interval when ``intervals``), and the leaderboards' ``rank``
+    metric after success."""
+
+    rates: tuple[str, ...]
+    means: tuple[str, ...]
+    intervals: bool
+    rank: str
+
+
+#: The layouts a suite's ``table`` names (``suite.TABLES``).
+LAYOUTS = {"paper": Layout(("success",), METRIC_COLUMNS, False, "spl"),
+           "barn": Layout(("success", "collision", "timeout"), ("barn_time_s", "barn_score"),
+                          True, "barn_score")}
+
+
+@dataclass(frozen=True)
+class SuiteTable:
+    header: tuple[str, ...]
+    rows: tuple[tuple[str | None, ...], ...]
+    files: tuple[Path, ...]  # the tables and leaderboards written
+    bag_errors: tuple[str, ...]  # bags that could not be judged
+
+
+def _num(value: object) -> str | None:
+    return None if value is None or pd.isna(value) else f"{float(value):.2f}"
+
+
+def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[str, ...],
+                                                         MetricsResult | None]:
+    """Every cell's episodes with the cell's row keys, the errors of unjudged bags, and the
+    metrics' result (None when no cell has bags)."""
+    folders = [suite.root / c.name / c.agent for c in cells]
+    folders = [f for f in folders if f.is_dir()]
+    if not folders:
+        return pd.DataFrame(columns=[*ROW_KEYS, "success"]), (), None
+    # one process per core (the pass runs on the driver); whole scans: the report draws returns
+    result = compute(folders, jobs=0, full_scans=True)
+    frame = result.frame
+    by_name = {c.name: c for c in cells}
+    rows = [by_name[Path(str(b)).resolve().relative_to(suite.root.resolve()).parts[0]].row
+            for b in frame["bag"]]
+    keys = pd.DataFrame(rows, index=frame.index, columns=list(ROW_KEYS))
+    frame = pd.concat([keys, frame.drop(columns=[c for c in ROW_KEYS if c in frame])], axis=1)
+    return frame, tuple(str(f.error) for f in result.failed), result
+
+
+def _interval(low: float, high: float) -> str | None:
+    return None if math.isnan(low) else f"[{low:.2f}, {high:.2f}]"
+
+
+def _header(layout: Layout) -> tuple[str, ...]:
+    rates = [c for r in layout.rates for c in (r, f"{r} 95% CI")]
+    means = []
+    for m in layout.means:
+        label = plain_text(METRICS[m].label)
+        means += [f"{label} [{plain_text(METRICS[m].unit)}]"] + (
+            [f"{label} 95% CI"] if layout.intervals else [])
+    return (*ROW_KEYS, "n", *rates, *means, "status")
+
+
+def _table_row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
+         episodes: pd.DataFrame) -> list[str | None]:
+    """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals)."""
+    cells: list[str | None] = list(key.values())
+    width = 2 * len(layout.rates) + len(layout.means) * (1 + layout.intervals)
+    if stats is None:
+        return [*cells, "0", *[None] * width, f"failed: {error}"]
+    n = int(stats["n_judged"])
+    for rate in layout.rates:
+        k = int(stats["n_success" if rate == "success" else f"n_{rate}"])
+        cells += [f"{k}/{n}" if n else None, _interval(*wilson_interval(k, n))]
+    for m in layout.means:
+        cells.append(_num(stats.get(f"{m}_mean")))
+        if layout.intervals:
+            over = episodes[episodes["success"] == 1.0] if METRICS[m].quality else episodes
+            values = over[m] if m in over else []
+            cells.append(_interval(*bootstrap_interval(pd.to_numeric(values, errors="coerce"))))
+    return [*cells[:len(key)], str(int(stats["n_episodes"])), *cells[len(key):],
+            f"failed: {error}" if error else "ok"]
+
+
+def build_rows(suite: Suite, errors: Mapping[str, str],
+               judged: tuple[pd.DataFrame, tuple[str, ...], object] | None = None) -> tuple[
+        tuple[str, ...], list[list[str | None]], tuple[str, ...]]:
+    """The table's header and rows (in the suite's order) and the unjudged bags' errors;
+    ``errors``: the failed cells' errors by cell name; ``judged``: ``_judged``'s, when the
+    caller judged the bags already."""
+    layout = LAYOUTS[suite.table]
+    frame, bad, _ = judged if judged is not None else _judged(suite, suite.cells)
+    agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
+    good = frame[frame["error"].fillna("") == ""] if "error" in frame else frame
+    groups = {k: g for k, g in good.groupby(list(ROW_KEYS), sort=False)} if len(good) else {}
+    header = _header(layout)
+    rows: dict[tuple[str, ...], tuple[dict[str, str], list[str]]] = {}
+    for cell in suite.cells:
+        key = tuple(cell.row.values())
+        rows.setdefault(key, (cell.row, []))
+        if cell.name in errors:
+            rows[key][1].append(f"{cell.name}: {errors[cell.name]}")
+    out = []
+    for key, (row, errs) in rows.items():
+        stats = agg.loc[key] if agg is not None and key in agg.index else None
+        out.append(_table_row(row, stats, "; ".join(errs), layout,
+                        groups.get(key, pd.DataFrame(columns=["success"]))))
+    return header, out, bad
+
+
+def _rate(row: Sequence[str | None], col: int) -> float:
+    text = row[col]
+    if text is None:
+        return -1.0
+    if "/" in text:
+        k, n = text.split("/")
+        return int(k) / int(n)
+    return float(text)
+
+
+def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]],
+                 layout: Layout = LAYOUTS["paper"]) -> dict[str, str]:
+    """Markdown per task: its rows by success rate, then the layout's rank metric (SPL, the
+    BARN score), best first."""
+    label = plain_text(METRICS[layout.rank].label)
+    success, spl = header.index("success"), header.index(
+        f"{label} [{plain_text(METRICS[layout.rank].unit)}]")
+    boards = {}
+    for task in dict.fromkeys(r[0] for r in rows):
+        mine = sorted((r for r in rows if r[0] == task),
+                      key=lambda r: (_rate(r, success), _rate(r, spl)), reverse=True)
+        cols = ["rank", *header[1:5], "n", "success", "success 95% CI", label, "status"]
+        body = [[str(i + 1), *r[1:5], r[5], r[success], r[success + 1], r[spl], r[-1]]
+                for i, r in enumerate(mine)]
+        boards[str(task)] = render_rows(cols, body, "markdown")
+    return boards
+
+
+def success_figure(task: str, header: Sequence[str],
+                      rows: Sequence[Sequence[str | None]]) -> Figure:
+    """One task's rows as bars of their success rate with its Wilson 95 % interval (a failed
+    or unjudged row is an empty bar, labelled so)."""
+    success = header.index("success")
+    mine = [r for r in rows if r[0] == task]
+    labels, rates, lows, highs = [], [], [], []
+    for r in mine:
+        k, _, n = (r[success] or "0/0").partition("/")
+        low, high = wilson_interval(int(k), int(n or 0))
+        rate = int(k) / int(n) if n and int(n) else math.nan
+        labels.append(" · ".join(str(v) for v in r[1:5]) + ("" if r[-1] == "ok" else " (failed)"))
+        rates.append(rate)
+        lows.append(max(rate - low, 0.0) if n and int(n) else 0.0)  # rounding: never < 0
+        highs.append(max(high - rate, 0.0) if n and int(n) else 0.0)
+    fig = Figure(figsize=(9, 1.2 + 0.45 * len(mine)), layout="constrained")
+    ax = fig.subplots()
+    y = np.arange(len(mine))[::-1]
+    ax.barh(y, np.nan_to_num(rates), xerr=[lows, highs], color="tab:blue", capsize=3)
+    ax.set_yticks(y, labels, fontsize=8)
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("success rate (bars: Wilson 95 % interval)")
+    ax.set_title(f"{task}: agent · world · robot · pairs")
+    return fig
+
+
+def _report(suite: Suite, result: MetricsResult) -> Path:
+    """``report.html``: the suite's page (``pic4rl_metrics.viz.html_report``), every agent
+    compared with each of the suite's baselines that has episodes (else every pair)."""
+    present = set(agent_names(result.frame))
+    baselines = [b for b in dict.fromkeys(c.baseline for c in suite.cells) if b in present]
+    return write_report(result, suite.root / REPORT, overwrite=True,
+                        references=baselines or None, inputs=[str(suite.path)],
+                        title=f"{suite.name}: pic4rl-bench report")
+
+
+def write_results(suite: Suite, errors: Mapping[str, str]) -> SuiteTable:
+    """Judge the suite's bags and write its tables (CSV, Markdown, LaTeX), its page
+    (``report.html``), leaderboards and comparison figures (``comparison_<task>.png``) into
+    the suite's bags folder, each atomically."""
+    judged = _judged(suite, suite.cells)
+    header, rows, bad = build_rows(suite, errors, judged)
+    files = [atomic.write_text(suite.root / name, render_rows(header, rows, fmt))
+             for fmt, name in TABLE_FORMATS.items()]
+    if judged[2] is not None:
+        files.append(_report(suite, judged[2]))
+    files += [atomic.write_text(suite.root / f"leaderboard_{task}.md", text)
+              for task, text in leaderboards(header, rows, LAYOUTS[suite.table]).items()]
+    files += [save_figure(success_figure(task, header, rows),
+                          suite.root / f"comparison_{task}.png", overwrite=True)
+              for task in dict.fromkeys(r[0] for r in rows)]
+    return SuiteTable(tuple(header), tuple(tuple(r) for r in rows), tuple(files), bad)

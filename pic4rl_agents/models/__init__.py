@@ -1,0 +1,15 @@
+"""What an agent is: the algorithm table (each algorithm's SB3 class, off-policy flag, tune
+sampler and keyword groups), their SB3 classes with atomic saves and the paper's ε-greedy,
+a new model from a ``TrainConfig`` (``new_model``) or a saved one (``load_model``), and the
+networks (``DepthGoalExtractor``). Only ``algorithm_table`` is light; the rest load torch.
+"""
+
+from pic4rl_agents.lazy import lazy_exports
+
+__all__, __getattr__ = lazy_exports(__name__, {
+    "algorithm_table": ("ALGORITHM_TABLE", "AlgorithmEntry"),
+    "algorithms": ("ALGORITHMS", "algorithm_class", "check_spaces", "describe_space",
+                   "load_model", "new_model"),
+    "exploration": ("EpsilonGreedy", "epsilon_at"),
+    "extractors": ("DepthGoalExtractor",),
+})

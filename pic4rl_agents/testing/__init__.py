@@ -1,0 +1,11 @@
+"""``pic4rl-test``: what a test is (``plan``: a ``TestPlan``, the agents and baselines it
+names, each with its test env) and doing it (``tester``: every agent drives the same episodes
+into bags, then one metrics table from the bags; ``drive_and_judge`` from Python).
+"""
+
+from pic4rl_agents.lazy import lazy_exports
+
+__all__, __getattr__ = lazy_exports(__name__, {
+    "plan": ("AgentSpec", "DEFAULT_PAIRS", "TestPlan", "resolve_agents"),
+    "tester": ("TestResult", "drive_agent", "drive_and_judge", "main"),
+})

@@ -1,0 +1,243 @@
+"""What ``pic4rl-test`` tests: a ``TestPlan`` (agents, baselines, episodes, where the bags
+go), and the agents it names, each with its test env (``resolve_agents``).
+
+An agent's env is its training config, then the plan's params files key by key, then its
+overrides; a baseline's is the first agent's at the robot's full speed range, or the params
+files alone. All drive the same test episodes (``pic4rl_agents.testing.tester`` says which).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from pic4rl_bridge.baseline_config import BASELINES_NODE, BaselinesConfig, baselines_config
+from pic4rl_bridge.baselines import BASELINES, check_fits
+from pic4rl_bridge.config import EnvConfig, agent_conflicts
+from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.robot_info import RobotInfo
+from pic4rl_bridge.scenario import Scenario
+from pic4rl_sim import params_file
+
+from pic4rl_agents import rundir
+from pic4rl_agents.config import ENV_NODE, NODES, RunConfig, run_config
+
+Sections = dict[str, dict[str, Any]]
+
+#: The paper's testing set for the indoor world: 5 start–goal pairs, walked in order.
+DEFAULT_PAIRS = Path(__file__).resolve().parents[1] / "data" / "goals_indoor_test.json"
+DEFAULT_PAIRS_WORLD = ("indoor", 0)  # the world and variant those pairs are in
+
+
+@dataclass(frozen=True)
+class TestPlan:
+    """What to test and how: the agents and baselines, the episodes, where the bags go."""
+
+    agents: tuple[str, ...] = ()  # [NAME=]PATH: a run/checkpoint directory or a model zip
+    baselines: tuple[str, ...] = ()
+    algorithm: str = ""  # of a bare model zip (its run's config names it otherwise)
+    episodes: int = 5
+    random: int | None = None  # draw this many pairs instead of a pairs file
+    pairs: str | None = None  # the kind of the drawn pairs (PAIR_KINDS)
+    seed: int = 0
+    bags_dir: Path = Path("bags")
+    run: str = ""  # the bags' run name; empty: test_<date>-<time>
+    params_files: tuple[str, ...] = ()  # applied over each agent's config
+    env_overrides: Mapping[str, Any] = field(default_factory=dict)
+    sim_overrides: Mapping[str, Any] = field(default_factory=dict)
+    baseline_overrides: Mapping[str, Any] = field(default_factory=dict)  # dwa.horizon_s, ...
+    with_std: bool = False  # mean ± std cells in table.md
+    video: bool = False  # an MP4 per episode beside its bag (episode_NNNN.mp4)
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        for flag, value in (("--episodes", self.episodes), ("--random", self.random)):
+            if value is not None and value < 1:
+                raise ConfigError(f"{flag} {value}: expected a positive number of episodes")
+
+    @property
+    def n_episodes(self) -> int:
+        return self.random or self.episodes
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """One row of the table: a trained model (``model`` set) or a baseline (``baseline``)."""
+
+    name: str
+    run: RunConfig
+    model: Path | None = None
+    baseline: str = ""
+    episode_set: str = ""  # its test episodes, in words
+    trained: str = ""  # a model's training config, in words (``RunConfig.origin``)
+    settings: BaselinesConfig | None = None  # a baseline's: the baselines: section
+
+
+def _agent_files(path: Path) -> tuple[Path, Path | None]:
+    """The model zip and its run's config, from a directory or a zip (the config is looked
+    for beside the zip and up to two folders above: checkpoints/, best/<session>/)."""
+    if path.is_dir():
+        model = path / rundir.MODEL
+        if not model.is_file():
+            raise ConfigError(f"--agent {path}: no {rundir.MODEL} in it")
+        return model, rundir.run_config_file(path)
+    if path.is_file() and path.suffix == ".zip":
+        run_dir = rundir.run_of(path)
+        return path, rundir.run_config_file(run_dir) if run_dir is not None else None
+    raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
+                      f"{rundir.MODEL} and {rundir.CONFIG}, or a model .zip)")
+
+
+def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
+    """The trained agents, each with its run's config and the plan's files (``files``, read
+    once) and overrides."""
+    train_overrides = {"algorithm": plan.algorithm} if plan.algorithm else {}
+    specs: list[AgentSpec] = []
+    for item in plan.agents:
+        name, sep, location = item.partition("=")
+        path = Path(location if sep else item)
+        model, config = _agent_files(path)
+        if config is None and not plan.params_files:
+            raise ConfigError(f"--agent {path}: no {rundir.CONFIG} beside the model; give the "
+                              "env with --ros-args --params-file FILE and --algorithm")
+        own = params_file.load([config], NODES) if config else {}
+        sources = ([str(config)] if config else []) + list(plan.params_files)
+        run = run_config(params_file.merge(own, files), sources, train=train_overrides,
+                         env=plan.env_overrides, sim=plan.sim_overrides)
+        if not sep:
+            name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
+                path.parent.name if path.suffix == ".zip" else path.name)
+        trained = "no config beside it"
+        if config:
+            own_run = run_config(own, [str(config)])
+            check_trained(f"--agent {path}", config, own_run.env, run.env,
+                          plan.params_files, plan.env_overrides)
+            trained = own_run.origin
+        specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
+    return specs
+
+
+def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
+                  params_files: Sequence[str], overrides: Mapping[str, Any]) -> None:
+    """``ConfigError`` in one line when ``test`` changes a setting that shapes what the agent
+    observes or what its actions do (``pic4rl_bridge.config.agent_keys``): it names the key,
+    the value the params file or override gives, and the agent's own (from ``config``)."""
+    conflicts = agent_conflicts(trained, test)
+    if not conflicts:
+        mine, theirs = (_drive(Scenario(env).robot) for env in (trained, test))
+        if mine != theirs:  # the same keys, another robot or control period under them
+            raise ConfigError(f"{agent}: its test robot drives {theirs} but the agent was "
+                              f"trained on {mine} ({config}); an action must mean what it "
+                              "meant in training: test it on a robot as fast, at its period")
+        return
+    key, mine, theirs = conflicts[0]
+    source = "-p/--env-kwargs" if key in overrides else next(
+        (f for f in reversed(params_files)
+         if key in params_file.read_sections(f, (ENV_NODE,))[ENV_NODE]), "the test env")
+    more = f" (also {', '.join(k for k, _, _ in conflicts[1:])})" if conflicts[1:] else ""
+    raise ConfigError(f"{agent}: {key}: {source} gives {theirs!r} but the agent was trained "
+                      f"with {mine!r} ({config}){more}; a test env must not change what an "
+                      f"agent observes or how it acts: remove {key} there or set it to "
+                      f"{mine!r}")
+
+
+def _drive(robot: RobotInfo) -> str:
+    """What an action means on ``robot``: its speed ranges and control period, in words."""
+    lateral = f", vy ≤ {robot.max_lateral_m_s:g} m/s" if robot.omni else ""
+    return (f"v in [{robot.min_linear_m_s:g}, {robot.max_linear_m_s:g}] m/s, "
+            f"|ω| ≤ {robot.max_angular_rad_s:g} rad/s{lateral} every {robot.control_dt_s:g} s")
+
+
+def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
+              files: Sections) -> AgentSpec:
+    """A baseline in the first agent's env (at the robot's full speed range), or in the
+    plan's params files (``files``, read once)."""
+    if baseline not in BASELINES:
+        raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
+    if agents:
+        run = agents[0].run
+        if "min_linear_m_s" not in plan.env_overrides:
+            # An agent's speed floor is its own training choice; a baseline drives the
+            # robot's full range unless the user says otherwise.
+            run = run.replace(env={"min_linear_m_s": 0.0})
+    elif plan.params_files:
+        run = run_config(files, plan.params_files, env=plan.env_overrides,
+                         sim=plan.sim_overrides)
+    else:
+        raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
+                          "or --ros-args --params-file FILE")
+    check_fits(baseline, run.env)  # before any run directory or bag exists
+    settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
+                                where=" + ".join(plan.params_files))
+    return AgentSpec(baseline, run, baseline=baseline, settings=settings)
+
+
+def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:
+    """The agents and baselines to test, each in its test env (the test episodes, no
+    curriculum), recorded under ``run_dir`` when one is given. Every params file is read
+    once, here; what follows works on the typed configs."""
+    files = params_file.load(plan.params_files, (*NODES, BASELINES_NODE))
+    # The pairs named at test time: the params files' (later files win), then the overrides.
+    pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
+    agents = _agents(plan, files)
+    specs = agents + [_baseline(plan, b, agents, files) for b in plan.baselines]
+    if not specs:
+        raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
+                          f"{'|'.join(BASELINES)}")
+    tested = [_test_env(s, plan, pairs) for s in specs]
+    return tested if run_dir is None else [recorded(s, run_dir) for s in tested]
+
+
+def first_env(plan: TestPlan) -> EnvConfig:
+    """The env the plan's first agent drives in (its sim section, its ROS domain)."""
+    return resolve_agents(plan)[0].run.env
+
+
+def recorded(spec: AgentSpec, run_dir: Path) -> AgentSpec:
+    """``spec`` with its episodes recorded to ``<run_dir>/<its name>/``."""
+    return replace(spec, run=spec.run.replace(env={
+        "record.enabled": True, "record.bags_dir": str(run_dir), "record.run": spec.name}))
+
+
+def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
+    """``spec`` set up for testing: the test episodes, no curriculum."""
+    overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
+    from pic4rl_sim.params import SimParams
+
+    env = spec.run.env
+    if not env.simulated:
+        return replace(spec, run=spec.run.replace(env={**overrides, "episodes.file": ""}),
+                       episode_set=_without_sim(plan, pairs))
+    sim = env.sim_params
+    world = sim.get("world", SimParams.world), sim.get("world_variant", SimParams.world_variant)
+    if pairs is None and world == DEFAULT_PAIRS_WORLD:
+        pairs = str(DEFAULT_PAIRS)
+    if plan.random or not pairs:
+        kind = plan.pairs or ("paper" if plan.random else "any")
+        overrides.update({"episodes.file": "", "episodes.ordered": False,
+                          "episodes.pair_kind": kind})
+        episode_set = f"{plan.n_episodes} random pairs of kind {kind!r} with seed {plan.seed}"
+    else:
+        if plan.pairs:
+            raise ConfigError(f"--pairs {plan.pairs}: the test pairs come from {pairs}; add "
+                              "--random N to draw N pairs of that kind")
+        overrides.update({"episodes.file": pairs, "episodes.ordered": True,
+                          "episodes.change_goal_and_pose": 1})
+        episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
+                       else "pairs file") + f" {pairs}"
+    return replace(spec, run=spec.run.replace(env=overrides), episode_set=episode_set)
+
+
+def _without_sim(plan: TestPlan, pairs: str | None) -> str:
+    """The episodes of a run without a simulator (``EnvConfig.simulated``: a real robot), in
+    words; drawn pairs and pairs files, which only a simulator can set up, are refused."""
+    given = (f"--random {plan.random}" if plan.random else f"--pairs {plan.pairs}"
+             if plan.pairs else f"episodes.file {pairs}" if pairs else "")
+    if given:
+        raise ConfigError(f"{given}: a run without a simulator (transport ros, ros.sim_node "
+                          "'') cannot set starts and goals; the operator sends each goal on "
+                          "topics.goal")
+    return (f"{plan.n_episodes} episodes without a simulator: each goal from the operator on "
+            "topics.goal, no world facts recorded")

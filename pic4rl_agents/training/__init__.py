@@ -1,0 +1,19 @@
+"""``pic4rl-train`` and what it trains with: the ``Trainer`` (``train``) and its command line
+(``args``), the vectorised envs (``envs``), the curriculum, the SB3 callbacks (progress,
+checkpoints, seeded evaluations, stops), imitation from an expert, the reward and evaluation
+curves (``python -m pic4rl_agents.training.curves``) and the evaluations' videos.
+"""
+
+from pic4rl_agents.lazy import lazy_exports
+
+__all__, __getattr__ = lazy_exports(__name__, {
+    "train": ("Trainer", "main"),
+    "args": ("build_parser", "resolve"),
+    "envs": ("env_namespace", "eval_env_config", "make_vec_env"),
+    "curriculum": ("Curriculum",),
+    "callbacks": ("Checkpoints", "ProgressCallback", "RewardCurveCallback",
+                  "SeededEvalCallback", "StopWhenSet", "WallClockLimit"),
+    "imitation": ("EXPERTS", "DecayingCloning", "Imitation", "make_expert"),
+    "curves": ("episode_table", "eval_curves", "save_eval_curves", "save_reward_curve"),
+    "videos": ("EvalVideoCallback",),
+})

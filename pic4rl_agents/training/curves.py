@@ -1,0 +1,178 @@
+"""Training curves: the reward curve of a run, like the paper's Figure 4 (each episode's reward
+and its moving average, from the run's Monitor CSVs, one per env), and the evaluation curves of
+several runs in one figure (eval success against the clock and against env steps, from their
+``evaluations.csv``), so that two recipes compare on one plot::
+
+    python -m pic4rl_agents.training.curves runs/td3_lidar sac=runs/sac_lidar -o curves.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from stable_baselines3.common.monitor import LoadMonitorResultsError, load_results
+
+from pic4rl_bridge.errors import ConfigError
+
+from pic4rl_metrics import atomic
+
+from pic4rl_agents import rundir
+
+
+def episode_table(monitor_dir: Path) -> pd.DataFrame:
+    """Every finished episode of every env in time order: ``r`` (reward), ``l`` (steps),
+    ``t`` (s since the start), ``is_success``, ``outcome``; empty when none finished yet."""
+    try:
+        df = load_results(str(monitor_dir))
+    except LoadMonitorResultsError:
+        return pd.DataFrame(columns=["r", "l", "t", "is_success", "outcome"])
+    return df.sort_values("t").reset_index(drop=True)
+
+
+def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
+                      title: str = "") -> Path | None:
+    """Write ``out`` (PNG); ``None`` (nothing written) before the first finished episode."""
+    df = episode_table(monitor_dir)
+    if df.empty:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    episodes = range(1, len(df) + 1)
+    fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
+    ax.plot(episodes, df["r"], color="tab:blue", alpha=0.3, lw=0.8, label="episode reward")
+    ax.plot(episodes, df["r"].rolling(window, min_periods=1).mean(), color="tab:blue", lw=2,
+            label=f"moving average ({window} episodes)")
+    ax.set_xlabel("episode")
+    ax.set_ylabel("reward")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right")
+    with atomic.replacing(out) as tmp:  # whole or not at all
+        fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
+    plt.close(fig)
+    return out
+
+
+# -- evaluation curves: success against the clock and against env steps ------------------------
+
+#: x-axes of the evaluation curves: ``evaluations.csv`` columns and their axis labels.
+EVAL_AXES = {"train_wall_s": "training wall-clock (min, evaluations excluded)",
+             "wall_s": "wall-clock (min, evaluations included)", "steps": "env steps"}
+EVAL_METRICS = ("success_rate", "mean_reward", "mean_length")
+
+
+def eval_table(path: str | Path) -> pd.DataFrame:
+    """One ``evaluations.csv`` (``pic4rl_agents.training.callbacks.CSV_COLUMNS``)."""
+    path = Path(path)
+    try:
+        df = pd.read_csv(path)
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as err:
+        raise ConfigError(f"{path}: cannot read the evaluations: {err}") from err
+    missing = [c for c in ("steps", "wall_s", "train_wall_s", *EVAL_METRICS) if c not in df]
+    if missing:
+        raise ConfigError(f"{path}: not an evaluations.csv (no column {missing[0]!r})")
+    return df
+
+
+def eval_curves(source: str | Path, label: str | None = None) -> dict[str, pd.DataFrame]:
+    """The evaluations of ``source``: an ``evaluations.csv``, or a run directory (each
+    session's ``eval/<session>/evaluations.csv``: one curve per session, since each session's
+    clock starts at 0), by label (``label``, else the run's name)."""
+    path = Path(source)
+    if path.is_file():
+        return {label or rundir.run_of_evaluations(path): eval_table(path)}
+    files = rundir.evaluation_files(path)
+    if not files:
+        raise ConfigError(f"{path}: no evaluations (expected a run directory with "
+                          "eval/<session>/evaluations.csv, or such a file)")
+    name = label or path.resolve().name
+    if len(files) == 1:
+        return {name: eval_table(files[0])}
+    return {f"{name} (session {f.parent.name})": eval_table(f) for f in files}
+
+
+def plot_eval_curves(ax: Any, curves: Mapping[str, pd.DataFrame], *, x: str = "train_wall_s",
+                     metric: str = "success_rate") -> None:
+    """Draw ``metric`` against ``x`` (an ``EVAL_AXES`` key; clocks in minutes), one line per
+    curve, on ``ax``."""
+    for label, df in curves.items():
+        xs = df[x] / 60.0 if x != "steps" else df[x]
+        ys = df[metric] * 100.0 if metric == "success_rate" else df[metric]
+        ax.plot(xs, ys, marker="o", ms=3, lw=1.5, label=label)
+    ax.set_xlim(left=0)  # runs compare from their start
+    ax.set_xlabel(EVAL_AXES[x])
+    ax.set_ylabel("eval success (%)" if metric == "success_rate" else f"eval {metric}")
+    if metric == "success_rate":
+        ax.set_ylim(-2, 102)
+    ax.grid(alpha=0.3)
+
+
+def save_eval_curves(curves: Mapping[str, pd.DataFrame], out: Path, *,
+                     clock: str = "train_wall_s", metric: str = "success_rate",
+                     title: str = "") -> Path:
+    """One PNG, two panels: ``metric`` against ``clock`` and against env steps."""
+    if clock not in ("train_wall_s", "wall_s"):
+        raise ConfigError(f"clock: {clock!r} is invalid; expected train_wall_s or wall_s")
+    if metric not in EVAL_METRICS:
+        raise ConfigError(f"metric: {metric!r} is invalid; expected one of "
+                          f"{', '.join(EVAL_METRICS)}")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), layout="constrained")
+    plot_eval_curves(left, curves, x=clock, metric=metric)
+    plot_eval_curves(right, curves, x="steps", metric=metric)
+    right.set_ylabel("")
+    left.legend(loc="best", fontsize="small")
+    if title:
+        fig.suptitle(title)
+    with atomic.replacing(out) as tmp:
+        fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
+    plt.close(fig)
+    return out
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m pic4rl_agents.training.curves",
+        description="Evaluation curves of several runs in one PNG: eval success against the "
+                    "training wall-clock and against env steps.")
+    parser.add_argument("runs", nargs="+", metavar="[LABEL=]PATH",
+                        help="a run directory or an evaluations.csv")
+    parser.add_argument("-o", "--out", default="eval_curves.png", help="the PNG to write")
+    parser.add_argument("--clock", choices=("train_wall_s", "wall_s"), default="train_wall_s",
+                        help="the time axis: training time (evaluations excluded) or all")
+    parser.add_argument("--metric", choices=EVAL_METRICS, default="success_rate")
+    parser.add_argument("--title", default="")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write the PNG; exit 2 with one line for a missing or malformed input."""
+    args = build_parser().parse_args(argv)
+    curves: dict[str, pd.DataFrame] = {}
+    try:
+        for item in args.runs:
+            label, sep, path = item.rpartition("=")
+            curves.update(eval_curves(path, label if sep else None))
+        out = save_eval_curves(curves, Path(args.out), clock=args.clock, metric=args.metric,
+                               title=args.title)
+    except ConfigError as err:
+        print(f"curves: {err}", file=sys.stderr)
+        return 2
+    print(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,96 @@
+"""The training and testing envs: ``NavEnv`` in SB3's ``Monitor``, vectorised.
+
+One env lives in the trainer's process (the paper's training(env(Node)) shape: through ROS it
+uses the trainer's node); ``n_envs > 1`` run in ``SubprocVecEnv`` workers (or all in this
+process, ``vec_env: dummy``), each with its own sim: through ROS the sims sit in namespaces
+``env_0``, ``env_1``, ... (``pic4rl-run`` starts them), in process each env builds its own
+engine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
+
+from pic4rl_bridge.config import EnvConfig, EpisodesConfig
+from pic4rl_bridge.env import NavEnv
+from pic4rl_sim.schema import to_params
+
+from pic4rl_agents.config import CurriculumConfig, EvalConfig
+from .curriculum import STAGE_KEY, Curriculum
+
+#: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
+INFO_KEYWORDS = ("is_success", "outcome")
+
+
+def env_namespace(config: EnvConfig, rank: int, n_envs: int) -> str:
+    """The ROS namespace of env ``rank``: the config's alone, or ``<it>/env_<rank>``."""
+    if n_envs == 1:
+        return config.ros.namespace
+    return f"{config.ros.namespace.rstrip('/')}/env_{rank}"
+
+
+def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
+    if config.transport != "ros" or n_envs == 1:
+        return config
+    return config.replace(**{"ros.namespace": env_namespace(config, rank, n_envs)})
+
+
+def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
+    """The evaluation env of a run whose env is ``env``: in process, not recording, and every
+    ``episodes.*`` key back at its default (no training pairs, no curriculum) but
+    ``episodes.pair_kind``, the evaluation's: pairs sampled from the seed, like a test's."""
+    defaults = {f"episodes.{k}": v for k, v in to_params(EpisodesConfig()).items()}
+    return env.replace(**{**defaults, "episodes.pair_kind": evaluation.pair_kind,
+                          "transport": "inprocess", "record.enabled": False})
+
+
+def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
+          reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None) -> gym.Env:
+    """A monitored ``NavEnv``, its pairs from ``curriculum``'s stage when one is given: the
+    monitor logs the env's own (the paper's) rewards, and the learner sees them times
+    ``reward_scale`` (rewards of order 1 suit SB3's defaults)."""
+    env: gym.Env = NavEnv(config, node=node)
+    keywords = INFO_KEYWORDS
+    if curriculum is not None and curriculum.enabled:
+        env, keywords = Curriculum(env, curriculum), (*INFO_KEYWORDS, STAGE_KEY)
+    env = Monitor(env, monitor_file, info_keywords=keywords)
+    if reward_scale != 1.0:
+        env = gym.wrappers.TransformReward(env, lambda r: reward_scale * r)
+    return env
+
+
+def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
+                 monitor_dir: Path | None = None, prefix: str = "", node: Any = None,
+                 reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None,
+                 vec_env: str = "subproc") -> VecEnv:
+    """``n_envs`` monitored ``NavEnv``s (seeds ``seed + rank``), each writing
+    ``<monitor_dir>/<prefix><rank>.monitor.csv``; ``node``: the trainer's rclpy node, used by
+    a single ROS env; the learner's rewards are the env's times ``reward_scale``; each env's
+    pairs follow ``curriculum`` when given. ``vec_env``: ``subproc`` runs each env in a worker
+    process, ``dummy`` all of them in this one (cheaper when an env step costs less than the
+    workers' messages, as in process on two cores). Not SB3's ``make_vec_env``: it gives every
+    rank the same env kwargs (ours differ by ROS namespace and node) and names monitor files
+    ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read)."""
+    def factory(rank: int) -> Callable[[], gym.Env]:
+        cfg = env_for_rank(config, rank, n_envs)
+        file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
+
+        def make() -> gym.Env:
+            return _make(cfg, file, node if n_envs == 1 else None, reward_scale, curriculum)
+        return make
+
+    if monitor_dir is not None:
+        monitor_dir.mkdir(parents=True, exist_ok=True)
+    fns = [factory(rank) for rank in range(n_envs)]
+    if n_envs == 1 or vec_env == "dummy":
+        vec: VecEnv = DummyVecEnv(fns)
+    else:
+        vec = SubprocVecEnv(fns, start_method="forkserver")
+    vec.seed(seed)
+    return vec

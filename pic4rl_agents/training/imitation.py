@@ -1,0 +1,281 @@
+"""Expert-guided training: behaviour cloning, then DAgger, on an SB3 off-policy model's actor.
+
+The expert reads the env's decoded frame: the mapless explorer (``pic4rl_bridge.explorer``)
+only what the student's sensors saw, one frame per step, so its choices depend on nothing the
+student could not have remembered; the others are privileged at training time only: the
+simulated world's map (``pic4rl_bridge.planner``) or the vineyard row's centre line
+(``pic4rl_bridge.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
+on states the expert drove through; DAgger (Ross, Gordon and Bagnell 2011) then lets the
+student drive, has the expert label every state the student visits, aggregates the labels and
+regresses again, so the student learns to recover from its own mistakes. The actor is the
+same SB3 network that RL trains (the MLP on LiDAR, the CNN on depth), so the result is an SB3
+model like any other, and RL fine-tunes it: imitation's transitions, with their rewards, stay
+in the replay buffer, and the critic is warmed up on them with the actor frozen before RL
+starts.
+
+The `imitation` package does this for SB3 policies (``SimpleDAggerTrainer``) but pins
+gymnasium 0.29 and SB3 2.2; this module writes the same loop on SB3's policy objects.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList
+from stable_baselines3.common.utils import obs_as_tensor
+from stable_baselines3.common.vec_env import VecEnv
+
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.explorer import ExplorerController
+from pic4rl_bridge.follow import HeadingController
+from pic4rl_bridge.planner import PlannerController
+from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
+from pic4rl_bridge.scenario import Scenario
+
+from pic4rl_agents.config import ImitationConfig
+
+log = logging.getLogger(__name__)
+
+EXPERT, STUDENT = 0, 1  # who drove a labelled state
+
+
+#: The experts that label states, and the task each drives.
+EXPERTS = {"planner": "goToPose", "explorer": "goToPose", "heading": "personMonitoring",
+           "centerline": "vineyard"}
+
+
+def make_expert(name: str, env: EnvConfig
+                ) -> PlannerController | ExplorerController | HeadingController | CenterlineFollower:
+    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
+    (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
+    mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
+    ``heading``: DWA with a
+    proportional heading law, personMonitoring, either control; ``centerline``: the row's
+    centre-line follower, vineyard)."""
+    if name not in EXPERTS:
+        raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
+                          f"{', '.join(EXPERTS)}")
+    if env.task != EXPERTS[name]:
+        fits = [e for e, task in EXPERTS.items() if task == env.task]
+        raise ConfigError(f"imitation.expert: {name} drives {EXPERTS[name]}; the env's task is "
+                          f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
+    scenario = Scenario(env)
+    if name == "explorer":
+        return ExplorerController(scenario.robot)
+    if name == "heading":
+        return HeadingController(env, scenario.robot)
+    if name == "centerline":
+        return make_row_follower(name, env, scenario.robot, scenario.world)  # type: ignore[return-value]
+    if scenario.world is None:
+        raise ConfigError("imitation.expert: planner plans on the simulated world's map, and "
+                          "the env has none (no 'sim:' section)")
+    return PlannerController(scenario.robot, scenario.world)
+
+
+@dataclass
+class Demonstrations:
+    """Aggregated labelled states: observations (an array, or a dict of arrays, batched along
+    the first axis), the expert's actions and who drove (``EXPERT`` or ``STUDENT``)."""
+
+    observations: list[Any] = field(default_factory=list)
+    actions: list[np.ndarray] = field(default_factory=list)
+    drivers: list[np.ndarray] = field(default_factory=list)
+    _joined: tuple[Any, np.ndarray, np.ndarray] | None = field(default=None, repr=False)
+
+    def add(self, obs: Any, actions: np.ndarray, driver: int) -> None:
+        self.observations.append(copy.deepcopy(obs))
+        self.actions.append(np.asarray(actions, dtype=np.float32))
+        self.drivers.append(np.full(len(actions), driver, dtype=np.int8))
+        self._joined = None
+
+    def __len__(self) -> int:
+        return sum(len(a) for a in self.actions)
+
+    def arrays(self) -> tuple[Any, np.ndarray, np.ndarray]:
+        """Everything so far as (observations, actions, drivers), concatenated (once per
+        change: RL's cloning term regresses on the same labels again and again)."""
+        if self._joined is None:
+            first = self.observations[0]
+            if isinstance(first, dict):
+                obs: Any = {k: np.concatenate([o[k] for o in self.observations]) for k in first}
+            else:
+                obs = np.concatenate(self.observations)
+            self._joined = (obs, np.concatenate(self.actions), np.concatenate(self.drivers))
+        return self._joined
+
+
+def actor_loss(model: Any, obs: Any, actions: torch.Tensor) -> torch.Tensor:
+    """The regression loss of ``model``'s actor on (obs, expert actions): squared error of the
+    deterministic action, and for a Gaussian actor (SAC, TQC) also the expert action's
+    negative log-likelihood, so that its spread shrinks where the expert is consistent."""
+    actor = model.actor
+    if hasattr(actor, "get_action_dist_params"):
+        mean, log_std, kwargs = actor.get_action_dist_params(obs)
+        dist = actor.action_dist.proba_distribution(mean, log_std, **kwargs)
+        nll = -dist.log_prob(actions.clamp(-0.999, 0.999)).mean() / actions.shape[1]
+        return torch.mean((torch.tanh(mean) - actions) ** 2) + 0.01 * nll
+    return torch.mean((actor(obs) - actions) ** 2)
+
+
+class Imitation:
+    """Behaviour cloning then DAgger on ``model`` (an SB3 off-policy model on ``env``), each
+    env step counted in ``model.num_timesteps`` and passed to ``callback`` (evaluations,
+    checkpoints, the clock); ``run`` returns False when a callback ended training or the
+    steps reached ``max_steps``."""
+
+    def __init__(self, config: ImitationConfig, env: VecEnv, env_config: EnvConfig, model: Any,
+                 callback: CallbackList, *, batch_size: int, seed: int = 0,
+                 max_steps: int | None = None) -> None:
+        self.config, self.env, self.model, self.callback = config, env, model, callback
+        self.max_steps = max_steps
+        self.experts = [make_expert(config.expert, env_config) for _ in range(env.num_envs)]
+        self.data = Demonstrations()
+        self.batch_size = batch_size
+        self.rng = np.random.default_rng(seed)
+        self.optimizer = torch.optim.Adam(model.actor.parameters(), lr=config.learning_rate)
+        self._obs: Any = None
+        self.losses: list[float] = []  # the mean regression loss of each round
+
+    def run(self) -> bool:
+        """Behaviour cloning, the DAgger rounds, then the critic's warm-up; False when a
+        callback stopped it (the clock, an evaluation's target)."""
+        c = self.config
+        self.callback.on_training_start(locals(), globals())
+        try:
+            rounds = [(EXPERT, c.bc_steps)] if c.bc_steps else []
+            rounds += [(STUDENT, c.dagger_steps)] * c.dagger_rounds
+            for number, (driver, steps) in enumerate(rounds):
+                if not self.collect(steps, driver):
+                    if self._out_of_steps():  # an imitation-only run: its last data counts
+                        self.fit(c.gradient_steps)
+                    return False
+                self.fit(c.gradient_steps)
+                log.info("imitation round %d/%d (%s): %d labelled states, loss %.4f",
+                         number + 1, len(rounds), "expert" if driver == EXPERT else "student",
+                         len(self.data), self.losses[-1])
+            self.warm_up_critic(c.critic_warmup_steps)
+            return True
+        finally:
+            self.callback.on_training_end()
+
+    def collect(self, steps: int, driver: int) -> bool:
+        """Drive ``steps`` env steps (the expert or the student), labelling every state;
+        False when a callback asked to stop or ``max_steps`` is reached."""
+        env, model = self.env, self.model
+        if self._obs is None:
+            self._obs = env.reset()
+            for expert in self.experts:
+                expert.reset()
+        for _ in range(max(1, steps // env.num_envs)):
+            if self._out_of_steps():
+                return False
+            frames = env.get_attr("frame")
+            labels = np.stack([e.action(f) for e, f in zip(self.experts, frames)])
+            if driver == EXPERT:
+                actions = labels
+            else:
+                actions, _ = model.predict(self._obs, deterministic=True)
+            self.data.add(self._obs, labels, driver)
+            new_obs, rewards, dones, infos = env.step(actions)
+            if self.config.replay and getattr(model, "replay_buffer", None) is not None:
+                model.replay_buffer.add(self._obs, _next_obs(new_obs, dones, infos), actions,
+                                        rewards, dones, infos)
+            for i in np.flatnonzero(dones):
+                self.experts[i].reset()
+            self._obs = new_obs
+            model.num_timesteps += env.num_envs
+            self.callback.update_locals({"dones": dones, "infos": infos, "rewards": rewards})
+            if not self.callback.on_step():
+                return False
+        return True
+
+    def _out_of_steps(self) -> bool:
+        return self.max_steps is not None and self.model.num_timesteps >= self.max_steps
+
+    def fit(self, gradient_steps: int) -> None:
+        """Regress the actor on every labelled state so far (minibatches drawn uniformly)."""
+        obs, actions, _ = self.data.arrays()
+        policy, device = self.model.policy, self.model.device
+        policy.set_training_mode(True)
+        total = 0.0
+        for _ in range(gradient_steps):
+            idx = self.rng.integers(0, len(actions), self.batch_size)
+            batch = ({k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx])
+            loss = actor_loss(self.model, obs_as_tensor(batch, device),
+                              torch.as_tensor(actions[idx], device=device))
+            self.optimizer.zero_grad()
+            loss.backward()
+            self.optimizer.step()
+            total += float(loss.detach())
+        policy.set_training_mode(False)
+        target = getattr(self.model, "actor_target", None)
+        if target is not None:  # TD3, DDPG: RL's targets start from the imitated actor
+            target.load_state_dict(self.model.actor.state_dict())
+        self.losses.append(total / max(gradient_steps, 1))
+
+    def warm_up_critic(self, gradient_steps: int) -> None:
+        """``gradient_steps`` of the algorithm's own updates with the actor frozen: a critic
+        fitted to the imitated policy before its gradient reaches the actor."""
+        model = self.model
+        if gradient_steps <= 0 or model.replay_buffer.size() < self.batch_size:
+            return
+        frozen = list(model.actor.parameters())
+        for p in frozen:
+            p.requires_grad_(False)
+        try:
+            model.train(gradient_steps=gradient_steps, batch_size=self.batch_size)
+        finally:
+            for p in frozen:
+                p.requires_grad_(True)
+        log.info("critic warmed up: %d gradient steps on %d transitions", gradient_steps,
+                 model.replay_buffer.size() * model.replay_buffer.n_envs)
+
+
+class DecayingCloning(BaseCallback):
+    """During RL, every 1000 env steps: ``imitation.rl_gradient_steps`` regression steps on the
+    labels, times ``1 - t / rl_decay_steps`` (t: RL's env steps so far), so that the
+    actor stays near the expert while the critic learns, and RL alone takes over."""
+
+    def __init__(self, imitation: Imitation) -> None:
+        super().__init__()
+        self.imitation = imitation
+        self._start: int | None = None
+        self._due = 0
+
+    def _on_step(self) -> bool:
+        c = self.imitation.config
+        if self._start is None:
+            self._start = self._due = self.num_timesteps
+        if self.num_timesteps < self._due:
+            return True
+        self._due += 1000
+        share = 1.0 - (self.num_timesteps - self._start) / c.rl_decay_steps
+        steps = round(c.rl_gradient_steps * share)
+        if steps > 0:
+            self.imitation.fit(steps)
+            self.logger.record("imitation/rl_gradient_steps", steps)
+        return True
+
+
+def _next_obs(new_obs: Any, dones: np.ndarray, infos: list[dict[str, Any]]) -> Any:
+    """The observations each transition led to: a finished episode's last one (the vec env has
+    already reset it), as SB3's own collection stores them."""
+    if not dones.any():
+        return new_obs
+    out = copy.deepcopy(new_obs)
+    for i in np.flatnonzero(dones):
+        last = infos[i].get("terminal_observation")
+        if last is None:
+            continue
+        if isinstance(out, dict):
+            for key in out:
+                out[key][i] = last[key]
+        else:
+            out[i] = last
+    return out

@@ -1,0 +1,133 @@
+"""A test env never changes what an agent was trained to observe or how its actions act: the
+settings of ``pic4rl_bridge.config.agent_keys`` come from the agent's own config; a params
+file, ``-p`` or ``--env-kwargs`` that contradicts one is refused in one line naming the key,
+both values and where the other came from, and a suite with such an env file is refused before
+any cell runs. ``config/suite_table1.yaml`` gives each shipped agent its trained settings."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+
+import pytest
+import yaml
+from agents_helpers import ROOT
+
+from pic4rl_agents.testing import tester
+from pic4rl_agents.bench.cell import _plan
+from pic4rl_agents.bench.suite import load_suite
+from pic4rl_agents.testing.plan import resolve_agents
+from pic4rl_bridge.config import AGENT_KEYS, EnvConfig, agent_keys
+from pic4rl_bridge.errors import ConfigError
+
+TD3_LIDAR = ROOT / "checkpoints" / "td3_lidar"
+
+
+def run_main(argv: list[str]) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = tester.main(argv)
+    return code, err.getvalue()
+
+
+def test_the_declared_keys_are_env_parameters_and_follow_the_sensor() -> None:
+    params = EnvConfig().to_params()
+    for key in AGENT_KEYS:
+        assert key in params or any(p.startswith(key) for p in params), key
+    lidar, depth = agent_keys(EnvConfig()), agent_keys(EnvConfig(sensor="depth"))
+    assert {"lidar.max_range_m", "lidar.beams", "min_linear_m_s"} <= set(lidar)
+    assert not any(k.startswith("depth.") for k in lidar)
+    assert {"depth.width", "depth.max_depth_m", "depth.encoding"} <= set(depth)
+    assert "episode_max_steps" not in lidar and "reward.goal" not in lidar
+
+
+@pytest.mark.bad_input
+def test_an_override_that_changes_the_agents_range_is_refused(tmp_path: Path) -> None:
+    code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path), "--no-progress",
+                          "--env-kwargs", "lidar.max_range_m:10.0"])
+    assert code == 2
+    assert err.splitlines() == [
+        f"pic4rl-test: --agent {TD3_LIDAR}: lidar.max_range_m: -p/--env-kwargs gives 10.0 but "
+        f"the agent was trained with 3.5 ({TD3_LIDAR / 'config.yaml'}); a test env must not "
+        "change what an agent observes or how it acts: remove lidar.max_range_m there or set "
+        "it to 3.5"]
+    assert not list(tmp_path.iterdir())  # nothing driven, no run folder
+
+
+@pytest.mark.bad_input
+def test_a_params_file_that_changes_the_agents_settings_is_refused_naming_it(
+        tmp_path: Path) -> None:
+    env = tmp_path / "env.yaml"
+    env.write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
+        "episode_max_steps": 50, "min_linear_m_s": 0.0, "lidar": {"max_range_m": 10.0}}}}))
+    code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path / "bags"),
+                          "--ros-args", "--params-file", str(env)])
+    assert code == 2
+    line, = err.splitlines()
+    assert line.startswith(f"pic4rl-test: --agent {TD3_LIDAR}: min_linear_m_s: {env} gives 0.0 "
+                           "but the agent was trained with 0.1")
+    assert "(also lidar.max_range_m)" in line
+
+
+def test_a_test_env_that_agrees_or_is_silent_keeps_the_agents_settings(tmp_path: Path) -> None:
+    env = tmp_path / "env.yaml"
+    env.write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
+        "episode_max_steps": 50, "lidar": {"max_range_m": 3.5}}}}))
+    plain, ros = tester.split_ros_args(["--agent", str(TD3_LIDAR), "--ros-args",
+                                        "--params-file", str(env)])
+    spec, = resolve_agents(tester.build_plan(tester.build_parser().parse_args(plain), ros))
+    assert (spec.run.env.lidar.max_range_m, spec.run.env.min_linear_m_s) == (3.5, 0.1)
+    assert spec.run.env.episode_max_steps == 50  # the test env's own keys still apply
+
+
+@pytest.mark.bad_input
+def test_a_suite_whose_env_contradicts_an_agent_is_refused_before_any_cell(
+        tmp_path: Path) -> None:
+    (tmp_path / "env.yaml").write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
+        "lidar": {"max_range_m": 10.0}}}}))
+    (tmp_path / "suite.yaml").write_text(yaml.safe_dump({
+        "suite": "s", "tasks": [{"name": "goto", "env": "env.yaml",
+                                 "agents": {"td3": str(TD3_LIDAR)}}]}))
+    with pytest.raises(ConfigError, match=r"^\S+suite.yaml: tasks\[0\].agents.td3: --agent "
+                       r"\S+: lidar.max_range_m: \S+env.yaml gives 10.0 but the agent was "
+                       r"trained with 3.5"):
+        load_suite(tmp_path / "suite.yaml")
+
+
+def test_the_table1_suite_gives_each_agent_its_trained_observation(tmp_path: Path) -> None:
+    suite = load_suite(ROOT / "config" / "suite_table1.yaml", bags_dir=tmp_path)
+    trained = {}
+    for cell in suite.cells:
+        if cell.agent_path and cell.agent not in trained:
+            spec, = resolve_agents(_plan(cell, suite.root, episodes=1, pairs="", domain=1))
+            trained[cell.agent] = spec.run.env
+    assert set(trained) == {"td3_lidar", "sac_lidar", "td3_depth", "sac_depth",
+                            "sac_person_hybrid", "td3_person_hybrid"}
+    for name in ("td3_lidar", "sac_lidar"):
+        env = trained[name]
+        assert (env.lidar.max_range_m, env.lidar.beams, env.min_linear_m_s) == (3.5, 36, 0.1)
+        assert env.max_linear_m_s == 0.5 and env.normalize_observations
+    for name in ("td3_depth", "sac_depth"):
+        assert (trained[name].depth.width, trained[name].depth.height) == (40, 30)
+    for name in ("sac_person_hybrid", "td3_person_hybrid"):
+        assert trained[name].lidar.max_range_m == 5.0 and trained[name].person.control == "hybrid"
+
+
+@pytest.mark.bad_input
+def test_a_test_robot_that_changes_the_agents_speed_range_or_period_is_refused(
+        tmp_path: Path) -> None:
+    """The same keys, but a slower robot (the Burger's 0.22 m/s caps the agent's 0.5) or
+    another control period: the agent's actions would mean something else."""
+    for sim, theirs in (
+            ("robot:burger", "v in [0.1, 0.22] m/s, |ω| ≤ 1 rad/s every 0.1 s"),
+            ("control_dt_s:0.05", "v in [0.1, 0.5] m/s, |ω| ≤ 1 rad/s every 0.05 s")):
+        code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path),
+                              "--sim-kwargs", sim])
+        assert code == 2
+        assert err.splitlines() == [
+            f"pic4rl-test: --agent {TD3_LIDAR}: its test robot drives {theirs} but the agent was "
+            f"trained on v in [0.1, 0.5] m/s, |ω| ≤ 1 rad/s every 0.1 s "
+            f"({TD3_LIDAR / 'config.yaml'}); an action must mean what it meant in training: test "
+            "it on a robot as fast, at its period"]
+    assert not list(tmp_path.iterdir())

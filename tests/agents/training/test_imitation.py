@@ -1,0 +1,242 @@
+"""Expert-guided training: DAgger labels the states the student drives into (the expert drives
+behaviour cloning's), imitation's transitions land in the replay buffer, the regression lowers
+the actor's error on the labels, and a tiny imitation + fine-tune run gives an SB3 model like
+any other, in process and through ROS 2 (``pic4rl-run``, a sim node in its own process)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import torch
+import yaml
+from agents_helpers import CONFIG, label_error, Launcher, LIDAR_TD3, ROS_ARGS, TINY
+from ros_helpers import next_domain
+from stable_baselines3.common.callbacks import CallbackList
+from stable_baselines3.common.logger import configure
+from stable_baselines3.common.utils import obs_as_tensor
+
+from pic4rl_agents.training import train
+from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
+from pic4rl_agents.config import ImitationConfig, load_run_config
+from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation, actor_loss
+from pic4rl_bridge.errors import ConfigError
+
+IMITATION = ["imitation.enabled:true", "imitation.bc_steps:40", "imitation.dagger_rounds:1",
+             "imitation.dagger_steps:40", "imitation.gradient_steps:20",
+             "imitation.critic_warmup_steps:10"]
+
+
+def _setup(algorithm: str = "td3", n_envs: int = 2):
+    run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
+                                              "algorithm": algorithm},
+                          env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+    env = make_vec_env(run.env, n_envs=n_envs, seed=0, vec_env="dummy")
+    model = new_model(run.train, env)
+    model.set_logger(configure(None, []))
+    callback = CallbackList([])
+    callback.init_callback(model)
+    config = ImitationConfig(enabled=True, bc_steps=40, dagger_rounds=1, dagger_steps=40,
+                             gradient_steps=50, critic_warmup_steps=10)
+    return run, env, model, Imitation(config, env, run.env, model, callback, batch_size=16)
+
+
+def test_dagger_labels_the_states_the_student_drives_into() -> None:
+    """The expert drives behaviour cloning's steps (its actions are its labels); in a DAgger
+    round the student's own deterministic actions drive, and the expert labels each state
+    it leads to; all of them are aggregated, and every transition is in the replay buffer."""
+    _, env, model, imitation = _setup()
+    try:
+        assert imitation.collect(40, EXPERT) and imitation.collect(40, STUDENT)
+        obs, labels, drivers = imitation.data.arrays()
+        assert (drivers == EXPERT).sum() == 40 and (drivers == STUDENT).sum() == 40
+        assert obs.shape == (80, *env.observation_space.shape) and labels.shape == (80, 2)
+        assert np.all(np.abs(labels) <= 1.0)
+        buffer = model.replay_buffer
+        assert buffer.size() == 40  # 40 steps of 2 envs each: 80 transitions
+        stored = buffer.actions[:buffer.size()].reshape(-1, 2)  # (step, env) order, as obs
+        student = drivers == STUDENT
+        np.testing.assert_allclose(stored[~student], labels[~student], atol=1e-6)
+        acted, _ = model.predict(obs[student], deterministic=True)
+        np.testing.assert_allclose(stored[student], acted, atol=1e-5)
+        assert not np.allclose(stored[student], labels[student], atol=0.05)  # an untrained one
+        assert model.num_timesteps == 80
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("algorithm", ["td3", "sac"])
+def test_the_regression_fits_the_labels(algorithm: str) -> None:
+    _, env, model, imitation = _setup(algorithm, n_envs=1)
+    try:
+        imitation.collect(60, EXPERT)
+        obs, labels, _ = imitation.data.arrays()
+
+        before = label_error(model, obs, labels)
+        imitation.fit(300)
+        assert label_error(model, obs, labels) < 0.5 * before
+        with torch.no_grad():  # the loss the fit lowers is the actor's own
+            loss = actor_loss(model, obs_as_tensor(obs, model.device), torch.as_tensor(labels))
+        assert float(loss) == pytest.approx(imitation.losses[-1], rel=1.0)
+        if algorithm == "td3":  # RL's target actor starts as the imitated one
+            for a, b in zip(model.actor.parameters(), model.actor_target.parameters()):
+                assert torch.equal(a, b)
+    finally:
+        env.close()
+
+
+def test_the_critic_warms_up_with_the_actor_frozen() -> None:
+    _, env, model, imitation = _setup()
+    try:
+        imitation.collect(40, EXPERT)
+        actor = [p.detach().clone() for p in model.actor.parameters()]
+        critic = [p.detach().clone() for p in model.critic.parameters()]
+        imitation.warm_up_critic(5)
+        assert all(torch.equal(a, p) for a, p in zip(actor, model.actor.parameters()))
+        assert not all(torch.equal(c, p) for c, p in zip(critic, model.critic.parameters()))
+        assert all(p.requires_grad for p in model.actor.parameters())
+    finally:
+        env.close()
+
+
+def test_imitation_then_fine_tuning_gives_an_sb3_model(tmp_path: Path) -> None:
+    """80 imitation steps, a critic warm-up, then TD3 to 160 steps: one run directory like
+    any other (model, evaluations, summary), the model loads, and the RL phase updated it."""
+    args = ["--no-progress", "--run", "il", "--hyperparams", f"runs_dir:{tmp_path}", *TINY,
+            *IMITATION, "eval.interval_steps:80", "checkpoint.interval_steps:0",
+            "-n", "160", "--env-kwargs", "episode_max_steps:30", "min_linear_m_s:0.0",
+            "--ros-args", "--params-file", str(LIDAR_TD3)]
+    assert train.main(args) == 0
+    run = tmp_path / "il"
+    model = load_model(run / "model.zip", "td3")
+    assert isinstance(model, ALGORITHMS["td3"]) and model.num_timesteps == 160
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    assert summary["total_steps"] == 160
+    evaluations = pd.read_csv(run / "eval" / "0" / "evaluations.csv")
+    assert list(evaluations["steps"]) == [80, 160]
+    progress = pd.read_csv(run / "logs" / "0" / "progress.csv")
+    assert progress["train/n_updates"].max() > 10  # the warm-up's 10, then RL's own
+    config = yaml.safe_load((run / "config.yaml").read_text())
+    assert config["trainer"]["ros__parameters"]["imitation.enabled"] is True
+
+
+MEMORY = ["imitation.expert:explorer", "policy.cnn_channels:[4, 8]", "policy.cnn_features:16"]
+MEMORY_ENV = ["memory.enabled:true", "memory.size_px:32", "memory.resolution_m:0.3"]
+
+
+def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
+    """imitation.expert explorer: one grid per env, marked with each step's frame (the
+    student's scan and pose), reset with the episode."""
+    from pic4rl_bridge.explorer import ExplorerController
+
+    run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
+                                              "imitation.expert": "explorer"},
+                          env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
+    model = new_model(run.train, env)
+    model.set_logger(configure(None, []))
+    callback = CallbackList([])
+    callback.init_callback(model)
+    imitation = Imitation(ImitationConfig(enabled=True, expert="explorer", bc_steps=10),
+                          env, run.env, model, callback, batch_size=16)
+    try:
+        expert = imitation.experts[0]
+        assert isinstance(expert, ExplorerController)
+        seen, observe = [], expert.observe
+        expert.observe = lambda frame: (seen.append(frame), observe(frame))[1]  # type: ignore
+        imitation.collect(10, EXPERT)
+        assert len(seen) == 10 and len(expert.grid.cells) > 0 and expert.path is not None
+        assert all(a.stamp_ns < b.stamp_ns for a, b in zip(seen, seen[1:]))  # one per step
+        again = ExplorerController(expert.robot)
+        for frame in seen:  # the same frames give the same grid: nothing else went in
+            again.observe(frame)
+        assert np.array_equal(np.sort(again.grid.cells, axis=0),
+                              np.sort(expert.grid.cells, axis=0))
+    finally:
+        env.close()
+
+
+def test_imitation_with_memory_then_fine_tuning_gives_a_loadable_model(tmp_path: Path) -> None:
+    """The explorer labels, the observation holds the memory crop (a Dict through the CNN
+    extractor): 80 imitation steps then TD3 to 160, a model that loads and acts."""
+    args = ["--no-progress", "--run", "mem", "--hyperparams", f"runs_dir:{tmp_path}", *TINY,
+            *IMITATION, *MEMORY, "eval.interval_steps:0", "checkpoint.interval_steps:0",
+            "-n", "160", "--env-kwargs", "episode_max_steps:30", "min_linear_m_s:0.0",
+            *MEMORY_ENV, "--ros-args", "--params-file", str(LIDAR_TD3)]
+    assert train.main(args) == 0
+    model = load_model(tmp_path / "mem" / "model.zip", "td3")
+    assert model.num_timesteps == 160
+    space = model.observation_space
+    assert set(space.spaces) == {"memory", "lidar"} and space["memory"].shape == (1, 32, 32)
+    action, _ = model.predict(space.sample(), deterministic=True)
+    assert action.shape == (2,)
+
+
+@pytest.mark.integration
+@pytest.mark.slow
+def test_imitation_with_memory_trains_through_ros(tmp_path: Path) -> None:
+    args = ["train", "--hyperparams", *TINY, *IMITATION, *MEMORY, "checkpoint.interval_steps:0",
+            "eval.interval_steps:0", "--env-kwargs", "episode_max_steps:30",
+            "min_linear_m_s:0.0", *MEMORY_ENV, "-n", "120", "--run", "mem_ros",
+            "--no-progress", "--ros-args", "--params-file", str(LIDAR_TD3),
+            "-p", f"runs_dir:={tmp_path}", *ROS_ARGS]
+    launcher = Launcher.start(args, tmp_path / "launcher.log", next_domain())
+    try:
+        assert launcher.wait(300) == 0, launcher.output
+        assert launcher.left() == []
+    finally:
+        launcher.stop(interrupt=False)
+    model = load_model(tmp_path / "mem_ros" / "model.zip", "td3")
+    assert model.num_timesteps == 120 and "memory" in model.observation_space.spaces
+
+
+def test_imitation_needs_an_off_policy_algorithm() -> None:
+    with pytest.raises(ConfigError, match="imitation.enabled"):
+        load_run_config([LIDAR_TD3], train={"algorithm": "ppo", "epsilon.initial": 0.0,
+                                            "imitation.enabled": True})
+
+
+@pytest.mark.integration
+@pytest.mark.slow
+def test_imitation_trains_through_ros(tmp_path: Path) -> None:
+    args = ["train", "--hyperparams", *TINY, *IMITATION, "checkpoint.interval_steps:0",
+            "eval.interval_steps:0", "--env-kwargs", "episode_max_steps:30",
+            "min_linear_m_s:0.0", "-n", "120", "--run", "il_ros", "--no-progress",
+            "--ros-args", "--params-file", str(LIDAR_TD3), "-p", f"runs_dir:={tmp_path}",
+            *ROS_ARGS]
+    launcher = Launcher.start(args, tmp_path / "launcher.log", next_domain())
+    try:
+        assert launcher.wait(300) == 0, launcher.output
+        assert launcher.left() == []
+    finally:
+        launcher.stop(interrupt=False)
+    model = load_model(tmp_path / "il_ros" / "model.zip", "td3")
+    assert model.num_timesteps == 120
+    config = yaml.safe_load((tmp_path / "il_ros" / "config.yaml").read_text())
+    assert config["nav_env"]["ros__parameters"]["transport"] == "ros"
+
+
+def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
+    """In a hybrid person env the expert labels ω alone, end to end (vx, vy, ω); it drives
+    personMonitoring only, and the planner goToPose only."""
+    from pic4rl_agents.training.imitation import make_expert
+    from pic4rl_bridge.config import load_env_config
+    from pic4rl_bridge.follow import HeadingController
+
+    person = load_env_config(CONFIG / "env_person_omni.yaml")
+    for control, size in (("hybrid", 1), ("end_to_end", 3)):
+        expert = make_expert("heading", person.replace(**{"person.control": control}))
+        assert isinstance(expert, HeadingController) and expert.hybrid == (size == 1)
+    with pytest.raises(ConfigError, match="heading drives personMonitoring; the env's task is "
+                                          "'goToPose' \\(use planner\\)"):
+        make_expert("heading", load_run_config([LIDAR_TD3]).env)
+    with pytest.raises(ConfigError, match="planner drives goToPose; .*'personMonitoring' "
+                                          "\\(use heading\\)"):
+        make_expert("planner", person)
+    with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
+                                          "explorer, heading"):
+        make_expert("nobody", person)
