@@ -41,10 +41,10 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
-from .baseline_config import PREFIX as BASELINES_PREFIX
+from .baselines.config import PREFIX as BASELINES_PREFIX
 from .errors import ConfigError, require
-from .sensors import SENSORS
-from .task_registry import (
+from .transports.sensor_table import SENSORS
+from .tasks.registry import (
     TASKS,
     GoalInput,
     PersonConfig,
@@ -116,7 +116,7 @@ class DepthObsConfig:
 @dataclass(frozen=True)
 class MemoryObsConfig:
     """goToPose's memory: an egocentric crop of an occupancy grid of the robot's own scans
-    (``pic4rl_bridge.occupancy``), beside the usual observation in a Dict."""
+    (``pic4rl_bridge.perception.occupancy``), beside the usual observation in a Dict."""
 
     enabled: bool = param(False, doc="goToPose: add the memory crop to the observation (a Dict: "
                           "memory, and lidar or depth and goal)")

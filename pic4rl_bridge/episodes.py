@@ -39,11 +39,11 @@ from pic4rl_sim.engine.sampling import (
 
 from .config import EpisodesConfig
 from .errors import ConfigError
-from .transport import EpisodeRequest
+from .transports.transport import EpisodeRequest
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.paths import PathPlanner
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
     from .scenario import Scenario
 

@@ -21,10 +21,10 @@ from pic4rl_metrics import raster
 from pic4rl_metrics.raster import COLORS, View
 
 from .errors import ConfigError
-from .frame import SensorFrame
+from .perception.collision import scan_points
 from .scenario import Scenario
 from .tasks.base import EpisodeContext
-from .tasks.collision import scan_points
+from .transports.frame import SensorFrame
 
 #: ``render_view`` values: the drawn top-down view, or MuJoCo's camera.
 RENDER_VIEWS = ("top", "mujoco")

@@ -21,8 +21,8 @@ from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
 from .engine.robot_specs import RobotSpec, load_robot
 from .engine.sensors import SENSOR_KINDS
-from .engine.world_generators import GENERATORS, make_world
-from .engine.world_spec import WorldSpec
+from .engine.worlds.generators import GENERATORS, make_world
+from .engine.worlds.spec import WorldSpec
 from .errors import ConfigError, require, unknown_key
 from .schema import (
     ParamEnum,

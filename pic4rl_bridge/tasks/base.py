@@ -11,7 +11,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -20,8 +20,12 @@ from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
-from ..frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..transports.frame import SensorFrame
+from .registry import task_spec
+
+if TYPE_CHECKING:
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 
 @dataclass(frozen=True)
@@ -108,3 +112,11 @@ class Task(ABC):
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         """Bag facts this task adds (e.g. ``row_centerline``)."""
         return {}
+
+
+def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:
+    """The task ``config.task`` names (``pic4rl_bridge.tasks.registry.TASKS``), built by its
+    entry's ``build``; ``world``, when the task reads it (``uses_world``), is the simulated
+    world."""
+    task: Task = task_spec(config.task).make(config, robot, world)
+    return task

@@ -30,7 +30,7 @@ from .sensors import (
     Lidar,
     WheelOdometry,
 )
-from .world_spec import WorldSpec
+from .worlds.spec import WorldSpec
 
 log = logging.getLogger(__name__)
 

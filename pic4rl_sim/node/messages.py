@@ -29,7 +29,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 from ..engine.core import Engine
 from ..engine.geometry import Pose2D, yaw_to_quaternion
 from ..engine.sensors import EXACT_VARIANCE
-from ..engine.world_spec import WorldSpec
+from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (
     CAMERA_INFO,
     CLOCK,

@@ -21,13 +21,13 @@ from pic4rl_sim import params_file
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
-from pic4rl_bridge.baseline_config import BASELINES_NODE, DwaConfig, baselines_config
-from pic4rl_bridge.baselines import make_baseline
-from pic4rl_bridge.dwa import DwaController
+from pic4rl_bridge.baselines.config import BASELINES_NODE, DwaConfig, baselines_config
+from pic4rl_bridge.baselines.registry import make_baseline
+from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.config import EnvConfig, load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks.goto import planar_command
 

@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
-from pic4rl_sim.engine.world_spec import Box, WorldSpec
+from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 
-from pic4rl_bridge.baseline_config import baselines_config_from_params
-from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.baselines.config import baselines_config_from_params
+from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.explorer import ExplorerController
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.baselines.explorer import ExplorerController
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 
 ROBOT = RobotInfo(name="disc", footprint=Footprint(radius_m=0.2), omni=False,

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from pic4rl_sim.engine.geometry import Pose2D
 
-from pic4rl_bridge.frame import ScanData
-from pic4rl_bridge.occupancy import OccupancyGrid
-from pic4rl_bridge.tasks.collision import depth_scan, scan_points
+from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.perception.occupancy import OccupancyGrid
+from pic4rl_bridge.perception.collision import depth_scan, scan_points
 
 
 def _scan(angle: float, r: float, mount: Pose2D = Pose2D(0.0, 0.0, 0.0)) -> ScanData:

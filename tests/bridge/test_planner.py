@@ -12,10 +12,10 @@ import pytest
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path
-from pic4rl_sim.engine.world_spec import Box, WorldSpec
+from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 
-from pic4rl_bridge.frame import SensorFrame
-from pic4rl_bridge.planner import PlannerController
+from pic4rl_bridge.transports.frame import SensorFrame
+from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks.goto import planar_command
 

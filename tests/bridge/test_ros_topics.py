@@ -1,4 +1,4 @@
-"""The ROS transport's subscriptions (``pic4rl_bridge.ros_topics.wiring``) as pure data: which
+"""The ROS transport's subscriptions (``pic4rl_bridge.transports.ros_topics.wiring``) as pure data: which
 topics, with the sim's types and QoS, and the topic a lockstep step waits for."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from pic4rl_sim.interfaces import BRIDGE_HISTORY, DEPTH_IMAGE, PLAN, SCAN, QosSe
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.ros_topics import Topic, stale, wiring
+from pic4rl_bridge.transports.ros_topics import Topic, stale, wiring
 
 
 def resolve(name: str) -> str:
@@ -70,7 +70,7 @@ def test_a_recorded_only_topic_stamp_is_read_from_its_cdr_bytes() -> None:
     from pic4rl_sim.node.ros_interfaces import ros_type, starts_with_stamp
     from rclpy.serialization import serialize_message
 
-    from pic4rl_bridge.ros_topics import KNOWN_TOPICS, cdr_stamp
+    from pic4rl_bridge.transports.ros_topics import KNOWN_TOPICS, cdr_stamp
 
     without = set()
     for topic in KNOWN_TOPICS.values():

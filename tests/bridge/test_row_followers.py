@@ -14,13 +14,13 @@ from pic4rl_metrics.geometry import project
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
-from pic4rl_bridge.baselines import BASELINE_TASKS, check_fits, make_baseline
+from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits, make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.row_followers import RowFollower
+from pic4rl_bridge.baselines.row_followers import RowFollower
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_vineyard_depth.yaml"

@@ -1,4 +1,4 @@
-"""The frame's sensor table (``pic4rl_bridge.sensors``): one entry per reading of
+"""The frame's sensor table (``pic4rl_bridge.transports.sensor_table``): one entry per reading of
 ``SensorFrame``, one place that builds frames, and for each sensor the in-process engine read
 bit-identical to decoding the sim node's message (what makes both transports' frames equal)."""
 
@@ -13,13 +13,13 @@ import pytest
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.node.messages import StateMessages, plan_path
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.frame import ScanData, SensorFrame
-from pic4rl_bridge.sensors import SENSORS, FrameSensor, build_frame
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.transports.sensor_table import SENSORS, FrameSensor, build_frame
 
 BRIDGE = Path(__file__).resolve().parents[2] / "pic4rl_bridge"
 #: The fields every frame has; the sensors' are its ``readings``.
@@ -65,7 +65,7 @@ def test_only_build_frame_constructs_a_sensor_frame() -> None:
             if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
                     and node.func.id == "SensorFrame"):
                 builders.append(path.relative_to(BRIDGE).as_posix())
-    assert builders == ["sensors.py"]
+    assert builders == ["transports/sensor_table.py"]
 
 
 def test_build_frame_fills_only_the_wanted_sensors() -> None:

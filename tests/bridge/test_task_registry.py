@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 import pic4rl_bridge
-from pic4rl_bridge.baselines import BASELINE_TASKS, check_fits
+from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.task_registry import (
+from pic4rl_bridge.tasks.registry import (
     TASKS,
     EnvId,
     GoToPoseReward,

@@ -10,9 +10,9 @@ from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.tasks.collision import (assess, depth_points, footprint_clearance,
+from pic4rl_bridge.perception.collision import (assess, depth_points, footprint_clearance,
                                            obstacle_distance, scan_points)
 
 CIRCLE = Footprint(radius_m=0.3)

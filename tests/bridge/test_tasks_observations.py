@@ -11,9 +11,9 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.frame import ScanData
-from pic4rl_bridge.tasks.collision import scan_points
-from pic4rl_bridge.tasks.observations import (clipped_action, depth_observation, depth_space,
+from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.perception.collision import scan_points
+from pic4rl_bridge.perception.observations import (clipped_action, depth_observation, depth_space,
                                               lidar_sectors, target_polar)
 
 

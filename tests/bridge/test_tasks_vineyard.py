@@ -9,14 +9,14 @@ import pytest
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.vineyard import VineyardTask, polyline_length, project
 from pic4rl_metrics.contract import Outcome
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
-from pic4rl_sim.engine.world_spec import WorldSpec
+from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 STRAIGHT = ((0.0, 0.0), (10.0, 0.0))
 OTHER = ((0.0, 2.5), (10.0, 2.5))

@@ -1,6 +1,6 @@
 """One collision judgement: the metrics place the scan's points by the LiDAR's mount and
 measure their signed distance to the footprint exactly as the env does
-(``pic4rl_bridge.tasks.collision``), and on recorded episodes they flag the very steps the env
+(``pic4rl_bridge.perception.collision``), and on recorded episodes they flag the very steps the env
 flagged. This test imports the bridge; ``pic4rl_metrics`` itself never does."""
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pic4rl_bridge.frame import ScanData
-from pic4rl_bridge.tasks.collision import footprint_clearance, scan_points
+from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.perception.collision import footprint_clearance, scan_points
 from pic4rl_metrics import EpisodeFacts, Footprint, compute, read_episode
 from pic4rl_metrics.geometry import Mount
 from pic4rl_metrics.scan_summary import scan_clearance

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_sim.engine.barn_world import (
+from pic4rl_sim.engine.worlds.barn import (
     DATA,
     LICENSE,
     WORLDS,
@@ -20,7 +20,7 @@ from pic4rl_sim.engine.barn_world import (
 from pic4rl_sim.engine.paths import shortest_path_length
 from pic4rl_sim.engine.robot_specs import BUILT_IN
 from pic4rl_sim.engine.sampling import sample_start_goal
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.errors import ConfigError
 
 JACKAL_RADIUS_M = BUILT_IN["jackal"].footprint.bounding_radius_m

@@ -11,7 +11,7 @@ from pic4rl_sim.engine.core import Engine, EngineConfig, limit_command
 from pic4rl_sim.errors import ConfigError, WorldError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.robot_specs import BURGER, HUSKY, JACKAL, OMNI, LidarSpec
-from pic4rl_sim.engine.world_spec import Box, Cylinder, PersonSpec, WorldSpec
+from pic4rl_sim.engine.worlds.spec import Box, Cylinder, PersonSpec, WorldSpec
 
 
 def open_field(*boxes: Box, cylinders: tuple[Cylinder, ...] = (), person: PersonSpec | None = None

@@ -25,7 +25,7 @@ from pic4rl_sim.params import (
 )
 from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI, robot_from_mapping
 from pic4rl_sim.engine.sensors import SENSOR_KINDS
-from pic4rl_sim.engine.world_generators import GENERATORS
+from pic4rl_sim.engine.worlds.generators import GENERATORS
 from pic4rl_sim.schema import param_names
 
 RCLPY_OWN = ("use_sim_time", "start_type_description_service")

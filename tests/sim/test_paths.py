@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from pic4rl_sim.errors import ConfigError
 from pic4rl_sim.engine.paths import PathPlanner, planner_for, shortest_path_length
-from pic4rl_sim.engine.world_spec import Box, Cylinder, WorldSpec
+from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec
 
 OPEN = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0))
 RADIUS, THICKNESS, GAP_LOW = 0.25, 0.1, 1.0  # the wall: x in ±0.05, solid below y = 1, above 2

@@ -19,8 +19,8 @@ from pic4rl_sim.engine.sampling import (
     sample_pairs,
     sample_start_goal,
 )
-from pic4rl_sim.engine.world_spec import Box, WorldSpec
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
+from pic4rl_sim.engine.worlds.generators import make_world
 
 INDOOR = make_world("indoor", seed=0)
 RADIUS = JACKAL.footprint.bounding_radius_m

@@ -76,4 +76,4 @@ def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
     """A params file is read, checked and its worlds generated without MuJoCo (only a user's
     MJCF world loads it)."""
     assert _loaded("pic4rl_sim.params, pic4rl_sim.params_file, pic4rl_sim.schema, "
-                   "pic4rl_sim.engine.world_generators") == ([], False)
+                   "pic4rl_sim.engine.worlds.generators") == ([], False)

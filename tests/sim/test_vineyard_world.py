@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.vineyard_world import POST_OFFSET_M
-from pic4rl_sim.engine.world_generators import make_world
-from pic4rl_sim.engine.world_spec import WorldSpec, clearance
+from pic4rl_sim.engine.worlds.vineyard import POST_OFFSET_M
+from pic4rl_sim.engine.worlds.generators import make_world
+from pic4rl_sim.engine.worlds.spec import WorldSpec, clearance
 from pic4rl_sim.errors import ConfigError
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.engine.world_spec import Box, Cylinder, WorldSpec, clearance
-from pic4rl_sim.engine.world_generators import (
+from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec, clearance
+from pic4rl_sim.engine.worlds.generators import (
     GENERATORS,
     ObstaclesParams,
     make_world,
@@ -18,7 +18,7 @@ from pic4rl_sim.engine.world_generators import (
     world_params,
 )
 from pic4rl_sim.schema import param_names, specs, to_params
-from pic4rl_sim.engine.mjcf_world import world_from_mjcf
+from pic4rl_sim.engine.worlds.mjcf import world_from_mjcf
 
 ROBOT_RADIUS_M = 0.25
 KINDS = sorted(GENERATORS)

@@ -18,10 +18,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..schema import PROBABILITY, Range, check, param, to_params
+from ...schema import PROBABILITY, Range, check, param, to_params
 from .arena import rng_for, walls
-from .barn_world import start_and_goal
-from .world_spec import Cylinder, WorldSpec
+from .barn import start_and_goal
+from .spec import Cylinder, WorldSpec
 
 CELL_M = 0.15
 RADIUS_M = 0.075

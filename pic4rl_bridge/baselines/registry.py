@@ -5,15 +5,15 @@ in ``follow`` (``BASELINE_TASKS`` says which task each drives).
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
   that the env, transport and recorder work end to end (it reaches any goal in open space).
-- ``dwa``: the Dynamic Window Approach (``pic4rl_bridge.dwa``), the local planner that
+- ``dwa``: the Dynamic Window Approach (``pic4rl_bridge.baselines.dwa``), the local planner that
   nav2 and the BARN challenge compare learned planners with.
-- ``planner``: the privileged planner (``pic4rl_bridge.planner``): the world's shortest path
+- ``planner``: the privileged planner (``pic4rl_bridge.baselines.planner``): the world's shortest path
   with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
-- ``explorer``: the mapless explorer (``pic4rl_bridge.explorer``): the shortest path on an
+- ``explorer``: the mapless explorer (``pic4rl_bridge.baselines.explorer``): the shortest path on an
   occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
   followed by the planner's pursuit law; it knows no map, as no agent does.
 - ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
-  bearing turns the base (``pic4rl_bridge.follow``): the classical version of the RL-DWA
+  bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
   hybrid.
 
 The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
@@ -28,17 +28,17 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .baseline_config import BaselinesConfig
-from .config import EnvConfig
+from ..config import EnvConfig
+from ..errors import ConfigError
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..tasks.registry import TASKS
+from ..transports.frame import SensorFrame
+from .config import BaselinesConfig
 from .dwa import DwaController
-from .errors import ConfigError
-from .frame import SensorFrame
-from .robot_info import RobotInfo
-from .task_registry import TASKS
-from .tasks.goto import normalized_action
 
 if TYPE_CHECKING:
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 
 def _bearing(dx: float, dy: float, yaw: float) -> float:

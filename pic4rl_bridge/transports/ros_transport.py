@@ -45,14 +45,14 @@ from pic4rl_sim.node.ros_interfaces import (
     type_name,
 )
 
+from ..config import EnvConfig, StepMode
+from ..errors import EpisodeRejected, StaleSensor, TransportError
+from ..scenario import Scenario
 from . import decode
-from .config import EnvConfig, StepMode
-from .errors import EpisodeRejected, StaleSensor, TransportError
 from .frame import SensorFrame
 from .ros_sim import check_one_sim, episode_request, subscribe_status
 from .ros_topics import Topic, command_message, offered, receiver, silent, stale, wiring
-from .scenario import Scenario
-from .sensors import FrameSensor, build_frame
+from .sensor_table import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)

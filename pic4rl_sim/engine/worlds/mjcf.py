@@ -9,8 +9,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from ..errors import WorldError
-from .world_spec import Box, Cylinder, WorldSpec
+from ...errors import WorldError
+from .spec import Box, Cylinder, WorldSpec
 
 
 def world_from_mjcf(path: str | Path) -> WorldSpec:

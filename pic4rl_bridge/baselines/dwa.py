@@ -9,12 +9,12 @@ import math
 
 import numpy as np
 
-from .baseline_config import DwaConfig
-from .errors import ConfigError
-from .frame import SensorFrame
-from .robot_info import RobotInfo
-from .tasks.collision import footprint_clearance, sensed_points
-from .tasks.goto import normalized_action
+from ..errors import ConfigError
+from ..perception.collision import footprint_clearance, sensed_points
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..transports.frame import SensorFrame
+from .config import DwaConfig
 
 
 _LANES = 72  # directions (5° apart) checked for a free lane toward the goal
@@ -205,4 +205,4 @@ class DwaController:
 
 
 #: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives (each task's
-#: ``baselines`` in ``pic4rl_bridge.task_registry.TASKS``).
+#: ``baselines`` in ``pic4rl_bridge.tasks.registry.TASKS``).

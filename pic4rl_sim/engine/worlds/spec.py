@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import require
-from .geometry import Pose2D
+from ...errors import require
+from ..geometry import Pose2D
 
 
 @dataclass(frozen=True)

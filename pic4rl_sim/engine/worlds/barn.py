@@ -20,11 +20,11 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, ClassVar
 
-from ..errors import require
-from ..schema import check
+from ...errors import require
+from ...schema import check
+from ..geometry import Pose2D
 from .arena import walls
-from .geometry import Pose2D
-from .world_spec import Cylinder, WorldSpec
+from .spec import Cylinder, WorldSpec
 
 DATA = Path(__file__).with_name("data") / "barn_worlds.json.gz"
 LICENSE = DATA.with_name("LICENSE-BARN")

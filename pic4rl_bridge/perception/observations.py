@@ -20,7 +20,7 @@ from pic4rl_sim.engine.geometry import Pose2D, wrap_angle
 
 from ..config import DepthObsConfig, LidarObsConfig
 from ..errors import ConfigError
-from ..frame import ScanData
+from ..transports.frame import ScanData
 
 
 #: A beam this close (rad) below a sector's start counts in that sector: a LaserScan's float32

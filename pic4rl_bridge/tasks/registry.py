@@ -20,8 +20,8 @@ from typing import Any
 
 from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
-from .baseline_config import DwaConfig
-from .errors import ConfigError, require
+from ..baselines.config import DwaConfig
+from ..errors import ConfigError, require
 
 
 @dataclass(frozen=True)

@@ -18,8 +18,8 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from ..errors import ConfigError, require, unknown_key
-from ..schema import (
+from ...errors import ConfigError, require, unknown_key
+from ...schema import (
     POSITIVE,
     PROBABILITY,
     Range,
@@ -29,12 +29,12 @@ from ..schema import (
     redefault,
     to_params,
 )
+from ..person_walk import corner_occluders, leg_speeds
 from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
-from .barn_like_world import BarnLikeParams, barn_like
-from .barn_world import BarnParams, barn
-from .person_walk import corner_occluders, leg_speeds
-from .vineyard_world import VineyardParams, vineyard
-from .world_spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
+from .barn import BarnParams, barn
+from .barn_like import BarnLikeParams, barn_like
+from .spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
+from .vineyard import VineyardParams, vineyard
 
 OBSTACLE_HEIGHT_M = 1.0
 JUNCTION_MARGIN_M = 0.4  # a door's edge to the nearest crossing wall
@@ -327,7 +327,7 @@ def make_world(kind: str, *, seed: int = 0, **params: Any) -> WorldSpec:
         if params:
             raise ConfigError(f"world: {kind!r} is an MJCF file and takes no parameters; "
                               f"got {sorted(params)}")
-        from .mjcf_world import world_from_mjcf  # MuJoCo, loaded only for a user's file
+        from .mjcf import world_from_mjcf  # MuJoCo, loaded only for a user's file
 
         return world_from_mjcf(kind)
     typed = world_params(kind, params)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import require
-from .world_spec import Box
+from ...errors import require
+from .spec import Box
 
 WALL_THICKNESS_M = 0.1
 WALL_HEIGHT_M = 1.0

@@ -2,7 +2,7 @@
 
 It reads what a mapless agent reads, the scan (or the depth image's pseudo-scan) and the pose
 topic, never the world, so it runs in process, through the sim node over ROS 2 and on a real
-robot. Each frame's returns mark an occupancy grid (``pic4rl_bridge.occupancy``: unknown is
+robot. Each frame's returns mark an occupancy grid (``pic4rl_bridge.perception.occupancy``: unknown is
 free, as nav2's rolling costmap with ``track_unknown_space: false`` or D* Lite in unknown
 terrain plan optimistically). It plans the shortest path on that grid with the obstacles
 inflated by the footprint's circumscribed radius plus ``margin_m`` (``narrow_margin_m`` when
@@ -27,12 +27,12 @@ from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.paths import grid_search, grid_steps, segment_samples
 from pic4rl_sim.engine.taut_path import pull_taut
 
-from .baseline_config import ExplorerConfig
-from .frame import SensorFrame
-from .occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
+from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..transports.frame import SensorFrame
+from .config import ExplorerConfig
 from .planner import pursuit_command
-from .robot_info import RobotInfo
-from .tasks.goto import normalized_action
 
 _PAD_CELLS = 60  # free cells round the window's content (3 m at 5 cm)
 #: A cell with less clearance than the full margin (but the narrow one) costs this many times

@@ -28,17 +28,17 @@ from pic4rl_metrics.geometry import project
 from pic4rl_metrics.rows import LaneFit, LaneWindow, fit_lane
 from pic4rl_sim.engine.geometry import point_along
 
-from .config import EnvConfig
-from .errors import ConfigError
-from .frame import SensorFrame
-from .robot_info import RobotInfo
-from .tasks.collision import sensed_points
-from .tasks.goto import normalized_action
-from .tasks.observations import target_polar
-from .tasks.vineyard import centerlines, row_centerline
+from ..config import EnvConfig
+from ..errors import ConfigError
+from ..perception.collision import sensed_points
+from ..perception.observations import target_polar
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..tasks.vineyard import centerlines, row_centerline
+from ..transports.frame import SensorFrame
 
 if TYPE_CHECKING:
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 
 def _drive(robot: RobotInfo, bearing: float, turn_gain: float,

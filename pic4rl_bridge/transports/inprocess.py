@@ -27,12 +27,12 @@ from pic4rl_sim.interfaces import (
     interface,
 )
 
+from ..config import EnvConfig
+from ..errors import ConfigError, EpisodeRejected
+from ..scenario import Scenario
 from . import decode
-from .config import EnvConfig
-from .errors import ConfigError, EpisodeRejected
 from .frame import SensorFrame, as_published
-from .scenario import Scenario
-from .sensors import FrameSensor, build_frame
+from .sensor_table import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")

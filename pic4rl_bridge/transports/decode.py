@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
-from .errors import TransportError
+from ..errors import TransportError
 from .frame import ScanData, yaw_from_quaternion
 
 _MM = 1e-3

@@ -15,14 +15,14 @@ import math
 
 import numpy as np
 
+from ..config import EnvConfig
+from ..perception.collision import sensed_points
+from ..perception.observations import target_polar
+from ..robot_info import RobotInfo
+from ..tasks.registry import PersonControl
+from ..transports.frame import SensorFrame
+from .config import DwaConfig
 from .dwa import DwaController
-from .baseline_config import DwaConfig
-from .config import EnvConfig
-from .frame import SensorFrame
-from .robot_info import RobotInfo
-from .task_registry import PersonControl
-from .tasks.collision import sensed_points
-from .tasks.observations import target_polar
 
 
 class PersonFollower(DwaController):

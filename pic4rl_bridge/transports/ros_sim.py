@@ -12,8 +12,8 @@ from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.node import Node
 
+from ..errors import SimConflict
 from . import decode
-from .errors import SimConflict
 from .ros_topics import Topic
 from .transport import EpisodeRequest
 

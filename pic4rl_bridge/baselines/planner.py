@@ -31,12 +31,12 @@ from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import Pose2D, point_along
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path, planner_for
 from pic4rl_sim.engine.taut_path import Visible
-from pic4rl_sim.engine.world_spec import WorldSpec
+from pic4rl_sim.engine.worlds.spec import WorldSpec
 
-from .frame import SensorFrame
-from .robot_info import RobotInfo
-from .tasks.goto import normalized_action
-from .tasks.observations import target_polar
+from ..perception.observations import target_polar
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..transports.frame import SensorFrame
 
 
 _LOOKAHEAD_FRACTIONS = (1.0, 0.75, 0.5, 0.25)  # of lookahead_m, tried in turn
@@ -50,7 +50,7 @@ def pursuit_command(robot: RobotInfo, pose: Pose2D, path: np.ndarray, s: float,
     """(v, ω) (m/s, rad/s) toward the farthest point of ``path`` within ``lookahead_m`` beyond
     arc length ``s`` (the robot's projection) that ``visible`` says the robot reaches in a
     straight line: the pursuit law of the module's docstring, which the mapless explorer
-    (``pic4rl_bridge.explorer``) follows its own plans with too. ``max_linear_m_s``: a speed
+    (``pic4rl_bridge.baselines.explorer``) follows its own plans with too. ``max_linear_m_s``: a speed
     limit below the robot's (None: the robot's)."""
     xy = np.array([pose.x, pose.y])
     ahead = [point_along(path, s + f * lookahead_m) for f in _LOOKAHEAD_FRACTIONS]

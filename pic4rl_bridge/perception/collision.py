@@ -16,8 +16,8 @@ from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
-from ..frame import ScanData, SensorFrame
 from ..robot_info import RobotInfo
+from ..transports.frame import ScanData, SensorFrame
 
 
 def _to_base(forward: np.ndarray, left: np.ndarray, mount: Pose2D) -> np.ndarray:

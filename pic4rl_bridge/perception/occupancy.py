@@ -1,6 +1,6 @@
 """A rolling occupancy grid of the robot's own scans: what a mapless robot can remember.
 
-Each scan's returns (``tasks.collision.scan_points``: the beams' angles and the LiDAR's
+Each scan's returns (``perception.collision.scan_points``: the beams' angles and the LiDAR's
 mount, REP 117's ±inf) are placed with the frame's pose (the pose topic's: wheel odometry by
 default) and mark world-fixed cells of ``resolution_m`` as occupied. Nothing else is marked:
 unknown space counts as free, the optimistic convention of nav2's rolling costmap with
@@ -9,7 +9,7 @@ same frame twice gives the same grid), so the grid is a function of the frames s
 transport made them. It grows as the robot sees farther; past ``max_extent_m`` across it rolls,
 forgetting the cells farthest from the robot. ``reset`` clears it (one grid per episode).
 
-Two readers: the mapless ``explorer`` baseline (``pic4rl_bridge.explorer``) plans on it, and
+Two readers: the mapless ``explorer`` baseline (``pic4rl_bridge.baselines.explorer``) plans on it, and
 goToPose's memory observation is its egocentric crop (``crop``: heading up, the robot at the
 centre, as nav2's rolling local costmap is centred on the robot).
 """
@@ -21,9 +21,9 @@ import math
 import numpy as np
 from pic4rl_sim.engine.geometry import Pose2D
 
-from .frame import ScanData, SensorFrame
-from .robot_info import RobotInfo
-from .tasks.collision import depth_scan, scan_points
+from ..robot_info import RobotInfo
+from ..transports.frame import ScanData, SensorFrame
+from .collision import depth_scan, scan_points
 
 #: Cell size (m) of the grids the explorer and the memory observation keep.
 GRID_RESOLUTION_M = 0.05

@@ -16,11 +16,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import require
-from ..schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
+from ...errors import require
+from ...schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
+from ..geometry import Pose2D
 from .arena import rng_for, walls
-from .geometry import Pose2D
-from .world_spec import Box, Cylinder, WorldSpec
+from .spec import Box, Cylinder, WorldSpec
 
 TRUNK_RADIUS_M = 0.05
 TRUNK_HEIGHT_M = 1.2

@@ -19,7 +19,7 @@ from typing import Any
 
 from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, Range, check, from_params, param, section
 
-from .errors import ConfigError, require
+from ..errors import ConfigError, require
 
 BASELINES_NODE = "baselines"
 #: ``-p`` keys with this prefix are the ``baselines:`` section's.
@@ -28,8 +28,8 @@ PREFIX = f"{BASELINES_NODE}."
 
 @dataclass(frozen=True)
 class DwaConfig:
-    """The Dynamic Window Approach (``pic4rl_bridge.dwa.DwaController``, and the person
-    follower of ``pic4rl_bridge.follow``). The velocity ranges, acceleration limits, window
+    """The Dynamic Window Approach (``pic4rl_bridge.baselines.dwa.DwaController``, and the person
+    follower of ``pic4rl_bridge.baselines.follow``). The velocity ranges, acceleration limits, window
     period and footprint are the robot's. Its owner's section checks it (``check_as``)."""
 
     horizon_s: float = param(1.5, doc="each velocity sample is simulated this long", unit="s",
@@ -65,7 +65,7 @@ class DwaConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """The privileged planner (``pic4rl_bridge.planner.PlannerController``): how fast it goes
+    """The privileged planner (``pic4rl_bridge.baselines.planner.PlannerController``): how fast it goes
     against how wide it keeps of obstacles (BARN's dense fields want a slower, wider one)."""
 
     lookahead_m: float = param(0.4, doc="the steering target: the farthest point of the plan "
@@ -86,7 +86,7 @@ class PlannerConfig:
 
 @dataclass(frozen=True)
 class ExplorerConfig:
-    """The mapless explorer (``pic4rl_bridge.explorer.ExplorerController``): its plan's
+    """The mapless explorer (``pic4rl_bridge.baselines.explorer.ExplorerController``): its plan's
     clearance beyond the footprint's circumscribed radius, when it plans anew, and how fast
     it goes (BARN's dense fields want it slower, as the planner)."""
 

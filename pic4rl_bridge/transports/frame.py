@@ -42,7 +42,7 @@ class ScanData:
 
     def base_angles(self) -> np.ndarray:
         """Beam directions (rad, not wrapped) in the robot's base frame: ``angles()`` turned by
-        the mount's yaw. ``pic4rl_bridge.tasks.collision.scan_points`` places the returns
+        the mount's yaw. ``pic4rl_bridge.perception.collision.scan_points`` places the returns
         along the same directions, from the mount's position."""
         return self.angles() + self.mount.yaw
 
@@ -50,7 +50,7 @@ class ScanData:
 @dataclass(frozen=True, init=False)
 class SensorFrame:
     """Everything a task may read at one step: pose, twist and goal, and each sensor's reading
-    by its ``pic4rl_bridge.sensors.SENSORS`` name (given as keywords too, ``scan=...``); a
+    by its ``pic4rl_bridge.transports.sensor_table.SENSORS`` name (given as keywords too, ``scan=...``); a
     sensor the robot lacks, or the task did not ask for, is absent (its accessor: ``None``).
 
     ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
