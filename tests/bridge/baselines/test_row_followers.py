@@ -22,7 +22,7 @@ from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.baselines.row_followers import RowFollower
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_vineyard_depth.yaml"
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.508, width_m=0.430), omni=False,
                    min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,

@@ -21,7 +21,7 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.transports.sensor_table import SENSORS, FrameSensor, build_frame
 
-BRIDGE = Path(__file__).resolve().parents[2] / "pic4rl_bridge"
+BRIDGE = Path(__file__).resolve().parents[3] / "pic4rl_bridge"
 #: The fields every frame has; the sensors' are its ``readings``.
 ALWAYS = ("stamp_ns", "pose", "twist", "goal")
 

@@ -20,7 +20,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 pytestmark = pytest.mark.integration
 
-CONFIG_DIR = Path(__file__).resolve().parents[2] / "config"
+CONFIG_DIR = Path(__file__).resolve().parents[3] / "config"
 CONTROL_DT_NS = 100_000_000  # the default control_dt_s
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)

@@ -31,7 +31,7 @@ from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks.goto import planar_command
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
 WALL_MJCF = walled_square_mjcf(
     5.0, '<geom name="wall" type="box" pos="0 0 0.5" size="0.1 1.0 0.5"/>', model="wall")
