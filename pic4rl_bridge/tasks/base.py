@@ -17,6 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import Outcome
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
@@ -34,7 +35,7 @@ class EpisodeContext:
     the vineyard, the row's centre line (n × 2, oriented from the start)."""
 
     start: Pose2D
-    goal: tuple[float, float] | None = None
+    goal: Goal | None = None
     centerline: np.ndarray | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 

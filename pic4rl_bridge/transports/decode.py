@@ -10,6 +10,7 @@ import sys
 from typing import Any
 
 import numpy as np
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..errors import TransportError
@@ -29,6 +30,14 @@ def planar_pose(pose: Any) -> Pose2D:
     q = pose.orientation
     return Pose2D(float(pose.position.x), float(pose.position.y),
                   yaw_from_quaternion(q.x, q.y, q.z, q.w))
+
+
+def goal(msg: Any) -> Goal:
+    """A ``geometry_msgs/PoseStamped`` goal: its position and, unless its orientation is the
+    identity (a goal without heading), its heading."""
+    p, q = msg.pose.position, msg.pose.orientation
+    identity = (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 1.0)
+    return Goal(p.x, p.y, None if identity else yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
 
 def path(msg: Any) -> np.ndarray:

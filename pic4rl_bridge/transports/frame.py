@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from pic4rl_metrics.geometry import yaw_from_quaternion
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D, yaw_to_quaternion
 
 
@@ -62,11 +63,11 @@ class SensorFrame:
     stamp_ns: int
     pose: Pose2D
     twist: Twist2D
-    goal: tuple[float, float] | None
+    goal: Goal | None
     readings: Mapping[str, Any]
 
     def __init__(self, stamp_ns: int, pose: Pose2D, twist: Twist2D,
-                 goal: tuple[float, float] | None = None,
+                 goal: Goal | None = None,
                  readings: Mapping[str, Any] | None = None, **sensors: Any) -> None:
         """``sensors`` by name add to (or replace) ``readings``; a ``None`` one is absent
         (``dataclasses.replace(frame, scan=None)`` drops the scan)."""

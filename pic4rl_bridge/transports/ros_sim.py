@@ -24,7 +24,7 @@ _UNNAMED = "_NODE_NAME_UNKNOWN_"
 def episode_request(request: EpisodeRequest) -> SetParametersAtomically.Request:
     """``seed``, ``start_pose`` and ``goal`` of the sim node, set at once (empty: sampled)."""
     start = [] if request.start is None else [float(v) for v in request.start]
-    goal = [] if request.goal is None else [float(v) for v in request.goal]
+    goal = [] if request.goal is None else request.goal.as_list()
     params = [
         ParameterMsg(name="seed", value=ParameterValue(
             type=ParameterType.PARAMETER_INTEGER, integer_value=int(request.seed))),

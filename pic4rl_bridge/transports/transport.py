@@ -9,6 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import QosSettings
 
@@ -37,11 +38,16 @@ OfferedQos = QosSettings
 @dataclass(frozen=True)
 class EpisodeRequest:
     """The next episode: its seed (sampling and sensor noise), and a start and goal in the
-    world frame (``None``: the simulator samples them from the seed)."""
+    world frame (``None``: the simulator samples them from the seed); a goal given as a pair
+    (a file's, a sampler's) becomes a ``Goal``."""
 
     seed: int
     start: Pose2D | None = None
-    goal: tuple[float, float] | None = None
+    goal: Goal | None = None
+
+    def __post_init__(self) -> None:
+        if self.goal is not None:
+            object.__setattr__(self, "goal", Goal.of(self.goal))
 
 
 class Transport(ABC):

@@ -19,6 +19,7 @@ from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
 from pic4rl_metrics.geometry import Footprint, Mount
+from pic4rl_metrics.goal import Goal
 from pic4rl_metrics.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
@@ -43,7 +44,7 @@ FACTS = st.builds(
     seed=_optional(st.integers(-(2**63), 2**63 - 1)),
     footprint=_optional(FOOTPRINTS),
     start=_optional(st.tuples(FINITE, FINITE, FINITE)),
-    goal=_optional(POINT),
+    goal=_optional(st.one_of(POINT, st.builds(Goal, FINITE, FINITE, FINITE))),
     goal_tolerance_m=_optional(NON_NEGATIVE),
     collision_tolerance_m=_optional(NON_NEGATIVE),
     safety_margin_m=_optional(NON_NEGATIVE),

@@ -130,8 +130,12 @@ def test_start_and_goal_arrays_are_parsed_or_rejected():
         parse_start([1.0, 2.0])
     with pytest.raises(ConfigError, match=r"^start_pose: .*nan"):
         parse_start([math.nan, 0.0, 0.0])
-    with pytest.raises(ConfigError, match=r"^goal: \[1.0, 2.0, 3.0\] is invalid"):
-        parse_goal([1.0, 2.0, 3.0])
+    with pytest.raises(ConfigError, match=r"^goal: \[1.0, 2.0, 3.0, 4.0\] is invalid"):
+        parse_goal([1.0, 2.0, 3.0, 4.0])
+    with pytest.raises(ConfigError, match=r"^goal: \[1.0\] is invalid"):
+        parse_goal([1.0])
+    assert parse_goal([1, 2]) == (1.0, 2.0) and parse_goal([1, 2]).yaw is None
+    assert parse_goal([1.0, 2.0, 0.5]).yaw == 0.5
 
 
 def test_sensor_parameters_override_the_robots_sensors():

@@ -1,6 +1,7 @@
 """The engine stands without ROS: rclpy only in the node's modules, never torch or SB3; of the
 other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``) and
-``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact)."""
+``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact) and
+``pic4rl_metrics.goal`` (the one ``Goal``)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "r
 NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_bridge", "pic4rl_agents")
 #: The doors to another pic4rl package: the lowest room's shared ``ConfigError`` and
 #: ``Footprint``, both light (no pandas, rosbags or matplotlib).
-METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry"}
+METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry", "pic4rl_metrics.goal"}
 #: What the metrics' doors must not load: the metrics' heavy libraries.
 METRICS_HEAVY = ("pandas", "rosbags", "matplotlib")
 

@@ -184,3 +184,18 @@ def test_unsupported_depth_encoding_names_the_topic(encoding: str) -> None:
     with pytest.raises(TransportError, match=rf"^/robot1/camera/depth/image_raw: depth "
                                              rf"encoding '{encoding}' is not supported"):
         decode.depth_image(msg, topic="/robot1/camera/depth/image_raw")
+
+
+def test_a_goal_pose_keeps_its_heading_and_the_identity_means_none() -> None:
+    """The sim's ``goal_pose`` of a goal with and without heading, through CDR, back to the
+    same ``Goal``."""
+    from pic4rl_metrics.goal import Goal
+    from pic4rl_sim.node.messages import goal_pose
+
+    for goal in (Goal(1.5, -2.0), Goal(1.5, -2.0, 0.75), Goal(0.0, 0.0, -3.0)):
+        msg = deserialize_message(serialize_message(goal_pose(goal, 5)), PoseStamped)
+        back = decode.goal(msg)
+        assert tuple(back) == tuple(goal)
+        assert (back.yaw is None) == (goal.yaw is None)
+        if goal.yaw is not None:
+            assert back.yaw == pytest.approx(goal.yaw, abs=1e-12)
