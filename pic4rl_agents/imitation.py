@@ -37,6 +37,7 @@ from pic4rl_bridge.baselines.follow import HeadingController
 from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.baselines.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
+from pic4rl_bridge.tasks.registry import EXPERT_TASKS
 
 from .config import ImitationConfig
 
@@ -45,9 +46,8 @@ log = logging.getLogger(__name__)
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
-#: The experts that label states, and the task each drives.
-EXPERTS = {"planner": "goToPose", "explorer": "goToPose", "heading": "personMonitoring",
-           "centerline": "vineyard"}
+#: The experts that label states, and the task each drives (each task's ``experts``).
+EXPERTS = EXPERT_TASKS
 
 
 def make_expert(name: str, env: EnvConfig

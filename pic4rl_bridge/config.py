@@ -49,14 +49,10 @@ from .tasks.registry import (
     GoalInput,
     PersonConfig,
     RewardConfig,
+    SensorName,
     TaskName,
     VineyardConfig,
 )
-
-
-class SensorName(ParamEnum):
-    LIDAR = "lidar"
-    DEPTH = "depth"
 
 
 class TransportName(ParamEnum):
@@ -221,7 +217,8 @@ class EnvConfig:
     """Everything ``NavEnv`` needs besides the simulator's own parameters (``sim_params``)."""
 
     task: TaskName = param(TaskName(next(iter(TASKS))), doc=" | ".join(TASKS))
-    sensor: SensorName = param(SensorName.LIDAR, doc="lidar | depth")
+    sensor: SensorName = param(SensorName(next(iter(SensorName)).value),
+                               doc=" | ".join(s.value for s in SensorName))
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
                                      "this process) | ros (topics and services)")
     agent: str = param("", doc="the agent's name, recorded in each bag")

@@ -3,7 +3,9 @@
 The paper's collision test: any scan point closer to the footprint than
 ``collision_tolerance_m``. It runs every step on every beam, so it is plain vectorized numpy:
 beams to points in the base frame, then the exact signed distance to a circle or a box.
-Robots without a LiDAR fall back on the depth image (each column's nearest pixel).
+Robots without a LiDAR fall back on the depth image (each column's nearest pixel). Any range
+sensor whose reading decodes to a ``ScanData`` (a sonar's fan, a point cloud's slice) senses
+obstacles the same way, in the sensor table's order, with no change here.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 from ..config import EnvConfig
 from ..robot_info import RobotInfo
 from ..transports.frame import ScanData, SensorFrame
+from ..transports.sensor_table import SENSORS
 
 
 def _to_base(forward: np.ndarray, left: np.ndarray, mount: Pose2D) -> np.ndarray:
@@ -97,13 +100,16 @@ def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float,
 
 
 def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
-    """The obstacle points (n, 2, base frame, m) the robot senses: the scan's, else the depth
-    image's, else none."""
-    if frame.scan is not None:
-        return scan_points(frame.scan)
-    if frame.depth is not None:
-        mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
-        return depth_points(frame.depth, mount, robot.depth_hfov_rad)
+    """The obstacle points (n, 2, base frame, m) the robot senses: those of the first reading,
+    in the sensor table's order, that is a scan (the LiDAR's, or any range sensor's decoded
+    to ``ScanData``) or the depth image; none without one."""
+    for sensor in SENSORS:
+        reading = frame.readings.get(sensor.name)
+        if isinstance(reading, ScanData):
+            return scan_points(reading)
+        if sensor.name == "depth" and reading is not None:
+            mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
+            return depth_points(reading, mount, robot.depth_hfov_rad)
     return np.empty((0, 2))
 
 

@@ -132,6 +132,7 @@ class TaskSpec:
     """One task. ``sensors``: the ``sensor`` values it observes through (the first its
     default); ``reward``: its scales' class; ``section``: its own ``nav_env`` section (name,
     class), if any; ``baselines``: the ``pic4rl-test --baseline`` names that drive it;
+    ``experts``: the ``imitation.expert`` names that label its states;
     ``build``: ``"module:function"`` making the task from ``(config, robot, world)``;
     ``uses_world``: it reads the simulated world (the vineyard's lanes); ``per_sensor``: its
     bags' task fact names the sensor (``goToPose/lidar``); ``headline``: the outcome that is
@@ -144,6 +145,7 @@ class TaskSpec:
     reward: type[CommonReward]
     build: str
     baselines: tuple[str, ...] = ()
+    experts: tuple[str, ...] = ()
     section: tuple[str, type] | None = None
     uses_world: bool = False
     per_sensor: bool = False
@@ -171,25 +173,31 @@ TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
               EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True})),
              sensors=("lidar", "depth"), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
-             baselines=("proportional", "dwa", "planner", "explorer"), per_sensor=True),
+             baselines=("proportional", "dwa", "planner", "explorer"),
+             experts=("planner", "explorer"), per_sensor=True),
     TaskSpec("vineyard",
              (EnvId("pic4rl/Vineyard-v0", "depth",
                     {"world": "vineyard", "depth.enabled": True}),),
              sensors=("depth",), reward=VineyardReward,
              build="pic4rl_bridge.tasks.vineyard:build",
-             baselines=("centerline", "row_follower"),
+             baselines=("centerline", "row_follower"), experts=("centerline",),
              section=("vineyard", VineyardConfig), uses_world=True,
              headline=("goal", "row ends")),
     TaskSpec("personMonitoring",
              (EnvId("pic4rl/PersonMonitoring-v0", "lidar", {"robot": "omni", "world": "person"}),),
              sensors=("lidar",), reward=PersonReward,
              build="pic4rl_bridge.tasks.person:build",
-             baselines=("dwa_heading",), section=("person", PersonConfig),
+             baselines=("dwa_heading",), experts=("heading",), section=("person", PersonConfig),
              headline=("timeout", "full runs")),
 )}
 
 #: The task choice of ``nav_env``'s ``task`` key, one value per registered task.
 TaskName = ParamEnum("TaskName", {name: name for name in TASKS})  # type: ignore[misc]
+#: The ``sensor`` choice: every sensor a task observes through, in the table's order.
+SensorName = ParamEnum("SensorName",  # type: ignore[misc]
+                       {s: s for spec in TASKS.values() for s in spec.sensors})
+#: Each ``imitation.expert`` name → the task it labels.
+EXPERT_TASKS = {name: spec.name for spec in TASKS.values() for name in spec.experts}
 
 
 def _reward_class() -> type:

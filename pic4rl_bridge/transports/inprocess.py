@@ -11,6 +11,7 @@ serialized, so its bags equal the node's too.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from pic4rl_sim.engine.core import Engine
@@ -58,7 +59,7 @@ class InProcessTransport(Transport):
         self.engine = Engine(sim.robot, scenario.world, sim.engine, seed=sim.episode.seed)
         self._exact_pose = pose == "ground_truth"
         self._sensors = sensors
-        self._lidar_mount = scenario.robot.lidar_mount or Pose2D(0.0, 0.0, 0.0)
+        self._mounts = scenario.robot.mounts
         self._world_name = scenario.world_name
         self._namespace = "/" + config.ros.namespace.strip("/") if config.ros.namespace else ""
         self._record_topics = config.record.topics
@@ -105,12 +106,12 @@ class InProcessTransport(Transport):
     def _frame(self) -> SensorFrame:
         if self.tap is not None:
             return self._messages().state(self._stamp_ns, self._exact_pose, self._sensors,
-                                          self._lidar_mount, self.tap)
-        engine, mount = self.engine, self._lidar_mount
+                                          self._mounts, self.tap)
+        engine, mounts = self.engine, self._mounts
         pose, twist = ((engine.robot_pose(), engine.robot_twist()) if self._exact_pose
                        else engine.wheel_odometry())
         return build_frame(self._stamp_ns, (as_published(pose), twist), engine.goal,
-                           self._sensors, lambda sensor: sensor.read(engine, mount))
+                           self._sensors, lambda sensor: sensor.read(engine, sensor.mount(mounts)))
 
 
 class _MessageWriter:
@@ -153,8 +154,8 @@ class _MessageWriter:
         msg.linear.x, msg.linear.y, msg.angular.z = command.vx, command.vy, command.wz
         self._emit(CMD_VEL.name, msg, stamp_ns, tap)
 
-    def state(self, stamp_ns: int, exact_pose: bool, sensors: frozenset[str], mount: Pose2D,
-              tap: Tap) -> SensorFrame:
+    def state(self, stamp_ns: int, exact_pose: bool, sensors: frozenset[str],
+              mounts: Mapping[str, Pose2D], tap: Tap) -> SensorFrame:
         """Fill the node's messages for ``stamp_ns``, hand them to ``tap`` in the node's
         publishing order and decode the frame from them."""
         engine, m = self._engine, self.state_messages
@@ -164,7 +165,7 @@ class _MessageWriter:
         held = self._held
 
         def value(sensor: FrameSensor) -> Any:
-            msg = held.get(sensor.interface.name)
+            msg, mount = held.get(sensor.interface.name), sensor.mount(mounts)
             return (sensor.read(engine, mount) if msg is None
                     else sensor.decode(msg, mount, sensor.interface.name))
 

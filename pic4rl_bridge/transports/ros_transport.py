@@ -37,7 +37,7 @@ from rclpy.node import Node
 from rclpy.serialization import serialize_message
 from std_srvs.srv import Empty
 
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import QosKind, bridge_qos
 from pic4rl_sim.node.ros_interfaces import (
     profile,
@@ -70,7 +70,7 @@ class RosTransport(Transport):
         self._timeout_s = config.ros.timeout_s
         self._dt_s = scenario.robot.control_dt_s
         self._max_age_s = config.ros.max_sensor_age_s or 5.0 * self._dt_s
-        self._lidar_mount = scenario.robot.lidar_mount or Pose2D(0.0, 0.0, 0.0)
+        self._mounts = scenario.robot.mounts
         self._world_name = scenario.world_name
         self._own_context: Context | None = None
         if node is None:
@@ -299,8 +299,7 @@ class RosTransport(Transport):
     def _frame(self, stamp_ns: int) -> SensorFrame:
         topics, roles = self._topics, self._roles
         goal_msg = topics[roles["goal"]].msg
-        goal = None if goal_msg is None else (float(goal_msg.pose.position.x),
-                                              float(goal_msg.pose.position.y))
+        goal = None if goal_msg is None else decode.goal(goal_msg)
         frame = build_frame(stamp_ns, decode.odometry(topics[roles["pose"]].msg), goal, roles,
                             self._value)
         self._frame_stamp_ns = stamp_ns
@@ -312,10 +311,11 @@ class RosTransport(Transport):
         topic = self._roles[sensor.name]
         msg = self._topics[topic].msg
         if not sensor.episodic:
-            return sensor.decode(msg, self._lidar_mount, topic)
+            return sensor.decode(msg, sensor.mount(self._mounts), topic)
         last = self._decoded.get(sensor.name)
         if last is None or last[0] is not msg:
-            last = self._decoded[sensor.name] = (msg, sensor.decode(msg, self._lidar_mount, topic))
+            last = self._decoded[sensor.name] = (msg, sensor.decode(msg, sensor.mount(self._mounts),
+                                                                      topic))
         return last[1]
 
     def offered_qos(self, topic: str) -> OfferedQos | None:

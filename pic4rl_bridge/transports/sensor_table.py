@@ -9,16 +9,19 @@ transports build frames through ``build_frame``; a task names the sensors it nee
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
 
 from . import decode
 from .frame import ScanData, SensorFrame, as_published
+
+_ORIGIN = Pose2D(0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -28,15 +31,22 @@ class FrameSensor:
 
     name: str
     interface: Interface
-    #: (message, LiDAR mount, topic name) → the field's value.
+    #: (message, its sensor's mount, topic name) → the field's value.
     decode: Callable[[Any, Pose2D, str], Any]
-    #: (engine, LiDAR mount) → the same value as the decoded message, or ``None`` when the
-    #: engine has no such sensor (the in-process transport when it does not record).
+    #: (engine, its sensor's mount) → the same value as the decoded message, or ``None`` when
+    #: the engine has no such sensor (the in-process transport when it does not record).
     read: Callable[[Any, Pose2D], Any]
+    #: The robot's sensor kind (a ``SENSOR_KINDS`` name, a ``RobotInfo.mounts`` key) that
+    #: makes the reading and whose mount ``decode`` and ``read`` take; ``None``: no mount.
+    kind: str | None = None
     #: Published once an episode (subscribed like the goal, decoded once per message).
     episodic: bool = False
     #: What ``topics.<name>``'s doc adds to the message type.
     topic_note: str = ""
+
+    def mount(self, mounts: Mapping[str, Pose2D]) -> Pose2D:
+        """The mount of this reading's sensor in ``mounts`` (the origin without one)."""
+        return mounts.get(self.kind, _ORIGIN) if self.kind else _ORIGIN
 
     @property
     def default_topic(self) -> str:
@@ -73,7 +83,8 @@ def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
 
 
 SENSORS = (
-    FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan),
+    FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan,
+                kind="lidar"),
     FrameSensor("depth", DEPTH_IMAGE,
                 lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth,
                 topic_note=" (32FC1)"),
@@ -89,7 +100,7 @@ BY_NAME = {s.name: s for s in SENSORS}
 
 
 def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
-                goal: tuple[float, float] | None, wanted: Collection[str],
+                goal: Goal | None, wanted: Collection[str],
                 value: Callable[[FrameSensor], Any]) -> SensorFrame:
     """The frame at ``stamp_ns``: pose and twist from ``odometry``, and ``value(sensor)`` for
     each sensor ``wanted`` in the table's order (the rest, and a ``None`` value, absent)."""

@@ -238,5 +238,5 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
                                           "\\(use heading\\)"):
         make_expert("planner", person)
     with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
-                                          "explorer, heading"):
+                                          "explorer, centerline, heading"):
         make_expert("nobody", person)

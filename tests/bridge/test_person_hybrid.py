@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_person_omni.yaml"
 OMNI = RobotInfo(name="omni", footprint=Footprint(radius_m=0.25), omni=True,
                  min_linear_m_s=-1.0, max_linear_m_s=1.0, max_angular_rad_s=2.0,
-                 max_lateral_m_s=1.0, control_dt_s=0.1, lidar_mount=Pose2D(0.0, 0.0, 0.0),
+                 max_lateral_m_s=1.0, control_dt_s=0.1, mounts={"lidar": Pose2D(0.0, 0.0, 0.0)},
                  max_linear_accel_m_s2=2.0, max_angular_accel_rad_s2=4.0)
 HYBRID = EnvConfig().replace(task="personMonitoring", **{"person.control": "hybrid"})
 OPEN = {"world.person.count": 0, "world.person.occluders": 0}

@@ -39,7 +39,8 @@ EPISODE = {"start": [-2.0, 0.0, 0.0], "goal": [2.0, 0.0]}
 #: The Jackal of env_goto_lidar.yaml: v in [0, 0.5] m/s, |ω| <= 1 rad/s, 3 m/s², 6 rad/s².
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.508, width_m=0.430), omni=False,
                    min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
-                   max_lateral_m_s=0.0, control_dt_s=0.1, lidar_mount=Pose2D(0.12, 0.0, 0.0),
+                   max_lateral_m_s=0.0, control_dt_s=0.1,
+                   mounts={"lidar": Pose2D(0.12, 0.0, 0.0)},
                    max_linear_accel_m_s2=3.0, max_angular_accel_rad_s2=6.0)
 
 

@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_vineyard_depth.yaml"
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.508, width_m=0.430), omni=False,
                    min_linear_m_s=0.0, max_linear_m_s=0.5, max_angular_rad_s=1.0,
-                   max_lateral_m_s=0.0, control_dt_s=0.1, lidar_mount=Pose2D(0.0, 0.0, 0.0))
+                   max_lateral_m_s=0.0, control_dt_s=0.1, mounts={"lidar": Pose2D(0.0, 0.0, 0.0)})
 LAYOUTS = {
     "straight": {"world.vineyard.rows": 3, "world.vineyard.gap_prob": 0.2},
     "waved": {"world.vineyard.rows": 3, "world.vineyard.bend_m": 0.6,

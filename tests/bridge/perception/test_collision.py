@@ -23,7 +23,7 @@ INC = 2 * math.pi / 360
 def robot(footprint: Footprint = CIRCLE, depth_mount: Pose2D | None = None) -> RobotInfo:
     return RobotInfo(name="test", footprint=footprint, omni=False, min_linear_m_s=0.0,
                      max_linear_m_s=0.5, max_angular_rad_s=1.0, max_lateral_m_s=0.0,
-                     control_dt_s=0.1, depth_mount=depth_mount,
+                     control_dt_s=0.1, mounts={"depth": depth_mount} if depth_mount else {},
                      depth_hfov_rad=math.radians(90.0))
 
 
