@@ -29,8 +29,8 @@ PREFIX = f"{BASELINES_NODE}."
 @dataclass(frozen=True)
 class DwaConfig:
     """The Dynamic Window Approach (``pic4rl_bridge.baselines.dwa.DwaController``, and the person
-    follower of ``pic4rl_bridge.baselines.follow``). The velocity ranges, acceleration limits, window
-    period and footprint are the robot's. Its owner's section checks it (``check_as``)."""
+    follower of ``pic4rl_bridge.baselines.follow``). The velocity ranges, acceleration limits,
+    window period and footprint are the robot's. Its owner's section checks it (``check_as``)."""
 
     horizon_s: float = param(1.5, doc="each velocity sample is simulated this long", unit="s",
                              range=POSITIVE)
@@ -65,8 +65,8 @@ class DwaConfig:
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """The privileged planner (``pic4rl_bridge.baselines.planner.PlannerController``): how fast it goes
-    against how wide it keeps of obstacles (BARN's dense fields want a slower, wider one)."""
+    """The privileged planner (``pic4rl_bridge.baselines.planner.PlannerController``): how fast it
+    goes against how wide it keeps of obstacles (BARN's dense fields want a slower, wider one)."""
 
     lookahead_m: float = param(0.4, doc="the steering target: the farthest point of the plan "
                                "this far ahead that the robot sees", unit="m", range=POSITIVE)

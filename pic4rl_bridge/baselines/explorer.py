@@ -2,8 +2,8 @@
 
 It reads what a mapless agent reads, the scan (or the depth image's pseudo-scan) and the pose
 topic, never the world, so it runs in process, through the sim node over ROS 2 and on a real
-robot. Each frame's returns mark an occupancy grid (``pic4rl_bridge.perception.occupancy``: unknown is
-free, as nav2's rolling costmap with ``track_unknown_space: false`` or D* Lite in unknown
+robot. Each frame's returns mark an occupancy grid (``pic4rl_bridge.perception.occupancy``: unknown
+is free, as nav2's rolling costmap with ``track_unknown_space: false`` or D* Lite in unknown
 terrain plan optimistically). It plans the shortest path on that grid with the obstacles
 inflated by the footprint's circumscribed radius plus ``margin_m`` (``narrow_margin_m`` when
 nothing else passes: a narrow door), by ``pic4rl_sim.engine.paths``' vectorised grid search

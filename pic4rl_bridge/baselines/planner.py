@@ -50,8 +50,8 @@ def pursuit_command(robot: RobotInfo, pose: Pose2D, path: np.ndarray, s: float,
     """(v, ω) (m/s, rad/s) toward the farthest point of ``path`` within ``lookahead_m`` beyond
     arc length ``s`` (the robot's projection) that ``visible`` says the robot reaches in a
     straight line: the pursuit law of the module's docstring, which the mapless explorer
-    (``pic4rl_bridge.baselines.explorer``) follows its own plans with too. ``max_linear_m_s``: a speed
-    limit below the robot's (None: the robot's)."""
+    (``pic4rl_bridge.baselines.explorer``) follows its own plans with too. ``max_linear_m_s``: a
+    speed limit below the robot's (None: the robot's)."""
     xy = np.array([pose.x, pose.y])
     ahead = [point_along(path, s + f * lookahead_m) for f in _LOOKAHEAD_FRACTIONS]
     seen = visible(xy, np.array(ahead))

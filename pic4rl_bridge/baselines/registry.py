@@ -7,8 +7,8 @@ in ``follow`` (``BASELINE_TASKS`` says which task each drives).
   that the env, transport and recorder work end to end (it reaches any goal in open space).
 - ``dwa``: the Dynamic Window Approach (``pic4rl_bridge.baselines.dwa``), the local planner that
   nav2 and the BARN challenge compare learned planners with.
-- ``planner``: the privileged planner (``pic4rl_bridge.baselines.planner``): the world's shortest path
-  with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
+- ``planner``: the privileged planner (``pic4rl_bridge.baselines.planner``): the world's shortest
+  path with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
 - ``explorer``: the mapless explorer (``pic4rl_bridge.baselines.explorer``): the shortest path on an
   occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
   followed by the planner's pursuit law; it knows no map, as no agent does.
@@ -16,8 +16,8 @@ in ``follow`` (``BASELINE_TASKS`` says which task each drives).
   bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
   hybrid.
 
-The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no ROS, no
-simulator.
+The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no
+ROS, no simulator.
 """
 
 from __future__ import annotations

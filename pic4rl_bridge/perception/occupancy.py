@@ -9,8 +9,8 @@ same frame twice gives the same grid), so the grid is a function of the frames s
 transport made them. It grows as the robot sees farther; past ``max_extent_m`` across it rolls,
 forgetting the cells farthest from the robot. ``reset`` clears it (one grid per episode).
 
-Two readers: the mapless ``explorer`` baseline (``pic4rl_bridge.baselines.explorer``) plans on it, and
-goToPose's memory observation is its egocentric crop (``crop``: heading up, the robot at the
+Two readers: the mapless ``explorer`` baseline (``pic4rl_bridge.baselines.explorer``) plans on it,
+and goToPose's memory observation is its egocentric crop (``crop``: heading up, the robot at the
 centre, as nav2's rolling local costmap is centred on the robot).
 """
 

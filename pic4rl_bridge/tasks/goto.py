@@ -8,9 +8,9 @@ sectors or the depth image. With ``goal_input: plan`` the polar target is instea
 it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
 the outcome still judge the final goal. With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
-(``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps no
-state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every step (0 when not triggered) so that
-``info["reward_terms"]`` keeps one shape through an episode.
+(``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps
+no state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every
+step (0 when not triggered) so that ``info["reward_terms"]`` keeps one shape through an episode.
 """
 
 from __future__ import annotations

@@ -22,7 +22,8 @@ from pic4rl_sim.engine.geometry import Twist2D
 from ..config import EnvConfig
 from ..errors import ConfigError
 from ..perception.collision import assess
-from ..perception.observations import MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors, target_polar
+from ..perception.observations import (MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors,
+                                       target_polar)
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task

@@ -51,8 +51,9 @@ class ScanData:
 @dataclass(frozen=True, init=False)
 class SensorFrame:
     """Everything a task may read at one step: pose, twist and goal, and each sensor's reading
-    by its ``pic4rl_bridge.transports.sensor_table.SENSORS`` name (given as keywords too, ``scan=...``); a
-    sensor the robot lacks, or the task did not ask for, is absent (its accessor: ``None``).
+    by its ``pic4rl_bridge.transports.sensor_table.SENSORS`` name (given as keywords too,
+    ``scan=...``); a sensor the robot lacks, or the task did not ask for, is absent (its accessor:
+    ``None``).
 
     ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
     the frame the goal is given in); ``goal`` is the current goal in that frame; ``depth`` is

@@ -1,5 +1,6 @@
 """What the ROS transport subscribes to, and with which type and QoS: the pose and goal, the
-frame's sensors a task needs (``pic4rl_bridge.transports.sensor_table``), and the topics only recorded.
+frame's sensors a task needs (``pic4rl_bridge.transports.sensor_table``), and the topics only
+recorded.
 
 Types and QoS come from the sim's interface table (``pic4rl_sim.interfaces``): a topic is
 matched as the sim node offers it, keeping ``BRIDGE_HISTORY`` messages so the recorder sees

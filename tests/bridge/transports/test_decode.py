@@ -1,5 +1,5 @@
-"""``pic4rl_bridge.transports.decode`` on real ROS 2 message objects (rclpy's message packages, no ROS
-graph): poses and yaw from quaternions, odometry twists, scans, depth images in both encodings
+"""``pic4rl_bridge.transports.decode`` on real ROS 2 message objects (rclpy's message packages, no
+ROS graph): poses and yaw from quaternions, odometry twists, scans, depth images in both encodings
 and byte orders, and ``frame.as_published`` agreeing with a decoded message."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""The ROS transport's subscriptions (``pic4rl_bridge.transports.ros_topics.wiring``) as pure data: which
-topics, with the sim's types and QoS, and the topic a lockstep step waits for."""
+"""The ROS transport's subscriptions (``pic4rl_bridge.transports.ros_topics.wiring``) as pure data:
+which topics, with the sim's types and QoS, and the topic a lockstep step waits for."""
 
 from __future__ import annotations
 
