@@ -4,7 +4,10 @@ directory is named, and the bridge's door (no torch, SB3 or agents) holds."""
 from __future__ import annotations
 
 import ast
+import importlib
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -215,3 +218,25 @@ def test_no_two_package_modules_import_each_other_in_a_circle() -> None:
         if name not in state:
             visit(name, [name])
     assert not circles, f"import circles: {circles}"
+
+
+# -- sub-package exports --------------------------------------------------------------------------
+
+#: Sub-packages whose ``__init__`` lists its public names (``pic4rl_sim.lazy.lazy_exports``).
+LAZY = sorted(_module_name(p) for package in PACKAGES for p in (ROOT / package).rglob("__init__.py")
+              if "lazy_exports(" in p.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("name", LAZY)
+def test_every_name_a_sub_package_exports_resolves(name: str) -> None:
+    module = importlib.import_module(name)
+    missing = [n for n in module.__all__ if not hasattr(module, n)]
+    assert not missing, f"{name} exports {missing}, which its modules do not define"
+
+
+def test_importing_the_sub_packages_loads_no_mujoco_or_rclpy() -> None:
+    code = (f"import sys\nimport {', '.join(LAZY)}\n"
+            "print(sorted({'mujoco', 'rclpy', 'torch'} & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT).stdout.strip()
+    assert len(LAZY) >= 6 and out == "[]", out
