@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from pic4rl_bridge.env import NavEnv
-from pic4rl_bridge.explorer import ExplorerController
+from pic4rl_bridge.baselines.explorer import ExplorerController
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "env_goto_lidar.yaml"
 OVERRIDES = {"episodes.pair_kind": "paper", "episode_max_steps": 300, "max_linear_m_s": 0.5,

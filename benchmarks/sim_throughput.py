@@ -33,7 +33,7 @@ from _sim import start_sim, stop_sim
 from pic4rl_sim.engine.core import Engine, EngineConfig
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import JACKAL, LidarSpec
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 
 CONTROL_DT_S = 0.1
 PHYSICS_DT_S = 0.005

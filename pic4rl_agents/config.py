@@ -158,11 +158,11 @@ class ImitationConfig:
 
     enabled: bool = param(False, doc=f"imitation before RL ({', '.join(OFF_POLICY)})")
     expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
-                        "privileged planner, pic4rl_bridge.planner) | explorer (goToPose: the "
-                        "mapless explorer of the student's own scans, pic4rl_bridge.explorer) | "
+                        "privileged planner, pic4rl_bridge.baselines.planner) | explorer (goToPose: the "
+                        "mapless explorer of the student's own scans, pic4rl_bridge.baselines.explorer) | "
                         "heading "
                         "(personMonitoring: DWA with a proportional heading law) | centerline "
-                        "(vineyard: the row's centre-line follower, pic4rl_bridge.row_followers)",
+                        "(vineyard: the row's centre-line follower, pic4rl_bridge.baselines.row_followers)",
                         choices=("planner", "explorer", "heading", "centerline"))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)

@@ -41,22 +41,18 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
-from .baseline_config import PREFIX as BASELINES_PREFIX
+from .baselines.config import PREFIX as BASELINES_PREFIX
 from .errors import ConfigError, require
-from .sensors import SENSORS
-from .task_registry import (
+from .transports.sensor_table import SENSORS
+from .tasks.registry import (
     TASKS,
     GoalInput,
     PersonConfig,
     RewardConfig,
+    SensorName,
     TaskName,
     VineyardConfig,
 )
-
-
-class SensorName(ParamEnum):
-    LIDAR = "lidar"
-    DEPTH = "depth"
 
 
 class TransportName(ParamEnum):
@@ -116,7 +112,7 @@ class DepthObsConfig:
 @dataclass(frozen=True)
 class MemoryObsConfig:
     """goToPose's memory: an egocentric crop of an occupancy grid of the robot's own scans
-    (``pic4rl_bridge.occupancy``), beside the usual observation in a Dict."""
+    (``pic4rl_bridge.perception.occupancy``), beside the usual observation in a Dict."""
 
     enabled: bool = param(False, doc="goToPose: add the memory crop to the observation (a Dict: "
                           "memory, and lidar or depth and goal)")
@@ -221,7 +217,8 @@ class EnvConfig:
     """Everything ``NavEnv`` needs besides the simulator's own parameters (``sim_params``)."""
 
     task: TaskName = param(TaskName(next(iter(TASKS))), doc=" | ".join(TASKS))
-    sensor: SensorName = param(SensorName.LIDAR, doc="lidar | depth")
+    sensor: SensorName = param(SensorName(next(iter(SensorName)).value),
+                               doc=" | ".join(s.value for s in SensorName))
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
                                      "this process) | ros (topics and services)")
     agent: str = param("", doc="the agent's name, recorded in each bag")

@@ -30,21 +30,18 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
+from .env_recording import EnvRecording, episode_facts
 from .episodes import (EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses,
                        resolve_pair_kind)
 from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
-from .frame import SensorFrame
-from .env_recording import EnvRecording, episode_facts
 from .scenario import Scenario
-from .sensors import BY_NAME
-from .task_registry import task_spec
-from .tasks import make_task
-from .tasks.base import EpisodeContext
-from .transport import EpisodeRequest, Transport
+from .tasks.base import EpisodeContext, make_task
+from .tasks.registry import task_spec
+from .transports.frame import SensorFrame
+from .transports.sensor_table import BY_NAME
+from .transports.transport import EpisodeRequest, Transport
 
 log = logging.getLogger(__name__)
-
-_FRAME_SENSORS = frozenset(BY_NAME)
 
 
 def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
@@ -162,7 +159,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             raise ConfigError(f"episodes.pair_kind: {e.pair_kind!r} with filters needs a "
                               "simulated world (a 'sim:' section); a real robot's goals come "
                               "from its operator or episodes.file")
-        sensors = self.task.required & _FRAME_SENSORS
+        sensors = self.task.required & BY_NAME.keys()
         if self.scenario.spec.lidar is not None:
             sensors |= {"scan"}
         self.transport = self._make_transport(frozenset(sensors), node)
@@ -182,10 +179,10 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     def _make_transport(self, sensors: frozenset[str], node: Any) -> Transport:
         if self.config.transport == TransportName.ROS.value:
-            from .ros_transport import RosTransport
+            from .transports.ros_transport import RosTransport
 
             return RosTransport(self.config, self.scenario, sensors, node=node)
-        from .inprocess import InProcessTransport
+        from .transports.inprocess import InProcessTransport
 
         return InProcessTransport(self.config, self.scenario, sensors)
 

@@ -14,12 +14,12 @@ from pic4rl_metrics.geometry import Mount
 
 from .config import EnvConfig
 from .episodes import PairSampler
-from .frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .robot_info import RobotInfo
 from .scenario import robot_of
 from .tasks.base import EpisodeContext
-from .transport import RawMessage, Transport
+from .transports.frame import SensorFrame
+from .transports.transport import RawMessage, Transport
 
 
 def run_params(config: EnvConfig) -> dict[str, Any]:

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import (
@@ -39,11 +40,11 @@ from pic4rl_sim.engine.sampling import (
 
 from .config import EpisodesConfig
 from .errors import ConfigError
-from .transport import EpisodeRequest
+from .transports.transport import EpisodeRequest
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.paths import PathPlanner
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
     from .scenario import Scenario
 
@@ -59,7 +60,7 @@ class GoalsAndPoses:
     whom the pairs were drawn (empty and ``None`` in a file that does not say)."""
 
     initial_pose: Pose2D | None
-    goals: tuple[tuple[float, float], ...]
+    goals: tuple[Goal, ...]
     poses: tuple[Pose2D, ...]
     world: str = ""
     robot_radius_m: float | None = None
@@ -111,7 +112,7 @@ def load_goals_and_poses(path: str | Path) -> GoalsAndPoses:
     return GoalsAndPoses(
         initial_pose=None if initial is None else Pose2D(
             *_numbers(path, "initial_pose", initial, "[x, y, yaw]", 3)),
-        goals=tuple((g[0], g[1]) for g in goals),
+        goals=tuple(Goal(g[0], g[1]) for g in goals),
         poses=tuple(Pose2D(*p) for p in poses), world=world,
         robot_radius_m=None if radius is None else _numbers(
             path, "robot_radius_m", [radius], "a radius in metres", 1)[0])

@@ -31,7 +31,7 @@ from pic4rl_metrics.errors import OutputError
 from pic4rl_sim.interfaces import QosKind, find
 
 from .errors import RecorderError
-from .transport import OfferedQos, RawMessage
+from .transports.transport import OfferedQos, RawMessage
 
 log = logging.getLogger(__name__)
 

@@ -4,7 +4,8 @@ mounts, with the env's own velocity limits applied."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D
@@ -19,8 +20,9 @@ _STOCK_HFOV_RAD = math.radians(DepthCameraSpec.hfov_deg)
 @dataclass(frozen=True)
 class RobotInfo:
     """The robot as the tasks see it: footprint, drive, the commanded velocity ranges (the
-    env's limits within the robot's), sensor mounts in the base frame, control period, and
-    the robot's acceleration limits (m/s², rad/s²; ``inf`` when unknown)."""
+    env's limits within the robot's), control period, the mount of each sensor it carries in
+    the base frame (``mounts``, by sensor kind: ``lidar``, ``depth``), and the robot's
+    acceleration limits (m/s², rad/s²; ``inf`` when unknown)."""
 
     name: str
     footprint: Footprint
@@ -30,8 +32,7 @@ class RobotInfo:
     max_angular_rad_s: float
     max_lateral_m_s: float
     control_dt_s: float
-    lidar_mount: Pose2D | None = None
-    depth_mount: Pose2D | None = None
+    mounts: Mapping[str, Pose2D] = field(default_factory=dict, hash=False)
     depth_hfov_rad: float = _STOCK_HFOV_RAD
     max_linear_accel_m_s2: float = math.inf  # the robot's (classical planners' window)
     max_angular_accel_rad_s2: float = math.inf
@@ -41,9 +42,9 @@ class RobotInfo:
         """``spec`` under the env's velocity limits (``config``; 0: the robot's own)."""
         c = config
         omni = spec.drive is Drive.OMNI
-        lidar = spec.lidar and Pose2D(spec.lidar.mount_xyz_m[0], spec.lidar.mount_xyz_m[1],
-                                      spec.lidar.mount_yaw_rad)
-        depth = spec.depth and Pose2D(spec.depth.mount_xyz_m[0], spec.depth.mount_xyz_m[1], 0.0)
+        mounts = {kind: Pose2D(s.mount_xyz_m[0], s.mount_xyz_m[1],
+                               getattr(s, "mount_yaw_rad", 0.0))
+                  for kind, s in spec.sensors.items() if hasattr(s, "mount_xyz_m")}
         max_linear = _limit(c.max_linear_m_s, spec.max_linear_m_s)
         return cls(
             name=spec.name, footprint=spec.footprint, omni=omni,
@@ -51,10 +52,19 @@ class RobotInfo:
             max_linear_m_s=max_linear,
             max_angular_rad_s=_limit(c.max_angular_rad_s, spec.max_angular_rad_s),
             max_lateral_m_s=_limit(c.max_lateral_m_s, spec.max_lateral_m_s) if omni else 0.0,
-            control_dt_s=control_dt_s, lidar_mount=lidar or None, depth_mount=depth or None,
+            control_dt_s=control_dt_s, mounts=mounts,
             depth_hfov_rad=math.radians(spec.depth.hfov_deg) if spec.depth else _STOCK_HFOV_RAD,
             max_linear_accel_m_s2=spec.max_linear_accel_m_s2,
             max_angular_accel_rad_s2=spec.max_angular_accel_rad_s2)
+
+
+    @property
+    def lidar_mount(self) -> Pose2D | None:
+        return self.mounts.get("lidar")
+
+    @property
+    def depth_mount(self) -> Pose2D | None:
+        return self.mounts.get("depth")
 
 
 def _limit(wanted: float, robot_limit: float) -> float:

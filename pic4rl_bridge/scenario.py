@@ -19,7 +19,7 @@ from .errors import ConfigError
 from .robot_info import RobotInfo
 
 if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section is used
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
     from pic4rl_sim.params import SimConfig
 
 

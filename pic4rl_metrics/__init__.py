@@ -38,7 +38,7 @@ def _builtins_first(home: str) -> None:
         import_module(".core.metrics", __name__)  # the built-in metrics register on import
 
 
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES, before=_builtins_first)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals(), before=_builtins_first)
 
 __all__ = [
     "METRICS",

@@ -29,6 +29,7 @@ from rosbags.typesys.store import Typestore
 from . import fact_values as decode
 from .errors import ConfigError
 from .geometry import Footprint, Mount
+from .goal import Goal
 
 #: Default topics, as recorded by pic4rl's recorder (the sim node's names).
 GROUND_TRUTH_TOPIC = "/ground_truth"
@@ -133,8 +134,8 @@ class EpisodeFacts:
     footprint: Footprint | None = _fact(decode.footprint)
     #: ``[x, y, yaw]`` (m, rad).
     start: tuple[float, float, float] | None = _fact(decode.pose)
-    #: ``[x, y]`` (m).
-    goal: tuple[float, float] | None = _fact(decode.point)
+    #: ``[x, y]`` (m), or ``[x, y, yaw]`` (m, m, rad) with a heading.
+    goal: Goal | None = _fact(decode.goal)
     goal_tolerance_m: float | None = _fact(decode.non_negative)
     collision_tolerance_m: float | None = _fact(decode.non_negative)
     #: Closer than this (m, beyond the footprint) is unsafe; the env's ``warning_tolerance_m``.
@@ -204,6 +205,8 @@ def plain(value: Any) -> Any:
         return {k: v for k, v in vars(value).items() if v is not None}
     if isinstance(value, Mount):
         return plain(value._asdict())
+    if isinstance(value, Goal):
+        return value.as_list()
     if isinstance(value, np.generic | np.ndarray):
         return value.tolist()
     if isinstance(value, Mapping):

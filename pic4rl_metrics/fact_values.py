@@ -15,6 +15,7 @@ from typing import Any
 
 from .errors import ConfigError
 from .geometry import Footprint, Mount
+from .goal import Goal
 
 #: ``decode(raw, key, source) -> value``.
 Decoder = Callable[[Any, str, str], Any]
@@ -81,9 +82,9 @@ def pose(raw: Any, key: str, source: str) -> tuple[float, ...]:
     return floats(raw, (3,), key, source)
 
 
-def point(raw: Any, key: str, source: str) -> tuple[float, ...]:
-    """``[x, y]`` (m), or ``[x, y, yaw]`` from a pose: the yaw is not used."""
-    return floats(raw, (2, 3), key, source)[:2]
+def goal(raw: Any, key: str, source: str) -> Goal:
+    """``[x, y]`` (m), or ``[x, y, yaw]`` (m, m, rad) with the goal's heading."""
+    return Goal(*floats(raw, (2, 3), key, source))
 
 
 def polyline(raw: Any, key: str, source: str) -> tuple[tuple[float, float], ...]:

@@ -1,9 +1,11 @@
 """Public names of a package, imported from their modules on first use (PEP 562).
 
 A sub-package's ``__init__`` lists each public name's module and exports them through
-``lazy_exports``, so that ``import pic4rl_metrics.viz.raster`` (the bridge's renderer) or
-``pic4rl_metrics.errors`` (the sim) does not pay for the matplotlib, pandas or rosbags its
-siblings load.
+``lazy_exports``, so that importing one module of a package does not pay for what its
+siblings load: the sim imports ``pic4rl_metrics.errors`` without pandas or rosbags, the bridge's
+``config`` reads ``tasks.registry`` without MuJoCo or rclpy (and before the tasks, which read
+``config``, have run), and the agents' ``config`` reads the algorithm table without torch.
+Every package's sub-packages use this one module (the sim may import it: docs/architecture.md).
 """
 
 from __future__ import annotations
@@ -13,12 +15,20 @@ from importlib import import_module
 from typing import Any
 
 
-def lazy_exports(package: str, namespace: dict[str, Any], homes: Mapping[str, str],
+def homes_of(modules: Mapping[str, tuple[str, ...]]) -> dict[str, str]:
+    """``{name: module}`` from ``{module: (names it exports)}``, the shape a long list reads
+    best in."""
+    return {name: module for module, names in modules.items() for name in names}
+
+
+def lazy_exports(package: str, homes: Mapping[str, str], *,
+                 namespace: dict[str, Any] | None = None,
                  before: Callable[[str], None] | None = None,
                  ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
     """``(__getattr__, __dir__)`` of ``package``: ``homes`` maps a public name to its module,
-    relative to the package (``"reader"``, ``"core.registry"``); ``before(module)`` runs
-    before that module is first imported for a name."""
+    relative to the package (``"reader"``, ``"core.registry"``); a name read is kept in
+    ``namespace`` (the package's ``globals()``) when given, so it is looked up once;
+    ``before(module)`` runs before that module is first imported for a name."""
 
     def __getattr__(name: str) -> Any:
         home = homes.get(name)
@@ -27,10 +37,11 @@ def lazy_exports(package: str, namespace: dict[str, Any], homes: Mapping[str, st
         if before is not None:
             before(home)
         value = getattr(import_module(f".{home}", package), name)
-        namespace[name] = value
+        if namespace is not None:
+            namespace[name] = value
         return value
 
     def __dir__() -> list[str]:
-        return sorted({*namespace, *homes})
+        return sorted({*(namespace or ()), *homes})
 
     return __getattr__, __dir__

@@ -25,8 +25,8 @@ class Direction(str, Enum):
 class QosSettings:
     """Reliable or best effort, transient local (latched) or volatile, history depth (0: not
     known). The one description of a QoS: the node's kinds, the bridge's subscriptions, what
-    a bag's metadata records (``pic4rl_bridge.transport.OfferedQos``); rclpy's profiles are
-    made from it (``pic4rl_sim.node.ros_interfaces.profile``)."""
+    a bag's metadata records (``pic4rl_bridge.transports.transport.OfferedQos``); rclpy's profiles
+    are made from it (``pic4rl_sim.node.ros_interfaces.profile``)."""
 
     reliable: bool = True
     transient_local: bool = False

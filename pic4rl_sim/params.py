@@ -17,12 +17,14 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from pic4rl_metrics.goal import Goal
+
 from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
 from .engine.robot_specs import RobotSpec, load_robot
 from .engine.sensors import SENSOR_KINDS
-from .engine.world_generators import GENERATORS, make_world
-from .engine.world_spec import WorldSpec
+from .engine.worlds.generators import GENERATORS, make_world
+from .engine.worlds.spec import WorldSpec
 from .errors import ConfigError, require, unknown_key
 from .schema import (
     ParamEnum,
@@ -63,8 +65,9 @@ class SimParams:
     start_pose: tuple[float, ...] = param((), doc="[x, y, yaw] (m, m, rad) of the robot in the "
                                           "world frame at the next reset_world; empty = sampled "
                                           "with clearance")
-    goal: tuple[float, ...] = param((), doc="[x, y] (m) of the goal in the world frame at the "
-                                    "next reset_world; empty = sampled")
+    goal: tuple[float, ...] = param((), doc="[x, y] (m), or [x, y, yaw] (m, m, rad) with the "
+                                    "heading a task may judge, of the goal in the world frame at "
+                                    "the next reset_world; empty = sampled")
     clock_mode: ClockMode = param(ClockMode.LOCKSTEP, doc="lockstep: each cmd_vel advances one "
                                   "control period; realtime: a wall-clock timer steps with the "
                                   "latest command (applies immediately)")
@@ -200,13 +203,13 @@ def parse_start(value: list[float]) -> Pose2D | None:
     return Pose2D(float(value[0]), float(value[1]), float(value[2]))
 
 
-def parse_goal(value: list[float]) -> tuple[float, float] | None:
-    """``goal`` as a point: empty → ``None``, else two finite numbers."""
+def parse_goal(value: list[float]) -> Goal | None:
+    """``goal`` as a goal: empty → ``None``, else two finite numbers, or three with a heading."""
     if len(value) == 0:
         return None
-    ok = len(value) == 2 and all(math.isfinite(v) for v in value)
-    require(ok, "goal", list(value), "[] or [x, y] of finite numbers (m)")
-    return float(value[0]), float(value[1])
+    ok = len(value) in (2, 3) and all(math.isfinite(v) for v in value)
+    require(ok, "goal", list(value), "[], [x, y] or [x, y, yaw] of finite numbers (m, m, rad)")
+    return Goal(*value)
 
 
 def build_robot(values: Mapping[str, Any]) -> RobotSpec:

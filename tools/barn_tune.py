@@ -25,11 +25,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pic4rl_bridge.baseline_config import baselines_config_from_params
-from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.baselines.config import baselines_config_from_params
+from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.env import NavEnv
 from pic4rl_metrics.core.metrics import BARN_CLIP, BARN_MOVED_M, BARN_SPEED_MPS
-from pic4rl_sim.engine.barn_world import challenge_test_worlds
+from pic4rl_sim.engine.worlds.barn import challenge_test_worlds
 
 ENV = "config/env_barn.yaml"
 

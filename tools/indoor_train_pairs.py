@@ -20,7 +20,7 @@ from pic4rl_bridge.episodes import PairSampler, save_goals_and_poses
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import load_robot
 from pic4rl_sim.engine.sampling import PairKind
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.params import SimParams
 
 OUT = Path(__file__).resolve().parents[1] / "config" / "goals_indoor_train.json"

@@ -21,7 +21,7 @@ from pic4rl_bridge.episodes import load_goals_and_poses
 from pic4rl_sim.engine.paths import PathPlanner
 from pic4rl_sim.engine.robot_specs import load_robot
 from pic4rl_sim.engine.sampling import PAIR_KINDS
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.params import SimParams
 
 SIM = SimParams()

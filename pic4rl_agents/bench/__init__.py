@@ -4,11 +4,13 @@ cells on a process pool or Ray and the command (``runner``), and the suite's tab
 leaderboards and report from its bags (``table``).
 """
 
-from pic4rl_agents.lazy import lazy_exports
+from pic4rl_metrics.lazy import homes_of, lazy_exports
 
-__all__, __getattr__ = lazy_exports(__name__, {
+_HOMES = homes_of({
     "suite": ("Cell", "PairSet", "Suite", "load_suite"),
     "cell": ("drive_cell",),
     "runner": ("bench_suite", "main"),
     "table": ("SuiteTable", "write_results"),
 })
+__all__ = sorted(_HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

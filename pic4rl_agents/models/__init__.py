@@ -4,12 +4,14 @@ a new model from a ``TrainConfig`` (``new_model``) or a saved one (``load_model`
 networks (``DepthGoalExtractor``). Only ``algorithm_table`` is light; the rest load torch.
 """
 
-from pic4rl_agents.lazy import lazy_exports
+from pic4rl_metrics.lazy import homes_of, lazy_exports
 
-__all__, __getattr__ = lazy_exports(__name__, {
+_HOMES = homes_of({
     "algorithm_table": ("ALGORITHM_TABLE", "AlgorithmEntry"),
     "algorithms": ("ALGORITHMS", "algorithm_class", "check_spaces", "describe_space",
                    "load_model", "new_model"),
     "exploration": ("EpsilonGreedy", "epsilon_at"),
     "extractors": ("DepthGoalExtractor",),
 })
+__all__ = sorted(_HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

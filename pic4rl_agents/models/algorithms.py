@@ -3,7 +3,8 @@ atomic saves and ε-greedy on the off-policy ones, and their networks.
 
 ``new_model`` turns a ``TrainConfig`` into a ready SB3 model for an env: ``MlpPolicy`` on
 vector observations (LiDAR), ``MultiInputPolicy`` with ``DepthGoalExtractor`` on Dict ones
-(depth + goal), ``CnnPolicy`` with it on bare images (vineyard). ``load_model`` reads a
+holding an image (depth + goal; SB3's own extractor on a Dict of vectors), ``CnnPolicy`` with
+it on bare images (vineyard). ``load_model`` reads a
 saved zip back with the same classes.
 """
 
@@ -88,15 +89,17 @@ def _policy(config: TrainConfig, observation_space: gym.Space) -> tuple[str, dic
                               "activation_fn": _ACTIVATIONS[p.activation]}
     if not config.off_policy:
         kwargs["log_std_init"] = p.log_std_init
-    image = isinstance(observation_space, gym.spaces.Box) and len(observation_space.shape) == 3
-    if isinstance(observation_space, gym.spaces.Dict) or image:
+    entries = (observation_space.spaces.values()
+               if isinstance(observation_space, gym.spaces.Dict) else [observation_space])
+    policy = "MultiInputPolicy" if isinstance(observation_space, gym.spaces.Dict) else "MlpPolicy"
+    if any(len(s.shape or ()) == 3 for s in entries):  # an image: the CNN per image entry
         kwargs["features_extractor_class"] = DepthGoalExtractor
         kwargs["features_extractor_kwargs"] = {"channels": list(p.cnn_channels),
                                                "cnn_features": p.cnn_features}
         if config.off_policy:
             kwargs["share_features_extractor"] = p.share_features_extractor
-        return ("CnnPolicy" if image else "MultiInputPolicy"), kwargs
-    return "MlpPolicy", kwargs
+        return ("CnnPolicy" if policy == "MlpPolicy" else policy), kwargs
+    return policy, kwargs  # vectors only (a Dict: SB3's CombinedExtractor flattens each)
 
 
 def new_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = None,

@@ -3,9 +3,11 @@ names, each with its test env) and doing it (``tester``: every agent drives the 
 into bags, then one metrics table from the bags; ``drive_and_judge`` from Python).
 """
 
-from pic4rl_agents.lazy import lazy_exports
+from pic4rl_metrics.lazy import homes_of, lazy_exports
 
-__all__, __getattr__ = lazy_exports(__name__, {
+_HOMES = homes_of({
     "plan": ("AgentSpec", "DEFAULT_PAIRS", "TestPlan", "resolve_agents"),
     "tester": ("TestResult", "drive_agent", "drive_and_judge", "main"),
 })
+__all__ = sorted(_HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

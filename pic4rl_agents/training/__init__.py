@@ -4,9 +4,9 @@ checkpoints, seeded evaluations, stops), imitation from an expert, the reward an
 curves (``python -m pic4rl_agents.training.curves``) and the evaluations' videos.
 """
 
-from pic4rl_agents.lazy import lazy_exports
+from pic4rl_metrics.lazy import homes_of, lazy_exports
 
-__all__, __getattr__ = lazy_exports(__name__, {
+_HOMES = homes_of({
     "train": ("Trainer", "main"),
     "args": ("build_parser", "resolve"),
     "envs": ("env_namespace", "eval_env_config", "make_vec_env"),
@@ -17,3 +17,5 @@ __all__, __getattr__ = lazy_exports(__name__, {
     "curves": ("episode_table", "eval_curves", "save_eval_curves", "save_reward_curve"),
     "videos": ("EvalVideoCallback",),
 })
+__all__ = sorted(_HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

@@ -1,10 +1,10 @@
 """Expert-guided training: behaviour cloning, then DAgger, on an SB3 off-policy model's actor.
 
-The expert reads the env's decoded frame: the mapless explorer (``pic4rl_bridge.explorer``)
+The expert reads the env's decoded frame: the mapless explorer (``pic4rl_bridge.baselines.explorer``)
 only what the student's sensors saw, one frame per step, so its choices depend on nothing the
 student could not have remembered; the others are privileged at training time only: the
-simulated world's map (``pic4rl_bridge.planner``) or the vineyard row's centre line
-(``pic4rl_bridge.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
+simulated world's map (``pic4rl_bridge.baselines.planner``) or the vineyard row's centre line
+(``pic4rl_bridge.baselines.row_followers``) to label any state with the action it would take, while the student acts from its observation alone. Behaviour cloning regresses the actor
 on states the expert drove through; DAgger (Ross, Gordon and Bagnell 2011) then lets the
 student drive, has the expert label every state the student visits, aggregates the labels and
 regresses again, so the student learns to recover from its own mistakes. The actor is the
@@ -32,11 +32,12 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.explorer import ExplorerController
-from pic4rl_bridge.follow import HeadingController
-from pic4rl_bridge.planner import PlannerController
-from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
+from pic4rl_bridge.baselines.explorer import ExplorerController
+from pic4rl_bridge.baselines.follow import HeadingController
+from pic4rl_bridge.baselines.planner import PlannerController
+from pic4rl_bridge.baselines.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
+from pic4rl_bridge.tasks.registry import EXPERT_TASKS
 
 from pic4rl_agents.config import ImitationConfig
 
@@ -45,9 +46,8 @@ log = logging.getLogger(__name__)
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
 
 
-#: The experts that label states, and the task each drives.
-EXPERTS = {"planner": "goToPose", "explorer": "goToPose", "heading": "personMonitoring",
-           "centerline": "vineyard"}
+#: The experts that label states, and the task each drives (each task's ``experts``).
+EXPERTS = EXPERT_TASKS
 
 
 def make_expert(name: str, env: EnvConfig

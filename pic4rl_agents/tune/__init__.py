@@ -3,11 +3,13 @@
 seeding (``settings``) and the summary written after every trial (``summary``).
 """
 
-from pic4rl_agents.lazy import lazy_exports
+from pic4rl_metrics.lazy import homes_of, lazy_exports
 
-__all__, __getattr__ = lazy_exports(__name__, {
+_HOMES = homes_of({
     "search": ("create_study", "main", "objective", "optimize"),
     "space": ("Fixing", "sample_off_policy", "sample_ppo", "sample_td3"),
     "settings": ("TrialSeeded", "TuneSettings"),
     "summary": ("trials_table", "write_summary"),
 })
+__all__ = sorted(_HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES)

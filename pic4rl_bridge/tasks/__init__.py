@@ -1,23 +1,20 @@
-"""Tasks: observation, reward and termination as pure functions of decoded sensor data."""
+"""Tasks: observation, reward and termination as pure functions of decoded sensor data.
+
+``registry`` (``TASKS``: each task's env ids, sensors, reward scales, section and baselines;
+``TaskName``, ``task_spec``), ``base`` (``Task``, ``EpisodeContext``, ``Judgement``,
+``make_task``) and one module per task: ``goto``, ``person``, ``vineyard``. Names are imported
+on first use: the env's ``config`` reads ``registry`` before the tasks, which read the config,
+exist.
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from pic4rl_metrics.lazy import lazy_exports
 
-from ..config import EnvConfig
-from ..robot_info import RobotInfo
-from ..task_registry import task_spec
-from .base import EpisodeContext, Judgement, Task
-
-if TYPE_CHECKING:
-    from pic4rl_sim.engine.world_spec import WorldSpec
-
-__all__ = ["EpisodeContext", "Judgement", "Task", "make_task"]
-
-
-def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:
-    """The task ``config.task`` names (``pic4rl_bridge.task_registry.TASKS``), built by its
-    entry's ``build``; ``world``, when the task reads it (``uses_world``), is the simulated
-    world."""
-    task: Task = task_spec(config.task).make(config, robot, world)
-    return task
+_EXPORTS = {
+    "TASKS": "registry", "TaskSpec": "registry", "TaskName": "registry",
+    "task_spec": "registry", "env_ids": "registry",
+    "Task": "base", "EpisodeContext": "base", "Judgement": "base", "make_task": "base",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

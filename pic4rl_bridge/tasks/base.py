@@ -11,17 +11,22 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import Outcome
+from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
-from ..frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..transports.frame import SensorFrame
+from .registry import task_spec
+
+if TYPE_CHECKING:
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 
 @dataclass(frozen=True)
@@ -30,7 +35,7 @@ class EpisodeContext:
     the vineyard, the row's centre line (n × 2, oriented from the start)."""
 
     start: Pose2D
-    goal: tuple[float, float] | None = None
+    goal: Goal | None = None
     centerline: np.ndarray | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
 
@@ -108,3 +113,11 @@ class Task(ABC):
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         """Bag facts this task adds (e.g. ``row_centerline``)."""
         return {}
+
+
+def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:
+    """The task ``config.task`` names (``pic4rl_bridge.tasks.registry.TASKS``), built by its
+    entry's ``build``; ``world``, when the task reads it (``uses_world``), is the simulated
+    world."""
+    task: Task = task_spec(config.task).make(config, robot, world)
+    return task

@@ -8,9 +8,9 @@ sectors or the depth image. With ``goal_input: plan`` the polar target is instea
 it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
 the outcome still judge the final goal. With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
-(``pic4rl_bridge.occupancy``; the grid lives in the episode's context, so the task keeps no
-state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every step (0 when not triggered) so that
-``info["reward_terms"]`` keeps one shape through an episode.
+(``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps
+no state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every
+step (0 when not triggered) so that ``info["reward_terms"]`` keeps one shape through an episode.
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import Twist2D, point_along
 
 from ..config import EnvConfig
-from ..frame import SensorFrame
-from ..occupancy import OccupancyGrid, sensed_scan
+from ..perception.collision import assess
+from ..perception.occupancy import OccupancyGrid, sensed_scan
 from ..robot_info import RobotInfo
-from ..task_registry import GoalInput, GoToPoseReward
+from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .collision import assess
-from .observations import (
+from .registry import GoalInput, GoToPoseReward
+from ..perception.observations import (
     MAX_TARGET_DISTANCE_M,
     NORMALIZED_GOAL_DISTANCE_M,
     clipped_action,

@@ -2,7 +2,7 @@
 
 An omni base can strafe while turning. With ``person.control: end_to_end`` the action is 3-D
 (forward, left, yaw rate); with ``hybrid`` it is the yaw rate alone, and DWA
-(``pic4rl_bridge.follow.PersonFollower``) adds the translation that follows the person and
+(``pic4rl_bridge.baselines.follow.PersonFollower``) adds the translation that follows the person and
 avoids obstacles (Eirale et al. 2022). The reward pays facing the person (``cos`` of the
 bearing: 1 ahead, -1 behind) and penalizes the error from the desired distance. There is no
 goal: an episode ends on a collision or on the env's time limit.
@@ -21,12 +21,13 @@ from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..errors import ConfigError
-from ..frame import SensorFrame
+from ..perception.collision import assess
+from ..perception.observations import (MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors,
+                                       target_polar)
 from ..robot_info import RobotInfo
-from ..task_registry import PersonControl, PersonReward
+from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .collision import assess
-from .observations import MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors, target_polar
+from .registry import PersonControl, PersonReward
 
 
 class PersonMonitoringTask(Task):
@@ -42,7 +43,7 @@ class PersonMonitoringTask(Task):
         super().__init__(config, robot)
         self.follower = None
         if config.person.control == PersonControl.HYBRID.value:
-            from ..follow import PersonFollower
+            from ..baselines.follow import PersonFollower
 
             self.follower = PersonFollower(robot, config.person.dwa,
                                            distance_m=config.person.distance_m,

@@ -22,16 +22,16 @@ from pic4rl_sim.engine.geometry import Twist2D, polyline_length
 
 from ..config import EnvConfig
 from ..errors import ConfigError
-from ..frame import SensorFrame
+from ..perception.collision import assess
+from ..perception.observations import depth_observation, depth_space
 from ..robot_info import RobotInfo
-from ..task_registry import VineyardReward
+from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .collision import assess
 from .goto import planar_action_space, planar_command
-from .observations import depth_observation, depth_space
+from .registry import VineyardReward
 
 if TYPE_CHECKING:
-    from pic4rl_sim.engine.world_spec import WorldSpec
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 
 class VineyardTask(Task):

@@ -15,5 +15,5 @@ _HOMES = {
     "reader", "TopicMap": "topics", "load_topic_map": "topics", "choose_topics": "topics",
     "chain_poses": "tf",
 }
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)

@@ -9,5 +9,5 @@ from ..lazy import lazy_exports
 _HOMES = {
     "main": "commands", "build_parser": "commands",
 }
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)

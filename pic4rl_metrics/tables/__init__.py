@@ -15,5 +15,5 @@ _HOMES = {
     "results", "METRIC_COLUMNS": "results", "paired_table": "paired", "render_paired":
     "paired", "render_episodes": "text", "render_comparison": "text", "FORMATS": "layouts",
 }
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)

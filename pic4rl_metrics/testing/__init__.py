@@ -13,5 +13,5 @@ _HOMES = {
     "straight_line": "synthetic_tracks", "circle": "synthetic_tracks", "from_waypoints":
     "synthetic_tracks",
 }
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)

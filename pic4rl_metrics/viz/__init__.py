@@ -11,5 +11,5 @@ _HOMES = {
     "episode_figure": "plots", "trajectories_figure": "plots", "View": "raster",
     "EpisodeScene": "video", "render_videos": "video_batch", "write_report": "html_report",
 }
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _HOMES)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)

@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 
 from pic4rl_metrics.geometry import wrap_angle
+from pic4rl_metrics.goal import Goal
 
 from ..errors import WorldError, require
 from .engine_config import EngineConfig
@@ -32,7 +33,7 @@ from .sensors import (
     Lidar,
     WheelOdometry,
 )
-from .world_spec import WorldSpec
+from .worlds.spec import WorldSpec
 
 log = logging.getLogger(__name__)
 
@@ -97,7 +98,7 @@ class Engine:
         self._rng: dict[str, np.random.Generator] = {}
         self.seed = seed
         self.start = Pose2D(0.0, 0.0, 0.0)
-        self.goal = (0.0, 0.0)
+        self.goal = Goal(0.0, 0.0)
         self.steps = 0
         self._plan: np.ndarray | None = None
         self.reset(seed=seed)
@@ -105,7 +106,7 @@ class Engine:
     # -- episodes ----------------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None, start: Pose2D | None = None,
-              goal: tuple[float, float] | None = None) -> None:
+              goal: Goal | None = None) -> None:
         """Start an episode: fresh random streams from ``seed`` (default: the last one), the
         robot at rest at ``start`` and the given ``goal``. Either is sampled with clearance
         when not given, at least ``min_goal_distance_m`` from the other; a given one is
@@ -121,7 +122,7 @@ class Engine:
         start, goal = self._sample_missing(start, goal, rng["sampling"])
         self.seed, self._rng = seed, rng
         self.start = Pose2D(float(start.x), float(start.y), wrap_angle(float(start.yaw)))
-        self.goal = (float(goal[0]), float(goal[1]))
+        self.goal = Goal.of(goal)
         self._plan = None
         self._restart()
 
@@ -134,7 +135,7 @@ class Engine:
                                    robot_radius_m=self.robot.footprint.bounding_radius_m)
         return self._plan
 
-    def _sample_missing(self, start: Pose2D | None, goal: tuple[float, float] | None,
+    def _sample_missing(self, start: Pose2D | None, goal: Goal | None,
                         rng: np.random.Generator) -> tuple[Pose2D, tuple[float, float]]:
         """``start`` and ``goal``, sampling whichever is ``None`` (far enough from the other)."""
         if start is not None and goal is not None:

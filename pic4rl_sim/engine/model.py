@@ -17,7 +17,7 @@ import mujoco
 from ..errors import WorldError
 from .robot_specs import Drive, RobotSpec
 from .sensors import STANDARD_GRAVITY_M_S2
-from .world_spec import WorldSpec
+from .worlds.spec import WorldSpec
 
 ROBOT_BODY = "pic4rl_robot"
 PERSON_BODY = "pic4rl_person"

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import require
 from .taut_path import pull_taut
-from .world_spec import WorldSpec
+from .worlds.spec import WorldSpec
 
 _SQRT2 = math.sqrt(2.0)
 #: Octile over Euclidean length, at most (a straight line at 22.5°): the grid search's bound.

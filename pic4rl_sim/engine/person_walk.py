@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .world_spec import Box, Cylinder, clearance
+from .worlds.spec import Box, Cylinder, clearance
 
 OCCLUDER_HEIGHT_M = 1.0
 #: Steps (m) by which an occluder is pushed further inside a corner until it is clear.

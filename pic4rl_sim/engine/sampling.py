@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import WorldError, require
 from .engine_config import EngineConfig
 from .geometry import Pose2D
-from .world_spec import PersonSpec, WorldSpec
+from .worlds.spec import PersonSpec, WorldSpec
 
 if TYPE_CHECKING:
     from .paths import PathPlanner

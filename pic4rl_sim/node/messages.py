@@ -27,11 +27,12 @@ from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
 from pic4rl_metrics.geometry import yaw_to_quaternion
+from pic4rl_metrics.goal import Goal
 
 from ..engine.core import Engine
 from ..engine.geometry import Pose2D
 from ..engine.sensors import EXACT_VARIANCE
-from ..engine.world_spec import WorldSpec
+from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (
     CAMERA_INFO,
     CLOCK,
@@ -203,11 +204,15 @@ class StateMessages:
             sensor.fill(engine)
 
 
-def goal_pose(goal: tuple[float, float], stamp_ns: int) -> PoseStamped:
-    """The goal as a pose in the world frame (identity orientation: goals have no heading)."""
+def goal_pose(goal: Goal, stamp_ns: int) -> PoseStamped:
+    """The goal as a pose in the world frame: its heading, or the identity orientation for a
+    goal without one."""
     msg = PoseStamped(header=Header(frame_id=WORLD_FRAME))
     set_stamp(msg.header.stamp, stamp_ns)
     msg.pose.position.x, msg.pose.position.y = goal
+    if goal.yaw is not None:
+        q = msg.pose.orientation
+        q.x, q.y, q.z, q.w = yaw_to_quaternion(goal.yaw)
     return msg
 
 
@@ -238,7 +243,7 @@ def _marker(ns: str, index: int, shape: int, header: Header, kind: str) -> Marke
                   color=ColorRGBA(r=r, g=g, b=b, a=a), frame_locked=False)
 
 
-def world_markers(world: WorldSpec, goal: tuple[float, float], stamp_ns: int) -> MarkerArray:
+def world_markers(world: WorldSpec, goal: Goal, stamp_ns: int) -> MarkerArray:
     """One marker per box and cylinder of ``world`` and one for the goal, after a DELETEALL
     that clears what an earlier world left in a viewer."""
     header = Header(frame_id=WORLD_FRAME)

@@ -50,8 +50,8 @@ from rclpy.utilities import remove_ros_args
 from std_srvs.srv import Empty
 
 from ..engine.core import Engine, StepResult, limit_command
-from ..errors import ConfigError, WorldError
 from ..engine.geometry import Twist2D
+from ..errors import ConfigError, WorldError
 from ..interfaces import (
     CMD_VEL,
     DIAGNOSTICS,
@@ -79,7 +79,7 @@ from ..params import (
     build_config,
 )
 from ..engine.sampling import check_free
-from ..engine.world_spec import WorldSpec
+from ..engine.worlds.spec import WorldSpec
 from ..params_file import param_rules
 
 _CLOCK_KEYS = frozenset({"clock_mode", "real_time_factor", "cmd_timeout_s"})

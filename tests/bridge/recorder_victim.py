@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from pic4rl_bridge.recorder import RunRecorder
-from pic4rl_bridge.transport import RawMessage
+from pic4rl_bridge.transports.transport import RawMessage
 from pic4rl_metrics.contract import parse_facts, typestore
 
 T0_NS = 1_700_000_000_000_000_000

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from pic4rl_metrics import compute
 from pic4rl_metrics.bags.reader import read_episode
-from pic4rl_sim.engine.barn_world import barn_data
+from pic4rl_sim.engine.worlds.barn import barn_data
 
-from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.env import NavEnv
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "env_barn.yaml"

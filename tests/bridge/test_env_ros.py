@@ -211,7 +211,7 @@ def test_twist_stamped_commands(domain: int, ros_client) -> None:
 
     from pic4rl_bridge.config import load_env_config
     from pic4rl_bridge.scenario import Scenario
-    from pic4rl_bridge.ros_transport import RosTransport
+    from pic4rl_bridge.transports.ros_transport import RosTransport
 
     config = load_env_config(ROOT / "config/env_goto_lidar.yaml").replace(
         **{"ros.domain_id": domain, "ros.cmd_vel_type": "TwistStamped",

@@ -13,7 +13,7 @@ import pytest
 from pic4rl_bridge.config import EpisodesConfig
 from pic4rl_bridge.episodes import EpisodeSchedule, GoalsAndPoses, load_goals_and_poses
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.transport import EpisodeRequest
+from pic4rl_bridge.transports.transport import EpisodeRequest
 from pic4rl_sim.engine.geometry import Pose2D
 
 EXAMPLE = {"initial_pose": [5.0, -2.0, 0.0],

@@ -15,11 +15,11 @@ import pytest
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
-from pic4rl_bridge.baselines import make_baseline
+from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
-from pic4rl_bridge.follow import HeadingController, PersonFollower
-from pic4rl_bridge.frame import ScanData, SensorFrame
+from pic4rl_bridge.baselines.follow import HeadingController, PersonFollower
+from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_metrics import compute
@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_person_omni.yaml"
 OMNI = RobotInfo(name="omni", footprint=Footprint(radius_m=0.25), omni=True,
                  min_linear_m_s=-1.0, max_linear_m_s=1.0, max_angular_rad_s=2.0,
-                 max_lateral_m_s=1.0, control_dt_s=0.1, lidar_mount=Pose2D(0.0, 0.0, 0.0),
+                 max_lateral_m_s=1.0, control_dt_s=0.1, mounts={"lidar": Pose2D(0.0, 0.0, 0.0)},
                  max_linear_accel_m_s2=2.0, max_angular_accel_rad_s2=4.0)
 HYBRID = EnvConfig().replace(task="personMonitoring", **{"person.control": "hybrid"})
 OPEN = {"world.person.count": 0, "world.person.occluders": 0}

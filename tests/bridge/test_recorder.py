@@ -25,7 +25,7 @@ from rosbags.rosbag2 import Reader
 
 from pic4rl_bridge.errors import RecorderError
 from pic4rl_bridge.recorder import EpisodeBag, RunRecorder
-from pic4rl_bridge.transport import RawMessage
+from pic4rl_bridge.transports.transport import RawMessage
 from pic4rl_metrics import Outcome, compute, read_episode
 from pic4rl_metrics.contract import fact_text, parse_facts, typestore
 

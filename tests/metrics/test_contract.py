@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
 from pic4rl_metrics.geometry import Footprint, Mount
+from pic4rl_metrics.goal import Goal
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
 POSITIVE = st.floats(min_value=1e-6, max_value=1e6, allow_nan=False)
@@ -39,7 +40,7 @@ FACTS = st.builds(
     seed=_optional(st.integers(-(2**63), 2**63 - 1)),
     footprint=_optional(FOOTPRINTS),
     start=_optional(st.tuples(FINITE, FINITE, FINITE)),
-    goal=_optional(POINT),
+    goal=_optional(st.one_of(POINT, st.builds(Goal, FINITE, FINITE, FINITE))),
     goal_tolerance_m=_optional(NON_NEGATIVE),
     collision_tolerance_m=_optional(NON_NEGATIVE),
     safety_margin_m=_optional(NON_NEGATIVE),

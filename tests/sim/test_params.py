@@ -25,7 +25,7 @@ from pic4rl_sim.params import (
 )
 from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI, robot_from_mapping
 from pic4rl_sim.engine.sensors import SENSOR_KINDS
-from pic4rl_sim.engine.world_generators import GENERATORS
+from pic4rl_sim.engine.worlds.generators import GENERATORS
 from pic4rl_sim.schema import param_names
 
 RCLPY_OWN = ("use_sim_time", "start_type_description_service")
@@ -130,8 +130,12 @@ def test_start_and_goal_arrays_are_parsed_or_rejected():
         parse_start([1.0, 2.0])
     with pytest.raises(ConfigError, match=r"^start_pose: .*nan"):
         parse_start([math.nan, 0.0, 0.0])
-    with pytest.raises(ConfigError, match=r"^goal: \[1.0, 2.0, 3.0\] is invalid"):
-        parse_goal([1.0, 2.0, 3.0])
+    with pytest.raises(ConfigError, match=r"^goal: \[1.0, 2.0, 3.0, 4.0\] is invalid"):
+        parse_goal([1.0, 2.0, 3.0, 4.0])
+    with pytest.raises(ConfigError, match=r"^goal: \[1.0\] is invalid"):
+        parse_goal([1.0])
+    assert parse_goal([1, 2]) == (1.0, 2.0) and parse_goal([1, 2]).yaw is None
+    assert parse_goal([1.0, 2.0, 0.5]).yaw == 0.5
 
 
 def test_sensor_parameters_override_the_robots_sensors():

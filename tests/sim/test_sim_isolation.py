@@ -1,6 +1,7 @@
 """The engine stands without ROS: rclpy only in the node's modules, never torch or SB3; of the
 other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``) and
-``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact)."""
+``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact),
+``pic4rl_metrics.goal`` (the one ``Goal``) and ``pic4rl_metrics.lazy`` (sub-package exports)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "r
 NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_bridge", "pic4rl_agents")
 #: The doors to another pic4rl package: the lowest room's shared ``ConfigError`` and
 #: ``Footprint``, both light (no pandas, rosbags or matplotlib).
-METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry"}
+METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry", "pic4rl_metrics.goal",
+                 "pic4rl_metrics.lazy"}
 #: What the metrics' doors must not load: the metrics' heavy libraries.
 METRICS_HEAVY = ("pandas", "rosbags", "matplotlib")
 
@@ -76,4 +78,4 @@ def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
     """A params file is read, checked and its worlds generated without MuJoCo (only a user's
     MJCF world loads it)."""
     assert _loaded("pic4rl_sim.params, pic4rl_sim.params_file, pic4rl_sim.schema, "
-                   "pic4rl_sim.engine.world_generators") == ([], False)
+                   "pic4rl_sim.engine.worlds.generators") == ([], False)

@@ -24,6 +24,7 @@ from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 from pic4rl_agents.models.algorithms import (
     ALGORITHMS,
     AtomicSave,
+    _policy,
     algorithm_class,
     new_model,
     load_model,
@@ -113,6 +114,22 @@ def test_the_extractor_concatenates_every_vector_entry_by_name() -> None:
     out = extractor(batch)
     assert out.shape == (4, 10)
     assert torch.equal(out[:, 5:7], batch["alpha"]) and torch.equal(out[:, 7:], batch["zeta"])
+
+
+def test_the_cnn_extractor_only_where_an_observation_holds_an_image() -> None:
+    """A Dict of vectors only (a new sensor's readings beside the goal) gets SB3's own
+    multi-input policy, not the depth CNN, which needs an image entry."""
+    config = train_config("td3")
+    vectors = gym.spaces.Dict({"sonar": gym.spaces.Box(0, 1, (8,), np.float32),
+                               "goal": gym.spaces.Box(-1, 1, (2,), np.float32)})
+    policy, kwargs = _policy(config, vectors)
+    assert policy == "MultiInputPolicy" and "features_extractor_class" not in kwargs
+    with_image = gym.spaces.Dict({**vectors.spaces,
+                                  "depth": gym.spaces.Box(0, 255, (1, 24, 32), np.uint8)})
+    policy, kwargs = _policy(config, with_image)
+    assert policy == "MultiInputPolicy" and kwargs["features_extractor_class"] is DepthGoalExtractor
+    assert _policy(config, with_image["depth"])[0] == "CnnPolicy"
+    assert _policy(config, vectors["sonar"])[0] == "MlpPolicy"
 
 
 def test_every_image_entry_gets_its_own_cnn_depth_keeping_the_old_names() -> None:

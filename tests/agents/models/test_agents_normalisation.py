@@ -31,7 +31,7 @@ from pic4rl_agents.config import load_run_config
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.rosargs import split_ros_args
 from pic4rl_bridge.env import NavEnv
-from pic4rl_bridge.tasks.observations import NORMALIZED_GOAL_DISTANCE_M
+from pic4rl_bridge.perception.observations import NORMALIZED_GOAL_DISTANCE_M
 
 REWARD_SCALE = 0.01
 STEPS = 100  # 50 of them after the warm-up: the networks have moved from their init

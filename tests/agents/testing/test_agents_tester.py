@@ -33,7 +33,7 @@ from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_sim.engine.core import EngineConfig
 from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.sampling import check_free
-from pic4rl_sim.engine.world_generators import make_world
+from pic4rl_sim.engine.worlds.generators import make_world
 
 SHORT = ["--env-kwargs", "episode_max_steps:100", "--no-progress"]
 PAIRS = json.loads(DEFAULT_PAIRS.read_text())

@@ -131,7 +131,7 @@ MEMORY_ENV = ["memory.enabled:true", "memory.size_px:32", "memory.resolution_m:0
 def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
     """imitation.expert explorer: one grid per env, marked with each step's frame (the
     student's scan and pose), reset with the episode."""
-    from pic4rl_bridge.explorer import ExplorerController
+    from pic4rl_bridge.baselines.explorer import ExplorerController
 
     run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
                                               "imitation.expert": "explorer"},
@@ -225,7 +225,7 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
     personMonitoring only, and the planner goToPose only."""
     from pic4rl_agents.training.imitation import make_expert
     from pic4rl_bridge.config import load_env_config
-    from pic4rl_bridge.follow import HeadingController
+    from pic4rl_bridge.baselines.follow import HeadingController
 
     person = load_env_config(CONFIG / "env_person_omni.yaml")
     for control, size in (("hybrid", 1), ("end_to_end", 3)):
@@ -238,5 +238,5 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
                                           "\\(use heading\\)"):
         make_expert("planner", person)
     with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
-                                          "explorer, heading"):
+                                          "explorer, centerline, heading"):
         make_expert("nobody", person)

@@ -20,7 +20,7 @@ from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.training.imitation import EXPERT, Imitation, make_expert
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.row_followers import CenterlineFollower
+from pic4rl_bridge.baselines.row_followers import CenterlineFollower
 
 RECIPE = CONFIG / "train_vineyard_sac.yaml"
 

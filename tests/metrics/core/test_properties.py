@@ -30,8 +30,8 @@ from pic4rl_metrics import (
     compute_metrics,
     judge_bag,
     read_episode,
-    synthetic,
 )
+from pic4rl_metrics.testing import synthetic
 from pic4rl_metrics.core.metrics import MIN_PATH_M
 from pic4rl_metrics.tables.results import METRIC_COLUMNS
 from pic4rl_metrics.core.series import PointSeries, PoseSeries, ScanSeries

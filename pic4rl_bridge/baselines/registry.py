@@ -1,0 +1,137 @@
+"""Classical references, run by ``pic4rl-test --baseline NAME`` like an agent; goToPose's
+here, the vineyard's row followers in ``row_followers`` and the person follower's heading law
+in ``follow`` (``BASELINE_TASKS`` says which task each drives).
+
+- ``proportional``: turns toward the goal and drives when facing it, with no obstacle
+  avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
+  that the env, transport and recorder work end to end (it reaches any goal in open space).
+- ``dwa``: the Dynamic Window Approach (``pic4rl_bridge.baselines.dwa``), the local planner that
+  nav2 and the BARN challenge compare learned planners with.
+- ``planner``: the privileged planner (``pic4rl_bridge.baselines.planner``): the world's shortest
+  path with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
+- ``explorer``: the mapless explorer (``pic4rl_bridge.baselines.explorer``): the shortest path on an
+  occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
+  followed by the planner's pursuit law; it knows no map, as no agent does.
+- ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
+  bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
+  hybrid.
+
+The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no
+ROS, no simulator.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+from pic4rl_metrics.geometry import wrap_angle
+
+from ..config import EnvConfig
+from ..errors import ConfigError
+from ..robot_info import RobotInfo
+from ..tasks.goto import normalized_action
+from ..tasks.registry import TASKS
+from ..transports.frame import SensorFrame
+from .config import BaselinesConfig
+from .dwa import DwaController
+
+if TYPE_CHECKING:
+    from pic4rl_sim.engine.worlds.spec import WorldSpec
+
+
+def _bearing(dx: float, dy: float, yaw: float) -> float:
+    """The angle (rad, in [-pi, pi)) of the vector (dx, dy) seen from heading ``yaw``."""
+    return wrap_angle(math.atan2(dy, dx) - yaw)
+
+
+class Baseline(Protocol):
+    """A classical controller: ``reset`` at each episode's start, then one ``action`` (the
+    goToPose normalised action) per frame."""
+
+    def reset(self) -> None: ...
+
+    def action(self, frame: SensorFrame) -> np.ndarray: ...
+
+
+class GoToGoalController:
+    """Normalized goToPose actions ([-1, 1]²) from the robot's pose and the goal:
+    ω = ``turn_gain`` × bearing, v = ``speed_gain`` × distance × cos⁴(bearing), clipped to the
+    robot's ranges (m/s, rad/s)."""
+
+    def __init__(self, robot: RobotInfo, *, turn_gain: float = 2.0,
+                 speed_gain: float = 1.0) -> None:
+        self.robot = robot
+        self.turn_gain = turn_gain
+        self.speed_gain = speed_gain
+
+    def reset(self) -> None:
+        """Nothing to forget: the controller keeps no state."""
+
+    def action(self, frame: SensorFrame) -> np.ndarray:
+        if frame.goal is None:
+            raise ValueError("GoToGoalController: the frame has no goal")
+        r = self.robot
+        dx, dy = frame.goal[0] - frame.pose.x, frame.goal[1] - frame.pose.y
+        bearing = _bearing(dx, dy, frame.pose.yaw)
+        w = float(np.clip(self.turn_gain * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
+        v = self.speed_gain * math.hypot(dx, dy) * max(0.0, math.cos(bearing)) ** 4
+        v = float(np.clip(v, r.min_linear_m_s, r.max_linear_m_s))
+        return normalized_action(r, v, w)
+
+
+BASELINE_TASKS: dict[str, tuple[str, ...]] = {}
+for _spec in TASKS.values():
+    for _name in _spec.baselines:
+        BASELINE_TASKS[_name] = (*BASELINE_TASKS.get(_name, ()), _spec.name)
+BASELINES = tuple(BASELINE_TASKS)
+
+
+def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
+                  world: WorldSpec | None = None,
+                  settings: BaselinesConfig | None = None) -> Baseline:
+    """The baseline ``name`` for an env of ``config`` and ``robot`` (``planner``: on the
+    simulated ``world``; ``centerline``: on its lanes or ``vineyard.centerline``), with the
+    ``baselines:`` section's ``settings`` (defaults when ``None``); ``ConfigError`` when it
+    does not fit (before anything runs)."""
+    if name not in BASELINES:
+        raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
+    check_fits(name, config)
+    if name in ("centerline", "row_follower"):
+        from .row_followers import make_row_follower
+
+        return make_row_follower(name, config, robot, world)
+    if name == "dwa":
+        return DwaController(robot, (settings or BaselinesConfig()).dwa,
+                             collision_tolerance_m=config.collision_tolerance_m)
+    if name == "planner":
+        if world is None:
+            raise ConfigError("--baseline planner: it plans on the simulated world's map, and "
+                              "this env has none (no 'sim:' section: a real robot)")
+        from .planner import PlannerController
+
+        return PlannerController(robot, world,
+                                 **dataclasses.asdict((settings or BaselinesConfig()).planner))
+    if name == "explorer":
+        from .explorer import ExplorerController
+
+        return ExplorerController(robot, (settings or BaselinesConfig()).explorer)
+    if name == "dwa_heading":
+        from .follow import HeadingController
+
+        return HeadingController(config, robot)
+    return GoToGoalController(robot)
+
+
+def check_fits(name: str, config: EnvConfig) -> None:
+    """``ConfigError`` unless baseline ``name`` can drive ``config``'s task (``BASELINE_TASKS``:
+    goToPose's goal and (v, ω) action, or personMonitoring's person)."""
+    tasks = BASELINE_TASKS[name]
+    if config.task not in tasks:
+        fits = [b for b, t in BASELINE_TASKS.items() if config.task in t]
+        other = f"--baseline {' or '.join(fits)}" if fits else "an --agent"
+        raise ConfigError(f"--baseline {name}: it drives {' or '.join(tasks)}; this env's task "
+                          f"is {config.task!r}. Test it with {other}, or give a "
+                          f"{tasks[0]} config")

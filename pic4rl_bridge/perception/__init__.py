@@ -1,0 +1,23 @@
+"""Perception: what the tasks and baselines make of a frame's readings.
+
+``collision`` (scan and depth image → points, the footprint's clearance, the step's safety),
+``observations`` (the encoders: LiDAR sectors, the depth image, the target in polar
+coordinates, and their spaces) and ``occupancy`` (the rolling occupancy grid of the robot's
+own scans: the memory observation's and the explorer's). Pure numpy; names are imported on
+first use.
+"""
+
+from __future__ import annotations
+
+from pic4rl_metrics.lazy import lazy_exports
+
+_EXPORTS = {
+    "assess": "collision", "Safety": "collision", "sensed_points": "collision",
+    "obstacle_distance": "collision", "depth_points": "collision", "depth_scan": "collision",
+    "lidar_sectors": "observations", "depth_observation": "observations",
+    "depth_space": "observations", "target_polar": "observations",
+    "clipped_action": "observations",
+    "OccupancyGrid": "occupancy", "sensed_scan": "occupancy",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

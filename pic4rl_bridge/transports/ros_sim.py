@@ -1,0 +1,80 @@
+"""What the ROS transport asks of a simulator node (``ros.sim_node``): the episode's set-up as
+one atomic parameter request, the check that only one simulator answers on our names, and its
+per-step physics status."""
+
+from __future__ import annotations
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from pic4rl_sim.interfaces import DIAGNOSTICS, QosKind, bridge_qos
+from pic4rl_sim.node.ros_interfaces import profile
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import SetParametersAtomically
+from rclpy.node import Node
+
+from ..errors import SimConflict
+from . import decode
+from .ros_topics import Topic
+from .transport import EpisodeRequest
+
+#: How the ROS graph names a node whose name record has not arrived yet.
+_UNNAMED = "_NODE_NAME_UNKNOWN_"
+
+
+def episode_request(request: EpisodeRequest) -> SetParametersAtomically.Request:
+    """``seed``, ``start_pose`` and ``goal`` of the sim node, set at once (empty: sampled)."""
+    start = [] if request.start is None else [float(v) for v in request.start]
+    goal = [] if request.goal is None else request.goal.as_list()
+    params = [
+        ParameterMsg(name="seed", value=ParameterValue(
+            type=ParameterType.PARAMETER_INTEGER, integer_value=int(request.seed))),
+        ParameterMsg(name="start_pose", value=ParameterValue(
+            type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=start)),
+        ParameterMsg(name="goal", value=ParameterValue(
+            type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=goal)),
+    ]
+    return SetParametersAtomically.Request(parameters=params)
+
+
+def check_one_sim(node: Node, sim_node: str, goal_topic: str, pose_topic: str) -> None:
+    """``SimConflict`` when a second simulator answers on our names (a forgotten
+    ``pic4rl-sim``), so that frames and bags would mix two worlds: more than one node
+    named like ``sim_node`` publishes the goal or the pose topic, or the pose topic
+    (which only a simulator or a robot's driver publishes) has a second publisher whose
+    node the graph cannot name yet (DDS may lose a node's name record while several
+    participants start). A graph query: cheap, once an episode."""
+    sim = node.resolve_topic_name(sim_node)
+    for role, topic in (("goal", goal_topic), ("pose", pose_topic)):
+        nodes = [f"{info.node_namespace.rstrip('/')}/{info.node_name}"
+                 for info in node.get_publishers_info_by_topic(topic)]
+        twins = [name for name in nodes if name == sim or (
+            role == "pose" and _UNNAMED in name)]
+        if len(twins) > 1:
+            shown = " and ".join(name if _UNNAMED not in name else "a node not yet named"
+                                 for name in twins)
+            raise SimConflict(
+                f"{len(twins)} simulator nodes publish {topic} in ROS domain "
+                f"{node.context.get_domain_id()}: {shown} (a pic4rl-sim left "
+                "running?); stop all but one, or give each its own namespace "
+                "(-r __ns:=/robot2) or ROS_DOMAIN_ID")
+
+
+def subscribe_status(node: Node, faults: dict[int, str]) -> Topic:
+    """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
+    physics diverged and the robot was put back at its start; its reason goes to ``faults``
+    under the step's stamp (ns). The returned topic holds the last status's stamp."""
+    from pic4rl_sim.node.messages import PHYSICS_STATUS  # the engine's: only with our sim
+
+    entry = Topic(DIAGNOSTICS.name, DIAGNOSTICS.type)
+
+    def on_status(msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            if status.name == PHYSICS_STATUS:
+                entry.stamp_ns = decode.stamp_ns(msg.header)
+                if status.level == DiagnosticStatus.ERROR:
+                    faults[entry.stamp_ns] = status.message
+
+    sub = node.create_subscription(DiagnosticArray, DIAGNOSTICS.name, on_status,
+                                   profile(bridge_qos(QosKind.RELIABLE)))
+    entry.name = sub.topic_name
+    return entry

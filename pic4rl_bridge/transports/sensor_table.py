@@ -1,0 +1,112 @@
+"""The frame's sensors in one table, and the one function that builds a ``SensorFrame``.
+
+Each reading of ``SensorFrame`` is one ``FrameSensor``: the sim topic that carries it (its
+type, QoS and default name, ``topics.<name>`` in the config, with its doc), how its message
+decodes, and how the in-process transport reads the same value straight from the engine. Both
+transports build frames through ``build_frame``; a task names the sensors it needs in its
+``required`` and reads them from ``SensorFrame.readings`` with the same names.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pic4rl_metrics.goal import Goal
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
+
+from . import decode
+from .frame import ScanData, SensorFrame, as_published
+
+_ORIGIN = Pose2D(0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class FrameSensor:
+    """One reading of ``SensorFrame``: ``name`` is its key in ``readings``, the task's
+    ``required`` entry and the ``topics`` key; ``interface`` the sim topic that carries it."""
+
+    name: str
+    interface: Interface
+    #: (message, its sensor's mount, topic name) → the field's value.
+    decode: Callable[[Any, Pose2D, str], Any]
+    #: (engine, its sensor's mount) → the same value as the decoded message, or ``None`` when
+    #: the engine has no such sensor (the in-process transport when it does not record).
+    read: Callable[[Any, Pose2D], Any]
+    #: The robot's sensor kind (a ``SENSOR_KINDS`` name, a ``RobotInfo.mounts`` key) that
+    #: makes the reading and whose mount ``decode`` and ``read`` take; ``None``: no mount.
+    kind: str | None = None
+    #: Published once an episode (subscribed like the goal, decoded once per message).
+    episodic: bool = False
+    #: What ``topics.<name>``'s doc adds to the message type.
+    topic_note: str = ""
+
+    def mount(self, mounts: Mapping[str, Pose2D]) -> Pose2D:
+        """The mount of this reading's sensor in ``mounts`` (the origin without one)."""
+        return mounts.get(self.kind, _ORIGIN) if self.kind else _ORIGIN
+
+    @property
+    def default_topic(self) -> str:
+        """``topics.<name>``'s default: the sim's topic."""
+        return self.interface.name
+
+    @property
+    def topic_doc(self) -> str:
+        """``topics.<name>``'s doc: the message type and what it carries."""
+        return f"{self.interface.type}{self.topic_note}"
+
+
+def _f32(value: float) -> float:
+    """``value`` as a float32 message field holds it."""
+    return float(np.float32(value))
+
+
+def _read_scan(engine: Any, mount: Pose2D) -> ScanData | None:
+    lidar = engine.lidar
+    if lidar is None:
+        return None
+    return ScanData(engine.scan().astype(np.float32), _f32(lidar.angle_min_rad),
+                    _f32(lidar.angle_increment_rad), _f32(lidar.range_min_m),
+                    _f32(lidar.range_max_m), mount)
+
+
+def _read_depth(engine: Any, mount: Pose2D) -> np.ndarray | None:
+    return None if engine.depth is None else engine.depth_image().astype(np.float32)
+
+
+def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
+    seen = engine.person_pose()
+    return None if seen is None else as_published(seen[0])
+
+
+SENSORS = (
+    FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan,
+                kind="lidar"),
+    FrameSensor("depth", DEPTH_IMAGE,
+                lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth,
+                topic_note=" (32FC1)"),
+    FrameSensor("person", PERSON_POSE, lambda msg, mount, topic: decode.planar_pose(msg.pose),
+                _read_person, topic_note=" (personMonitoring)"),
+    FrameSensor("plan", PLAN, lambda msg, mount, topic: decode.path(msg),
+                lambda engine, mount: engine.plan(), episodic=True,
+                topic_note=": the global plan of goal_input plan (the sim's, or any planner's, "
+                "e.g. nav2's /plan)"),
+)
+#: The frame's sensors by name, in the table's order.
+BY_NAME = {s.name: s for s in SENSORS}
+
+
+def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
+                goal: Goal | None, wanted: Collection[str],
+                value: Callable[[FrameSensor], Any]) -> SensorFrame:
+    """The frame at ``stamp_ns``: pose and twist from ``odometry``, and ``value(sensor)`` for
+    each sensor ``wanted`` in the table's order (the rest, and a ``None`` value, absent)."""
+    pose, twist = odometry
+    readings = {}
+    for sensor in SENSORS:
+        if sensor.name in wanted and (reading := value(sensor)) is not None:
+            readings[sensor.name] = reading
+    return SensorFrame(stamp_ns, pose, twist, goal, readings)
