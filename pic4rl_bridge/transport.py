@@ -36,12 +36,14 @@ OfferedQos = QosSettings
 
 @dataclass(frozen=True)
 class EpisodeRequest:
-    """The next episode: its seed (sampling and sensor noise), and a start and goal in the
-    world frame (``None``: the simulator samples them from the seed)."""
+    """The next episode: its seed (sampling and sensor noise), a start and goal in the world
+    frame (``None``: the simulator samples them from the seed), and the variant of the sim's
+    world it runs in (``None``: the sim's ``world_variant``; ``episodes.world_variants``)."""
 
     seed: int
     start: Pose2D | None = None
     goal: tuple[float, float] | None = None
+    world_variant: int | None = None
 
 
 class Transport(ABC):
