@@ -41,7 +41,7 @@ from pic4rl_bridge.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim import params_file
 
-from .config import ImitationConfig
+from .config import NODES, ImitationConfig
 
 log = logging.getLogger(__name__)
 
@@ -141,7 +141,7 @@ class Imitation:
                  max_steps: int | None = None, sources: tuple[str, ...] = ()) -> None:
         self.config, self.env, self.model, self.callback = config, env, model, callback
         self.max_steps = max_steps
-        section = params_file.load(sources, (BASELINES_NODE,))[BASELINES_NODE]  # the experts'
+        section = params_file.load(sources, (BASELINES_NODE, *NODES))[BASELINES_NODE]  # experts'
         settings = baselines_config(section, where=" + ".join(sources))  # tuning, as baselines'
         self.experts = [make_expert(config.expert, env_config, settings)
                         for _ in range(env.num_envs)]

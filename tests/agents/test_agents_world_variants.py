@@ -63,3 +63,32 @@ def test_a_test_env_runs_its_own_world_not_the_training_worlds(tmp_path: Path) -
     spec = testplan.resolve_agents(plan)[0]
     assert spec.run.env.episodes.world_variants == ""
     assert spec.run.env.sim_params["world_variant"] == 6
+
+
+def test_the_experts_drive_with_the_params_files_baselines_section(tmp_path: Path) -> None:
+    """The recipe's ``baselines:`` section (the explorer's BARN tuning) reaches the expert, as
+    it reaches ``--baseline explorer``; a file without one leaves the defaults."""
+    from stable_baselines3.common.callbacks import CallbackList
+    from stable_baselines3.common.logger import configure
+
+    from pic4rl_agents.algorithms import build_model
+    from pic4rl_agents.config import ImitationConfig, load_run_config
+    from pic4rl_agents.imitation import Imitation
+    from pic4rl_bridge.baseline_config import ExplorerConfig
+
+    recipe = ROOT / "config" / "train_barn_td3_memory.yaml"
+    run = load_run_config([recipe], train={"buffer_size": 100, "learning_starts": 10})
+    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
+    try:
+        model = build_model(run.train, env)
+        model.set_logger(configure(None, []))
+        callback = CallbackList([])
+        callback.init_callback(model)
+        config = ImitationConfig(enabled=True, expert="explorer", bc_steps=10)
+        tuned = Imitation(config, env, run.env, model, callback, batch_size=16,
+                          sources=(str(recipe),)).experts[0].config
+        plain = Imitation(config, env, run.env, model, callback, batch_size=16).experts[0].config
+    finally:
+        env.close()
+    assert (tuned.max_linear_m_s, tuned.squeeze_radius_m) == (1.0, 0.27)
+    assert plain == ExplorerConfig()
