@@ -39,8 +39,16 @@ VINEYARD_LANES := build/vineyard_lanes_101.json
 VINEYARD_DEMO := --agent checkpoints/vineyard_td3 --agent checkpoints/vineyard_sac \
 	--baseline centerline --baseline row_follower --episodes 7 --sim-kwargs world_variant:101 \
 	--env-kwargs episodes.file:$(VINEYARD_LANES) --run demo_vineyard --video
+# `make demo CASE=barn`: the shipped BARN agent (checkpoints/barn_td3_memory: mapless, learned
+# on training worlds only) beside DWA and the privileged planner on 5 of BARN's 50 test worlds,
+# one run each, through the sim node over ROS 2 (config/suite_barn_demo.yaml): a bag per
+# episode, the BARN table (bags/demo_barn/results.md) and a video per bag in bags/demo_barn/videos/.
+BARN_DEMO := bags/demo_barn
 demo: setup
-ifeq ($(CASE),person)
+ifeq ($(CASE),barn)
+	$(VENV)/bin/pic4rl-bench --no-progress config/suite_barn_demo.yaml
+	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(BARN_DEMO)/videos $(BARN_DEMO)
+else ifeq ($(CASE),person)
 	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
 else ifeq ($(CASE),vineyard)
 	mkdir -p build && $(PY) tools/vineyard_lanes.py config/train_vineyard_sac.yaml 101 -o $(VINEYARD_LANES)

@@ -106,6 +106,8 @@ class EvalConfig:
     seed: int = param(1000, doc="the same episodes at every evaluation")
     pair_kind: str = param("paper", doc="the eval env's episodes.pair_kind",
                            choices=tuple(PAIR_KINDS))
+    world_variants: str = param("", doc="the eval env's episodes.world_variants, walked in order "
+                                "(held-out worlds); empty: the sim's world_variant")
     video_episodes: int = param(0, doc="videos of each evaluation's first episodes, driven "
                                 "again with rendering on: MP4s in <run>/videos/, GIFs in "
                                 "TensorBoard; 0: none", range=NON_NEGATIVE)

@@ -147,6 +147,9 @@ class EpisodesConfig:
                                   range=NON_NEGATIVE)
     max_detour: float = param(0.0, doc="shortest collision-free path / straight line at most; "
                               "0: the kind's")
+    world_variants: str = param("", doc="a world per episode: the sim's world_variant drawn "
+                                "for each from these (comma-separated, each N or START:STOP"
+                                "[:STEP], Python's range); empty: the sim's own")
 
     def __post_init__(self) -> None:
         check(self, "episodes.")

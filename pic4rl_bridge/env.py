@@ -144,12 +144,11 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.task = make_task(self.config, self.scenario.robot, world)
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
-        pairs = (load_goals_and_poses(self.config.episodes.file)
-                 if self.config.episodes.file else None)
-        if pairs is not None:  # drawn in this world, every start free for this robot
-            check_pairs(pairs, self.config.episodes.file, self.scenario)
-        self._pairs = pairs
-        self._schedule = EpisodeSchedule(self.config.episodes, pairs=pairs,
+        file = self.config.episodes.file
+        self._pairs = load_goals_and_poses(file) if file else None
+        if self._pairs is not None:  # drawn in this world, every start free for this robot
+            check_pairs(self._pairs, file, self.scenario)
+        self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs,
                                          ordered=self.config.episodes.ordered)
         e = self.config.episodes
         self._kind = resolve_pair_kind(e.pair_kind, min_distance_m=e.min_distance_m,
@@ -172,8 +171,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._frame: SensorFrame | None = None
         self._context: EpisodeContext | None = None
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
-        self._streak = 0
-        self._steps = 0
+        self._streak = self._steps = 0
         self._seed_used = 0  # the simulator seed of the current episode
         self._done = True
 
@@ -218,11 +216,13 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self._end_bag(None)
         given = _parse_options(options or {})
         request = self._schedule.next_request(self._episode, self.np_random)
-        request = EpisodeRequest(given.get("seed", request.seed), given.get("start", request.start),
-                                 given.get("goal", request.goal))
+        request = dataclasses.replace(request, **{k: given[k] for k in ("seed", "start", "goal")
+                                                  if k in given})
+        if self.scenario.select(request.world_variant):  # the episode's world, and its pairs
+            self._sampler = PairSampler.for_scenario(self.scenario)
         kind = self._kind if "pairs" not in given else self._pair_kind(given["pairs"])
         if "pairs" in given:  # the drawn pair replaces the schedule's
-            request = EpisodeRequest(request.seed)
+            request = EpisodeRequest(request.seed, world_variant=request.world_variant)
         recording = self._recording
         held = recording.hold(self.transport) if recording is not None else []
         try:
@@ -271,7 +271,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         if kind is not None and first.start is None and first.goal is None:
             requests = self._sampler.attempts(  # type: ignore[union-attr]  # checked with kind
                 first.seed, kind, self.np_random, self.config.episodes.max_attempts)
-        for request in requests:
+        for request in requests:  # redraws stay in the episode's world
+            request = dataclasses.replace(request, world_variant=first.world_variant)
             try:
                 frame = self.transport.reset(request)
             except EpisodeRejected as err:

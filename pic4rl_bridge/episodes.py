@@ -10,7 +10,8 @@ gives one sequence of episodes.
 Pairs of a kind (``episodes.pair_kind``; ``pic4rl_sim.engine.sampling.PAIR_KINDS``) other than plain
 ``any`` are drawn here, by ``PairSampler`` from the episode's seed, and sent to the simulator
 as an explicit start and goal: both transports then run the same pair, and the simulator's own
-sampling stays as it was.
+sampling stays as it was. With ``episodes.world_variants`` each episode first draws its world
+(or walks them in order when ``ordered``).
 """
 
 from __future__ import annotations
@@ -29,17 +30,12 @@ import numpy as np
 from pic4rl_metrics.goal import Goal
 from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D
-from pic4rl_sim.engine.sampling import (
-    PAIR_KINDS,
-    PairKind,
-    check_free,
-    check_pair_filter,
-    sample_pairs,
-    sample_start_goal,
-)
+from pic4rl_sim.engine.sampling import (PAIR_KINDS, PairKind, check_free, check_pair_filter,
+                                        sample_pairs, sample_start_goal)
 
 from .config import EpisodesConfig
 from .errors import ConfigError
+from .scenario import parse_variants
 from .transports.transport import EpisodeRequest
 
 if TYPE_CHECKING:
@@ -165,6 +161,8 @@ class EpisodeSchedule:
         self.config = config
         self.pairs = pairs
         self.ordered = ordered
+        self.variants = parse_variants(config.world_variants)
+        self.variant: int | None = None  # the world variant in use
         self.index: int | None = None  # the file pair in use
         self._block: int | None = None  # its block of change_goal_and_pose episodes
         self._skipped = 0  # ordered pairs skipped by redraws
@@ -175,11 +173,14 @@ class EpisodeSchedule:
         if episode < 0:
             raise ValueError(f"episode: {episode} is invalid; expected an integer >= 0")
         seed = int(rng.integers(0, _SEED_END))
+        if self.variants:  # its world (no pairs file, no starting episodes: Scenario's check)
+            n = len(self.variants)
+            self.variant = self.variants[episode % n if self.ordered else int(rng.integers(n))]
         self._starting = episode < self.config.starting_episodes
         if self._starting:
             return self._starting_request(seed, rng)
         if self.pairs is None:
-            return EpisodeRequest(seed)
+            return EpisodeRequest(seed, world_variant=self.variant)
         block = (episode - self.config.starting_episodes) // self.config.change_goal_and_pose
         if block != self._block:
             self._block = block
@@ -195,7 +196,7 @@ class EpisodeSchedule:
         if self._starting:
             return self._starting_request(request.seed, rng)
         if self.pairs is None or self.index is None:
-            return EpisodeRequest(int(rng.integers(0, _SEED_END)))
+            return EpisodeRequest(int(rng.integers(0, _SEED_END)), world_variant=self.variant)
         n = len(self.pairs.goals)
         if self.ordered:
             self._skipped += 1

@@ -194,6 +194,9 @@ def make_view(view: str, scenario: Scenario, transport: Any, goal_tolerance_m: f
     """The picture-maker ``render_view`` names: ``top`` (default; ``depth``: the frames carry
     a depth image to show) or ``mujoco``."""
     if view == "top":
+        if scenario.variants:
+            raise ConfigError("render_view: 'top' draws one world; this env draws its world "
+                              "per episode (episodes.world_variants): unset it to render")
         return TopDownView(scenario, goal_tolerance_m, depth=depth)
     if view != "mujoco":
         raise ConfigError(f"render_view: {view!r} is invalid; expected one of "

@@ -4,11 +4,13 @@ The sim section of the config (``sim_params``) names the robot, its sensors and 
 the env knows the footprint, the LiDAR's mount and a vineyard's rows without asking the
 simulator; a real robot's config names the robot in ``robot`` instead (a built-in name or a
 robot YAML), and has no world. Defaults (the robot, the control period) are ``SimParams``'.
+With ``episodes.world_variants`` each episode runs one of several variants of the sim's world
+(``select``); every variant is built once, when the scenario is made, so a bad one fails then.
 """
 
 from __future__ import annotations
 
-from functools import cached_property
+import dataclasses
 from typing import TYPE_CHECKING
 
 from pic4rl_sim.engine.robot_specs import RobotSpec, load_robot
@@ -17,6 +19,7 @@ from pic4rl_sim.errors import SimError
 from .config import EnvConfig
 from .errors import ConfigError
 from .robot_info import RobotInfo
+from .tasks.registry import task_spec
 
 if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section is used
     from pic4rl_sim.engine.worlds.spec import WorldSpec
@@ -59,17 +62,66 @@ class Scenario:
                 raise ConfigError(f"robot: {err}") from err
             control_dt = float(config.sim_params.get("control_dt_s", SimParams.control_dt_s))
         self.robot = RobotInfo.of(self.spec, config, config.control_dt_s or control_dt)
+        #: The variants the episodes draw from (``episodes.world_variants``), and the current
+        #: episode's (``None``: the sim's ``world_variant``).
+        self.variants = parse_variants(config.episodes.world_variants)
+        self.variant: int | None = None
+        self._worlds: dict[int | None, WorldSpec | None] = {}
+        if self.variants:
+            if self.sim is None or config.episodes.file or task_spec(config.task).uses_world:
+                raise ConfigError("episodes.world_variants: a world per episode needs a "
+                                  "simulated world (a 'sim:' section), no episodes.file (its "
+                                  "pairs are in one world) and a task that knows no world's map")
+            for variant in self.variants:
+                self.world_at(variant)
 
-    @cached_property
+    def world_at(self, variant: int | None) -> WorldSpec | None:
+        """Variant ``variant`` of the simulated world (``None``: the sim's own), built once."""
+        if variant not in self._worlds:
+            if self.sim is None:
+                return None
+            choice = self.sim.world if variant is None else dataclasses.replace(
+                self.sim.world, variant=variant)
+            try:
+                self._worlds[variant] = choice.build()
+            except (SimError, ConfigError) as err:
+                key = "sim parameters" if variant is None else "episodes.world_variants"
+                raise ConfigError(f"{key}: {err}") from err
+        return self._worlds[variant]
+
+    def select(self, variant: int | None) -> bool:
+        """Make ``variant`` the current episode's world; whether that changed it."""
+        changed, self.variant = variant != self.variant, variant
+        return changed
+
+    @property
     def world(self) -> WorldSpec | None:
-        """The simulated world (built once: a vineyard's rows, the bags' world name)."""
-        return self.sim.world.build() if self.sim is not None else None
+        """The current episode's simulated world (a vineyard's rows, the bags' world name)."""
+        return self.world_at(self.variant)
 
     @property
     def world_name(self) -> str:
         if self.sim is None:
             return ""
-        return f"{self.sim.world.kind}:{self.sim.world.variant}"
+        variant = self.sim.world.variant if self.variant is None else self.variant
+        return f"{self.sim.world.kind}:{variant}"
+
+
+def parse_variants(text: str, key: str = "episodes.world_variants") -> tuple[int, ...]:
+    """The variants of ``text``: comma-separated, each ``N`` or ``START:STOP[:STEP]`` (Python's
+    ``range``), in order; ``ConfigError`` naming ``key`` for anything else."""
+    variants: list[int] = []
+    for item in (part.strip() for part in text.split(",") if part.strip()):
+        try:
+            numbers = [int(v) for v in item.split(":")]
+            found = numbers if len(numbers) == 1 else list(range(*numbers))
+        except (ValueError, TypeError):
+            found = []
+        if not found:
+            raise ConfigError(f"{key}: {item!r} is invalid; expected a variant N or a range "
+                              "START:STOP[:STEP] holding one or more")
+        variants += found
+    return tuple(variants)
 
 
 def robot_of(config: EnvConfig) -> str:

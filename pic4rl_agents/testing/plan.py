@@ -202,8 +202,10 @@ def recorded(spec: AgentSpec, run_dir: Path) -> AgentSpec:
 
 
 def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
-    """``spec`` set up for testing: the test episodes, no curriculum."""
-    overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0}
+    """``spec`` set up for testing: the test episodes, no curriculum, in the test env's world
+    (never the training worlds of ``episodes.world_variants``)."""
+    overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0,
+                                 "episodes.world_variants": ""}
     from pic4rl_sim.params import SimParams
 
     env = spec.run.env

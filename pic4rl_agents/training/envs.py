@@ -19,6 +19,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.errors import ConfigError
 from pic4rl_sim.schema import to_params
 
 from pic4rl_agents.config import CurriculumConfig, EvalConfig
@@ -44,10 +45,33 @@ def env_for_rank(config: EnvConfig, rank: int, n_envs: int) -> EnvConfig:
 def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
     """The evaluation env of a run whose env is ``env``: in process, not recording, and every
     ``episodes.*`` key back at its default (no training pairs, no curriculum) but
-    ``episodes.pair_kind``, the evaluation's: pairs sampled from the seed, like a test's."""
+    ``episodes.pair_kind`` and ``episodes.world_variants``, the evaluation's (its worlds
+    walked in order): pairs sampled from the seed, like a test's."""
     defaults = {f"episodes.{k}": v for k, v in to_params(EpisodesConfig()).items()}
     return env.replace(**{**defaults, "episodes.pair_kind": evaluation.pair_kind,
+                          "episodes.world_variants": evaluation.world_variants,
+                          "episodes.ordered": bool(evaluation.world_variants),
                           "transport": "inprocess", "record.enabled": False})
+
+
+def check_no_test_world(config: EnvConfig) -> None:
+    """``ConfigError`` when a training or evaluation env would run one of a benchmark's test
+    worlds (BARN's 50: docs/results.md; nothing is trained or chosen on them): its
+    ``episodes.world_variants``, or without them the sim's ``world_variant``."""
+    from pic4rl_bridge.scenario import parse_variants
+    from pic4rl_sim.engine.worlds.barn import challenge_test_worlds
+
+    if config.sim_params.get("world") != "barn":
+        return
+    key = "episodes.world_variants"
+    variants = parse_variants(config.episodes.world_variants)
+    if not variants:
+        key, variants = "sim world_variant", (int(config.sim_params.get("world_variant", 0)),)
+    banned = sorted(set(variants) & set(challenge_test_worlds()))
+    if banned:
+        raise ConfigError(f"{key}: holds BARN test world(s) {', '.join(map(str, banned[:5]))}"
+                          f"{' ...' if len(banned) > 5 else ''}; train and evaluate on the 250 "
+                          "others (the test worlds are 0, 6, ..., 294)")
 
 
 def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
@@ -77,6 +101,7 @@ def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
     workers' messages, as in process on two cores). Not SB3's ``make_vec_env``: it gives every
     rank the same env kwargs (ours differ by ROS namespace and node) and names monitor files
     ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read)."""
+    check_no_test_world(config)  # training and its evaluations never see a test world
     def factory(rank: int) -> Callable[[], gym.Env]:
         cfg = env_for_rank(config, rank, n_envs)
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None

@@ -20,6 +20,7 @@ gymnasium 0.29 and SB3 2.2; this module writes the same loop on SB3's policy obj
 from __future__ import annotations
 
 import copy
+import dataclasses
 import logging
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,6 +31,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
+from pic4rl_bridge.baselines.config import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.baselines.explorer import ExplorerController
@@ -38,8 +40,9 @@ from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.baselines.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
 from pic4rl_bridge.tasks.registry import EXPERT_TASKS
+from pic4rl_sim import params_file
 
-from pic4rl_agents.config import ImitationConfig
+from pic4rl_agents.config import NODES, ImitationConfig
 
 log = logging.getLogger(__name__)
 
@@ -50,14 +53,16 @@ EXPERT, STUDENT = 0, 1  # who drove a labelled state
 EXPERTS = EXPERT_TASKS
 
 
-def make_expert(name: str, env: EnvConfig
+def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = None
                 ) -> PlannerController | ExplorerController | HeadingController | CenterlineFollower:
     """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
     (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
     mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
     ``heading``: DWA with a
     proportional heading law, personMonitoring, either control; ``centerline``: the row's
-    centre-line follower, vineyard)."""
+    centre-line follower, vineyard). The planner and the explorer drive with ``settings``, the
+    params files' ``baselines:`` section (defaults when ``None``), as their baselines do."""
+    settings = settings or BaselinesConfig()
     if name not in EXPERTS:
         raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
                           f"{', '.join(EXPERTS)}")
@@ -67,15 +72,17 @@ def make_expert(name: str, env: EnvConfig
                           f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
     scenario = Scenario(env)
     if name == "explorer":
-        return ExplorerController(scenario.robot)
+        return ExplorerController(scenario.robot, settings.explorer)
     if name == "heading":
         return HeadingController(env, scenario.robot)
     if name == "centerline":
         return make_row_follower(name, env, scenario.robot, scenario.world)  # type: ignore[return-value]
-    if scenario.world is None:
-        raise ConfigError("imitation.expert: planner plans on the simulated world's map, and "
-                          "the env has none (no 'sim:' section)")
-    return PlannerController(scenario.robot, scenario.world)
+    if scenario.world is None or scenario.variants:
+        raise ConfigError("imitation.expert: planner plans on one simulated world's map, and "
+                          "the env has none (no 'sim:' section) or draws one per episode "
+                          "(episodes.world_variants)")
+    return PlannerController(scenario.robot, scenario.world,
+                             **dataclasses.asdict(settings.planner))
 
 
 @dataclass
@@ -131,10 +138,13 @@ class Imitation:
 
     def __init__(self, config: ImitationConfig, env: VecEnv, env_config: EnvConfig, model: Any,
                  callback: CallbackList, *, batch_size: int, seed: int = 0,
-                 max_steps: int | None = None) -> None:
+                 max_steps: int | None = None, sources: tuple[str, ...] = ()) -> None:
         self.config, self.env, self.model, self.callback = config, env, model, callback
         self.max_steps = max_steps
-        self.experts = [make_expert(config.expert, env_config) for _ in range(env.num_envs)]
+        section = params_file.load(sources, (BASELINES_NODE, *NODES))[BASELINES_NODE]  # experts'
+        settings = baselines_config(section, where=" + ".join(sources))  # tuning, as baselines'
+        self.experts = [make_expert(config.expert, env_config, settings)
+                        for _ in range(env.num_envs)]
         self.data = Demonstrations()
         self.batch_size = batch_size
         self.rng = np.random.default_rng(seed)

@@ -130,7 +130,7 @@ class Trainer:
             try:
                 imitation = Imitation(cfg.imitation, env, env_cfg, model, callback,
                                       batch_size=cfg.batch_size, seed=cfg.seed,
-                                      max_steps=cfg.max_steps)
+                                      max_steps=cfg.max_steps, sources=self.config.sources)
                 done = imitation.run()
                 if cfg.imitation.rl_gradient_steps > 0:
                     callbacks.insert(0, DecayingCloning(imitation))

@@ -127,7 +127,8 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
 
 def check_fits(name: str, config: EnvConfig) -> None:
     """``ConfigError`` unless baseline ``name`` can drive ``config``'s task (``BASELINE_TASKS``:
-    goToPose's goal and (v, ω) action, or personMonitoring's person)."""
+    goToPose's goal and (v, ω) action, or personMonitoring's person) or a map-aware one
+    would drive on another episode's world."""
     tasks = BASELINE_TASKS[name]
     if config.task not in tasks:
         fits = [b for b, t in BASELINE_TASKS.items() if config.task in t]
@@ -135,3 +136,6 @@ def check_fits(name: str, config: EnvConfig) -> None:
         raise ConfigError(f"--baseline {name}: it drives {' or '.join(tasks)}; this env's task "
                           f"is {config.task!r}. Test it with {other}, or give a "
                           f"{tasks[0]} config")
+    if name in ("planner", "centerline", "row_follower") and config.episodes.world_variants:
+        raise ConfigError(f"--baseline {name}: it drives on one world's map; this env draws "
+                          "its world per episode (episodes.world_variants): unset it")

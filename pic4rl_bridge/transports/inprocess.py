@@ -6,7 +6,8 @@ every sensor once; a step tracks the command for one control period, then reads 
 once. Values pass through the same float32 buffers and quaternions as the node's messages, so
 the frames equal the ROS transport's bit for bit. When recording, it builds the node's own
 messages (``pic4rl_sim.node.messages``), decodes the frame from them and hands them to the tap
-serialized, so its bags equal the node's too.
+serialized, so its bags equal the node's too. A request for another variant of the world builds a new
+engine on it, as the node does when its ``world_variant`` changed.
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ class InProcessTransport(Transport):
         self._exact_pose = pose == "ground_truth"
         self._sensors = sensors
         self._mounts = scenario.robot.mounts
-        self._world_name = scenario.world_name
+        self._scenario, self._variant = scenario, scenario.variant
         self._namespace = "/" + config.ros.namespace.strip("/") if config.ros.namespace else ""
         self._record_topics = config.record.topics
         self._control_dt_ns = round(sim.engine.control_dt_s * 1e9)
@@ -69,9 +70,15 @@ class InProcessTransport(Transport):
 
     @property
     def world_name(self) -> str:
-        return self._world_name
+        return self._scenario.world_name
 
     def reset(self, request: EpisodeRequest) -> SensorFrame:
+        variant = request.world_variant
+        if variant is not None and variant != self._variant:  # as the node rebuilds its own
+            sim, world = self._scenario.sim, self._scenario.world_at(variant)
+            assert sim is not None and world is not None  # checked in __init__
+            self.engine = Engine(sim.robot, world, sim.engine, seed=request.seed)
+            self._variant, self._writer = variant, None
         try:
             self.engine.reset(seed=request.seed, start=request.start, goal=request.goal)
         except (SimError, ConfigError) as err:

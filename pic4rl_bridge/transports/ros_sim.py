@@ -22,7 +22,8 @@ _UNNAMED = "_NODE_NAME_UNKNOWN_"
 
 
 def episode_request(request: EpisodeRequest) -> SetParametersAtomically.Request:
-    """``seed``, ``start_pose`` and ``goal`` of the sim node, set at once (empty: sampled)."""
+    """``seed``, ``start_pose`` and ``goal`` of the sim node, set at once (empty: sampled), and
+    its ``world_variant`` when the request names one (the node rebuilds its world)."""
     start = [] if request.start is None else [float(v) for v in request.start]
     goal = [] if request.goal is None else request.goal.as_list()
     params = [
@@ -33,6 +34,9 @@ def episode_request(request: EpisodeRequest) -> SetParametersAtomically.Request:
         ParameterMsg(name="goal", value=ParameterValue(
             type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=goal)),
     ]
+    if request.world_variant is not None:
+        params.append(ParameterMsg(name="world_variant", value=ParameterValue(
+            type=ParameterType.PARAMETER_INTEGER, integer_value=int(request.world_variant))))
     return SetParametersAtomically.Request(parameters=params)
 
 

@@ -71,7 +71,7 @@ class RosTransport(Transport):
         self._dt_s = scenario.robot.control_dt_s
         self._max_age_s = config.ros.max_sensor_age_s or 5.0 * self._dt_s
         self._mounts = scenario.robot.mounts
-        self._world_name = scenario.world_name
+        self._scenario = scenario  # its world_name: the current episode's world
         self._own_context: Context | None = None
         if node is None:
             self._own_context = Context()
@@ -174,7 +174,7 @@ class RosTransport(Transport):
 
     @property
     def world_name(self) -> str:
-        return self._world_name
+        return self._scenario.world_name
 
     def reset(self, request: EpisodeRequest) -> SensorFrame:
         self._t0_ns, self._pending = None, []

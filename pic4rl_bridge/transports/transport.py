@@ -37,13 +37,15 @@ OfferedQos = QosSettings
 
 @dataclass(frozen=True)
 class EpisodeRequest:
-    """The next episode: its seed (sampling and sensor noise), and a start and goal in the
-    world frame (``None``: the simulator samples them from the seed); a goal given as a pair
-    (a file's, a sampler's) becomes a ``Goal``."""
+    """The next episode: its seed (sampling and sensor noise), a start and goal in the world
+    frame (``None``: the simulator samples them from the seed; a goal given as a pair, a file's
+    or a sampler's, becomes a ``Goal``), and the variant of the sim's world it runs in
+    (``None``: the sim's ``world_variant``; ``episodes.world_variants``)."""
 
     seed: int
     start: Pose2D | None = None
     goal: Goal | None = None
+    world_variant: int | None = None
 
     def __post_init__(self) -> None:
         if self.goal is not None:

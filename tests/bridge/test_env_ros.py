@@ -84,6 +84,39 @@ def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, extra: dict,
         local.close()
 
 
+def test_a_world_per_episode_is_the_same_through_both_transports(domain: int,
+                                                                 start_sim) -> None:
+    """``episodes.world_variants`` on BARN: one seed gives the same worlds, pairs,
+    observations and rewards through the sim node (its ``world_variant`` set with each
+    episode's seed) as in process, and each episode's bag names its world."""
+    config = ROOT / "config" / "env_barn.yaml"
+    start_sim(domain, "--params-file", str(config))
+    overrides = {"episodes.world_variants": "1:300:6,2:300:6", "episode_max_steps": 15}
+    ros = gym.make("pic4rl/GoToPoseLidar-v0", config=config, transport="ros",
+                   overrides={"ros.domain_id": domain, **overrides})
+    local = gym.make("pic4rl/GoToPoseLidar-v0", config=config, overrides=overrides)
+    rng = np.random.default_rng(3)
+    worlds = []
+    try:
+        for episode in range(4):
+            seed = 21 if episode == 0 else None
+            (obs_r, info_r), (obs_l, info_l) = ros.reset(seed=seed), local.reset(seed=seed)
+            names = ros.unwrapped.transport.world_name, local.unwrapped.transport.world_name
+            assert names[0] == names[1] and info_r["seed"] == info_l["seed"]
+            assert _equal(obs_r, obs_l), f"first observations differ in {names[0]}"
+            worlds.append(names[0])
+            done = False
+            while not done:
+                action = rng.uniform(-1, 1, ros.action_space.shape).astype(np.float32)
+                out_r, out_l = ros.step(action), local.step(action)
+                assert _equal(out_r[0], out_l[0]) and out_r[1:4] == out_l[1:4]
+                done = out_r[2] or out_r[3]
+    finally:
+        ros.close()
+        local.close()
+    assert len(set(worlds)) >= 3 and all(w.startswith("barn:") for w in worlds)
+
+
 @pytest.mark.bad_input
 def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_sim,
                                                             ros_client) -> None:
