@@ -15,6 +15,7 @@ from typing import Any
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError, require
+from pic4rl_bridge.tasks.registry import EXPERT_TASKS
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
@@ -159,13 +160,9 @@ class ImitationConfig:
     counts in ``max_steps``, and the expert's time in every clock."""
 
     enabled: bool = param(False, doc=f"imitation before RL ({', '.join(OFF_POLICY)})")
-    expert: str = param("planner", doc="the expert that labels states: planner (goToPose: the "
-                        "privileged planner, pic4rl_bridge.baselines.planner) | explorer (goToPose: the "
-                        "mapless explorer of the student's own scans, pic4rl_bridge.baselines.explorer) | "
-                        "heading "
-                        "(personMonitoring: DWA with a proportional heading law) | centerline "
-                        "(vineyard: the row's centre-line follower, pic4rl_bridge.baselines.row_followers)",
-                        choices=("planner", "explorer", "heading", "centerline"))
+    expert: str = param("planner", doc="the expert that labels states, one of its task's "
+                        "experts in the task table (pic4rl_bridge.tasks.registry; "
+                        "docs/agents.md, imitation)", choices=tuple(EXPERT_TASKS))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)
     dagger_rounds: int = param(10, doc="DAgger rounds after behaviour cloning",

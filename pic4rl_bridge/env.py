@@ -8,9 +8,9 @@ limit (``episode_max_steps``), a simulator whose physics diverged (outcome ``div
 needed topic gone silent (``aborted``, the robot stopped; ``ros.max_sensor_age_s``):
 ``info["reason"]`` and the bag say why. ``info["reward_terms"]`` holds each scaled term.
 
-``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (start,
-goal, sensor noise) and, with the same actions, the same observations and rewards through
-either transport.
+``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (world,
+start, goal, sensor noise) and, with the same actions, the same observations and rewards
+through either transport.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
 from .env_recording import EnvRecording, episode_facts
-from .episodes import (EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses,
-                       resolve_pair_kind)
+from .episodes import EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses
+from .episodes import resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
 from .scenario import Scenario
 from .tasks.base import EpisodeContext, make_task
@@ -337,13 +337,12 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     # -- recording ----------------------------------------------------------------------------
 
-    def _episode_facts(self, frame: SensorFrame, context: EpisodeContext,
-                       seed: int) -> EpisodeFacts:
+    def _episode_facts(self, frame: SensorFrame, ctx: EpisodeContext, seed: int) -> EpisodeFacts:
         return episode_facts(
-            self.config, self.scenario.robot, frame, context, seed=seed,
+            self.config, self.scenario.robot, frame, ctx, seed=seed,
             task=self._task_spec.fact_name(self.config.sensor), world=self.transport.world_name,
             recording=self._recording, index=self._episode, sampler=self._sampler,
-            task_facts=self.task.facts(context))
+            task_facts=self.task.facts(ctx))
 
     def _end_bag(self, outcome: Outcome | None, reason: str | None = None) -> None:
         if getattr(self, "_recording", None) is not None:
