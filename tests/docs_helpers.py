@@ -1,5 +1,6 @@
 """What the docs-vs-code tests share (tests/docs): a config dataclass's
-parameter rows as the docs write them, and reading Markdown sections, tables and anchors."""
+parameter rows as the docs write them, and reading Markdown sections, tables, anchors and
+links."""
 
 from __future__ import annotations
 
@@ -61,3 +62,16 @@ def anchors(path: Path) -> set[str]:
             text = re.sub(r"[^\w\- ]", "", match.group(1).lower())
             out.add(text.replace(" ", "-"))
     return out
+
+
+def broken_links(path: Path) -> tuple[int, list[str]]:
+    """How many relative links ``path`` has, and those whose file or heading does not exist."""
+    links = [link for link in re.findall(r"\]\(([^)\s]+)\)", path.read_text(encoding="utf-8"))
+             if "://" not in link]
+    broken = []
+    for link in links:
+        target, _, anchor = link.partition("#")
+        file = path if not target else path.parent / target
+        if not file.exists() or (anchor and anchor not in anchors(file)):
+            broken.append(link)
+    return len(links), broken

@@ -4,27 +4,17 @@ recorded episode as they read their own test bags."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import pytest
 import yaml
+from contract_helpers import ENV_FACTS
 from rosbags.rosbag2 import Reader
 
 from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
-from pic4rl_metrics.geometry import Footprint, Mount
 from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
-
-#: Facts as the env writes them (a Jackal after a goToPose episode).
-ENV_FACTS = EpisodeFacts(
-    agent="sac", task="goToPose/lidar", world="indoor:0", robot="jackal", run="run1",
-    episode="episode_0000", seed=7, footprint=Footprint(length_m=0.508, width_m=0.43),
-    start=(0.0, 0.0, 0.0), goal=(2.0, 0.0), goal_tolerance_m=0.3, collision_tolerance_m=0.05,
-    safety_margin_m=0.1, max_speed_mps=2.0, shortest_path_m=math.inf, straight_line_m=2.0,
-    scan_mount=Mount(0.12, 0.0, 0.0),
-)
 
 
 def _metadata_custom(bag: Path) -> list[tuple[str, str]]:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from docs_helpers import anchors, parameter_rows, section, table_rows
+from docs_helpers import broken_links, parameter_rows, section, table_rows
 
 from pic4rl_agents.testing import tester
 
@@ -244,18 +244,9 @@ def test_the_test_run_is_as_documented(doc, tmp_path):
 # -- links -------------------------------------------------------------------------------------
 
 
-def test_links_to_files_and_headings_resolve(doc):
-    links = re.findall(r"\]\(([^)\s]+)\)", doc)
-    assert links
-    broken = []
-    for link in links:
-        if "://" in link:
-            continue
-        target, _, anchor = link.partition("#")
-        file = DOC if not target else DOC.parent / target
-        if not file.exists() or (anchor and anchor not in anchors(file)):
-            broken.append(link)
-    assert not broken, f"agents.md has broken links: {broken}"
+def test_links_to_files_and_headings_resolve():
+    count, broken = broken_links(DOC)
+    assert count and not broken, f"agents.md has broken links: {broken}"
 
 
 def test_the_readme_and_interfaces_point_here():

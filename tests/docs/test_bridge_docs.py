@@ -17,7 +17,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
-from docs_helpers import anchors, literal, parameter_rows, section, table_rows
+from docs_helpers import broken_links, literal, parameter_rows, section, table_rows
 
 from pic4rl_bridge import ENV_IDS
 from pic4rl_bridge.baselines.config import BaselinesConfig
@@ -163,18 +163,8 @@ def test_every_reward_term_is_in_its_tasks_table(doc, emitted):
 
 @pytest.mark.parametrize("path", [DOC, INTERFACES, ROOT / "README.md"], ids=lambda p: p.name)
 def test_links_to_files_and_headings_resolve(path):
-    text = path.read_text(encoding="utf-8")
-    links = re.findall(r"\]\(([^)\s]+)\)", text)
-    assert links
-    broken = []
-    for link in links:
-        if "://" in link:
-            continue
-        target, _, anchor = link.partition("#")
-        file = path if not target else path.parent / target
-        if not file.exists() or (anchor and anchor not in anchors(file)):
-            broken.append(link)
-    assert not broken, f"{path.name} has broken links: {broken}"
+    count, broken = broken_links(path)
+    assert count and not broken, f"{path.name} has broken links: {broken}"
 
 
 def test_interfaces_names_the_recorder_and_the_env_node():

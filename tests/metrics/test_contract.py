@@ -10,6 +10,7 @@ import math
 import re
 from pathlib import Path
 
+from contract_helpers import ENV_FACTS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -54,14 +55,6 @@ FACTS = st.builds(
     extra=st.dictionaries(TEXT.filter(lambda k: k not in FACT_KEYS), TEXT, max_size=3),
 )
 
-#: Facts as the env writes them (a Jackal after a goToPose episode).
-ENV_FACTS = EpisodeFacts(
-    agent="sac", task="goToPose/lidar", world="indoor:0", robot="jackal", run="run1",
-    episode="episode_0000", seed=7, footprint=Footprint(length_m=0.508, width_m=0.43),
-    start=(0.0, 0.0, 0.0), goal=(2.0, 0.0), goal_tolerance_m=0.3, collision_tolerance_m=0.05,
-    safety_margin_m=0.1, max_speed_mps=2.0, shortest_path_m=math.inf, straight_line_m=2.0,
-    scan_mount=Mount(0.12, 0.0, 0.0),
-)
 
 
 @settings(max_examples=200, deadline=None)
