@@ -95,6 +95,8 @@ class LidarObsConfig:
     fov_deg: float = param(360.0, doc="the sectors' span, centred on the robot's forward axis "
                            "(sector 0 starts at -fov_deg / 2)", unit="deg",
                            range=Range(0.0, 360.0, lo_open=True))
+    history: int = param(1, doc="goToPose: the last N scans' sectors, newest first (a frame "
+                         "stack; 1: the current scan only)", range=POSITIVE)
 
 
 @dataclass(frozen=True)

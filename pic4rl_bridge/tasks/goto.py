@@ -15,6 +15,7 @@ step (0 when not triggered) so that ``info["reward_terms"]`` keeps one shape thr
 
 from __future__ import annotations
 
+import collections
 import math
 from typing import Any
 
@@ -84,7 +85,9 @@ class _GoToPose(Task):
     def begin(self, frame: SensorFrame) -> EpisodeContext:
         if frame.goal is None:
             raise ValueError("goToPose: the episode's first frame has no goal")
-        extra = {"memory": OccupancyGrid()} if self.config.memory.enabled else {}
+        extra: dict[str, Any] = {"memory": OccupancyGrid()} if self.config.memory.enabled else {}
+        if self.config.lidar.history > 1:
+            extra["scan_history"] = collections.deque(maxlen=self.config.lidar.history)
         return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])),
                               extra=extra)
 
@@ -178,13 +181,15 @@ def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> _GoToPos
 
 class GoToPoseLidar(_GoToPose):
     """goToPose from LiDAR: a flat vector [sectors (m), goal distance (m), goal angle (rad),
-    last action (2)]; normalised, sectors / ``lidar.max_range_m`` and the goal as above."""
+    last action (2)]; normalised, sectors / ``lidar.max_range_m`` and the goal as above. With
+    ``lidar.history`` N > 1 the sectors are the last N scans', newest first (a frame stack,
+    the episode's context's: the memory study's alternative to the occupancy crop)."""
 
     required = frozenset({"goal", "scan"})
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        beams, goal = config.lidar.beams, self._goal_space()
+        beams, goal = config.lidar.beams * config.lidar.history, self._goal_space()
         far = 1.0 if config.normalize_observations else config.lidar.max_range_m
         low = np.concatenate((np.zeros(beams, np.float32), goal.low))
         high = np.concatenate((np.full(beams, far, np.float32), goal.high))
@@ -198,6 +203,10 @@ class GoToPoseLidar(_GoToPose):
         sectors = lidar_sectors(frame.scan, lidar)
         if self.config.normalize_observations:
             sectors /= np.float32(lidar.max_range_m)
+        if lidar.history > 1:  # the frame stack: the episode's first scan fills it
+            stack = context.extra["scan_history"]
+            stack.extendleft([sectors] * (lidar.history if not stack else 1))
+            sectors = np.concatenate(stack)
         vector = np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
         return self._remember(vector, frame, context)
 

@@ -236,3 +236,22 @@ def test_the_memory_observation_is_the_episodes_own_scans_and_holds_no_plan(sens
     assert (rows < 16).all()
     fresh = task.begin(frames[0])
     assert not fresh.extra["memory"].cells.size
+
+
+def test_the_scan_history_stacks_the_last_scans_newest_first_and_resets():
+    """lidar.history 3: the first scan fills the stack; each step shifts it by one; a new
+    episode's context starts empty; the goal vector stays at the end."""
+    config = EnvConfig().replace(**{"lidar.history": 3})
+    task = GoToPoseLidar(config, robot())
+    beams = config.lidar.beams
+    assert task.observation_space.shape == (3 * beams + 4,)
+    context = task.begin(frame(0.0, ahead_m=2.0))
+    obs = [task.observe(frame(0.1 * i, ahead_m=a), context, np.zeros(2))
+           for i, a in enumerate((2.0, 1.5, 1.0, 0.5))]
+    assert all(task.observation_space.contains(o) for o in obs)
+    ahead = [[o[k * beams + beams // 2] for k in range(3)] for o in obs]
+    assert ahead == [[2.0, 2.0, 2.0], [1.5, 2.0, 2.0], [1.0, 1.5, 2.0], [0.5, 1.0, 1.5]]
+    np.testing.assert_allclose(obs[-1][-4:-2], [2.7, 0.0], atol=1e-6)
+    fresh = task.begin(frame(0.0, ahead_m=3.0))
+    again = task.observe(frame(0.0, ahead_m=3.0), fresh, np.zeros(2))
+    assert [again[k * beams + beams // 2] for k in range(3)] == [3.0, 3.0, 3.0]
