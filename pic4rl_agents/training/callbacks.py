@@ -225,7 +225,12 @@ class WallClockLimit(BaseCallback):
         self.limit_s, self.start = limit_s, start
 
     def _on_step(self) -> bool:
-        return time.perf_counter() - self.start < self.limit_s
+        return not self.over()
+
+    def over(self) -> bool:
+        """Whether the budget is spent (also read between the imitation's critic updates,
+        which are no env steps)."""
+        return time.perf_counter() - self.start >= self.limit_s
 
 
 @contextlib.contextmanager

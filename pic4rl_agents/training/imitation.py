@@ -44,6 +44,8 @@ from pic4rl_sim import params_file
 
 from pic4rl_agents.config import NODES, ImitationConfig
 
+from .callbacks import WallClockLimit
+
 log = logging.getLogger(__name__)
 
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
@@ -169,8 +171,7 @@ class Imitation:
                 log.info("imitation round %d/%d (%s): %d labelled states, loss %.4f",
                          number + 1, len(rounds), "expert" if driver == EXPERT else "student",
                          len(self.data), self.losses[-1])
-            self.warm_up_critic(c.critic_warmup_steps)
-            return True
+            return self.warm_up_critic(c.critic_warmup_steps)
         finally:
             self.callback.on_training_end()
 
@@ -229,22 +230,34 @@ class Imitation:
             target.load_state_dict(self.model.actor.state_dict())
         self.losses.append(total / max(gradient_steps, 1))
 
-    def warm_up_critic(self, gradient_steps: int) -> None:
+    def warm_up_critic(self, gradient_steps: int, chunk: int = 250) -> bool:
         """``gradient_steps`` of the algorithm's own updates with the actor frozen: a critic
-        fitted to the imitated policy before its gradient reaches the actor."""
+        fitted to the imitated policy before its gradient reaches the actor. Run ``chunk``
+        updates at a time, so that the run's wall-clock budget (``WallClockLimit``) ends it
+        between chunks; False when it did."""
         model = self.model
         if gradient_steps <= 0 or model.replay_buffer.size() < self.batch_size:
-            return
+            return True
+        clocks = [cb for cb in self.callback.callbacks if isinstance(cb, WallClockLimit)]
         frozen = list(model.actor.parameters())
         for p in frozen:
             p.requires_grad_(False)
+        done = 0
         try:
-            model.train(gradient_steps=gradient_steps, batch_size=self.batch_size)
+            while done < gradient_steps:
+                if any(clock.over() for clock in clocks):
+                    log.info("critic warm-up stopped by the wall-clock budget after %d of %d "
+                             "gradient steps", done, gradient_steps)
+                    return False
+                steps = min(chunk, gradient_steps - done)
+                model.train(gradient_steps=steps, batch_size=self.batch_size)
+                done += steps
         finally:
             for p in frozen:
                 p.requires_grad_(True)
         log.info("critic warmed up: %d gradient steps on %d transitions", gradient_steps,
                  model.replay_buffer.size() * model.replay_buffer.n_envs)
+        return True
 
 
 class DecayingCloning(BaseCallback):

@@ -5,6 +5,7 @@ any other, in process and through ROS 2 (``pic4rl-run``, a sim node in its own p
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
 from pic4rl_agents.config import ImitationConfig, load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.training.callbacks import WallClockLimit
 from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation, actor_loss
 from pic4rl_bridge.errors import ConfigError
 
@@ -99,6 +101,22 @@ def test_the_critic_warms_up_with_the_actor_frozen() -> None:
         assert all(torch.equal(a, p) for a, p in zip(actor, model.actor.parameters()))
         assert not all(torch.equal(c, p) for c, p in zip(critic, model.critic.parameters()))
         assert all(p.requires_grad for p in model.actor.parameters())
+    finally:
+        env.close()
+
+
+def test_the_critic_warm_up_stops_when_the_wall_clock_budget_is_spent() -> None:
+    _, env, model, imitation = _setup()
+    try:
+        imitation.collect(40, EXPERT)
+        spent = WallClockLimit(1.0, time.perf_counter() - 2.0)  # started 2 s ago, 1 s budget
+        imitation.callback.callbacks.append(spent)
+        critic = [p.detach().clone() for p in model.critic.parameters()]
+        assert imitation.warm_up_critic(500, chunk=5) is False
+        assert all(torch.equal(c, p) for c, p in zip(critic, model.critic.parameters()))
+        spent.start = time.perf_counter()  # a fresh budget: all of it runs
+        assert imitation.warm_up_critic(10, chunk=5) is True
+        assert not all(torch.equal(c, p) for c, p in zip(critic, model.critic.parameters()))
     finally:
         env.close()
 
