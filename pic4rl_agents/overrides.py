@@ -51,7 +51,7 @@ def _table(node: str) -> dict[str, ParamSpec]:
     if node == ENV_NODE:
         return {spec.name: spec for spec in specs(EnvConfig)}
     from pic4rl_sim.engine.robot_specs import load_robot
-    from pic4rl_sim.params import ROBOT, parameter_table
+    from pic4rl_sim.config import ROBOT, parameter_table
 
     return {spec.name: spec for spec in parameter_table(load_robot(ROBOT.default))}
 

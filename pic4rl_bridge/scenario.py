@@ -21,9 +21,9 @@ from .errors import ConfigError
 from .robot_info import RobotInfo
 from .tasks.registry import task_spec
 
-if TYPE_CHECKING:  # pic4rl_sim.params imports mujoco: only when a sim section is used
+if TYPE_CHECKING:  # pic4rl_sim.config imports mujoco: only when a sim section is used
     from pic4rl_sim.engine.worlds.spec import WorldSpec
-    from pic4rl_sim.params import SimConfig
+    from pic4rl_sim.config import SimConfig
 
 
 class Scenario:
@@ -36,7 +36,7 @@ class Scenario:
         self.config = config
         self.sim: SimConfig | None = None
         if config.transport == "inprocess" or (config.sim_params and config.simulated):
-            from pic4rl_sim.params import SimParams, build_config, parameter_table, resolve
+            from pic4rl_sim.config import SimParams, build_config, parameter_table, resolve
 
             try:
                 robot = load_robot(config.robot or config.sim_params.get("robot",
@@ -50,7 +50,7 @@ class Scenario:
             self.spec: RobotSpec = self.sim.robot
             control_dt = self.sim.engine.control_dt_s
         else:
-            from pic4rl_sim.params import SimParams
+            from pic4rl_sim.config import SimParams
 
             robot = robot_of(config)
             if not robot:
@@ -127,7 +127,7 @@ def parse_variants(text: str, key: str = "episodes.world_variants") -> tuple[int
 def robot_of(config: EnvConfig) -> str:
     """The robot (a built-in name or a robot YAML) of an env without a simulator: ``robot``,
     else its sim section's, else none (``""``)."""
-    from pic4rl_sim.params import SimParams
+    from pic4rl_sim.config import SimParams
 
     sim = config.sim_params
     return config.robot or (str(sim.get("robot", SimParams.robot)) if sim else "")

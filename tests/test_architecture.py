@@ -77,10 +77,6 @@ def test_the_bridge_imports_no_torch_sb3_or_agents(path: Path) -> None:
 
 #: The most places each piece may take (issue 31); every other piece takes one or two.
 MOST_PLACES = {"a sensor": 4, "a task": 3, "a metric": 1}
-#: Rows not at their bound yet, held at their honest count so that it can only go down: a
-#: metric's table column is still a second place (``results.TABLE1_COLUMNS``), and a baseline
-#: with settings still takes its section beside its factory and its tasks.
-NOT_YET = {"a baseline": 3}
 #: A place: a backticked repository file, then optionally ``: `Symbol```.
 PLACE = re.compile(r"`([^`]+)`(?::\s*`([^`]+)`)?")
 FILE = re.compile(r"(?:pic4rl_\w+|config|scripts|tools|benchmarks)/[\w./<>-]*\.\w+")
@@ -122,7 +118,7 @@ def test_the_places_for_a_new_piece_are_counted_and_exist() -> None:
     assert wanted <= set(rows), f"the Places table lacks {sorted(wanted - set(rows))}"
     for piece, (count, places, docs) in rows.items():
         assert count == len(places), f"{piece}: the count says {count}, the cell lists {places}"
-        most = NOT_YET.get(piece, MOST_PLACES.get(piece, 2))
+        most = MOST_PLACES.get(piece, 2)
         assert count <= most, f"{piece}: {count} places, at most {most}"
         code = [m[1] for m in PLACE.finditer(docs) if FILE.fullmatch(m[1])]
         assert not code, f"{piece}: the docs cell names code files {code}; they are places"
@@ -150,15 +146,6 @@ def test_a_place_with_several_files_names_them_as_alternatives() -> None:
             for (_, end), (start, _) in zip(spans, spans[1:]):
                 assert re.search(r"\bor\b", item[end:start]), \
                     f"{cells[0]}: {item[end:start]!r} joins two files of one place without 'or'"
-
-
-def test_the_places_count_is_not_more_than_it_was() -> None:
-    """The rows held at their honest count are still over their bound (else they join
-    ``MOST_PLACES``' rule and leave ``NOT_YET``)."""
-    rows = _places_rows()
-    for piece, held in NOT_YET.items():
-        assert rows[piece][0] > MOST_PLACES.get(piece, 2), \
-            f"{piece} is within its bound now: drop it from NOT_YET"
 
 
 # -- module sizes and import circles ------------------------------------------------------------

@@ -21,7 +21,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import load_robot
 from pic4rl_sim.engine.sampling import PairKind
 from pic4rl_sim.engine.worlds.generators import make_world
-from pic4rl_sim.params import SimParams
+from pic4rl_sim.config import SimParams
 
 OUT = Path(__file__).resolve().parents[1] / "config" / "goals_indoor_train.json"
 COMMENT = ("Training start-goal pairs of the indoor world (world_variant 0) for the Jackal: "

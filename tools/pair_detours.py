@@ -22,7 +22,7 @@ from pic4rl_sim.engine.paths import PathPlanner
 from pic4rl_sim.engine.robot_specs import load_robot
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.engine.worlds.generators import make_world
-from pic4rl_sim.params import SimParams
+from pic4rl_sim.config import SimParams
 
 SIM = SimParams()
 

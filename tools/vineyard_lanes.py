@@ -18,7 +18,7 @@ from pathlib import Path
 
 from pic4rl_agents.config import load_run_config
 from pic4rl_bridge.episodes import GoalsAndPoses, save_goals_and_poses
-from pic4rl_sim.params import build_world_choice, parameter_table, resolve
+from pic4rl_sim.config import build_world_choice, parameter_table, resolve
 from pic4rl_sim.engine.robot_specs import load_robot
 
 

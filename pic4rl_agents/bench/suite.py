@@ -238,7 +238,7 @@ def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None,
     """A pairs file that records its world runs only there: ``ConfigError`` naming the file,
     its world and the task's other one."""
     from pic4rl_bridge.episodes import load_goals_and_poses
-    from pic4rl_sim.params import SimParams
+    from pic4rl_sim.config import SimParams
 
     for pair_set in (p for p in pairs if p.file):
         drawn = load_goals_and_poses(pair_set.file).world

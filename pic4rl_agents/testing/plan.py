@@ -206,7 +206,7 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
     (never the training worlds of ``episodes.world_variants``)."""
     overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0,
                                  "episodes.world_variants": ""}
-    from pic4rl_sim.params import SimParams
+    from pic4rl_sim.config import SimParams
 
     env = spec.run.env
     if not env.simulated:

@@ -1,6 +1,8 @@
 """Classical references, run by ``pic4rl-test --baseline NAME`` like an agent; goToPose's
 here, the vineyard's row followers in ``row_followers`` and the person follower's heading law
-in ``follow`` (``BASELINE_TASKS`` says which task each drives).
+in ``follow``. ``BASELINE_TABLE`` is the one place a baseline is registered: the tasks it
+drives and how it is made (``BASELINES``, ``BASELINE_TASKS``, ``--baseline`` and the suites'
+checks follow).
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -24,6 +26,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
@@ -82,11 +86,68 @@ class GoToGoalController:
         return normalized_action(r, v, w)
 
 
-BASELINE_TASKS: dict[str, tuple[str, ...]] = {}
-for _spec in TASKS.values():
-    for _name in _spec.baselines:
-        BASELINE_TASKS[_name] = (*BASELINE_TASKS.get(_name, ()), _spec.name)
-BASELINES = tuple(BASELINE_TASKS)
+def _dwa(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+         settings: BaselinesConfig) -> Baseline:
+    return DwaController(robot, settings.dwa, collision_tolerance_m=config.collision_tolerance_m)
+
+
+def _planner(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+             settings: BaselinesConfig) -> Baseline:
+    if world is None:
+        raise ConfigError("--baseline planner: it plans on the simulated world's map, and "
+                          "this env has none (no 'sim:' section: a real robot)")
+    from .planner import PlannerController
+
+    return PlannerController(robot, world, **dataclasses.asdict(settings.planner))
+
+
+def _explorer(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+              settings: BaselinesConfig) -> Baseline:
+    from .explorer import ExplorerController
+
+    return ExplorerController(robot, settings.explorer)
+
+
+def _row_follower(name: str) -> Callable[..., Baseline]:
+    def make(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+             settings: BaselinesConfig) -> Baseline:
+        from .row_followers import make_row_follower
+
+        return make_row_follower(name, config, robot, world)
+    return make
+
+
+def _heading(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+             settings: BaselinesConfig) -> Baseline:
+    from .follow import HeadingController
+
+    return HeadingController(config, robot)
+
+
+@dataclass(frozen=True)
+class BaselineSpec:
+    """One baseline: the tasks it drives (``TASKS``' names) and what makes it from the env's
+    config, the robot, the simulated world (``None`` on a real robot) and the ``baselines:``
+    section's settings; ``one_world``: it drives on one world's map (refused when the env
+    draws a world per episode)."""
+
+    tasks: tuple[str, ...]
+    make: Callable[[EnvConfig, RobotInfo, WorldSpec | None, BaselinesConfig], Baseline]
+    one_world: bool = False
+
+
+BASELINE_TABLE: dict[str, BaselineSpec] = {
+    "proportional": BaselineSpec(("goToPose",), lambda c, robot, w, s: GoToGoalController(robot)),
+    "dwa": BaselineSpec(("goToPose",), _dwa),
+    "planner": BaselineSpec(("goToPose",), _planner, one_world=True),
+    "explorer": BaselineSpec(("goToPose",), _explorer),
+    "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True),
+    "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),
+    "dwa_heading": BaselineSpec(("personMonitoring",), _heading),
+}
+#: Each baseline → the tasks it drives.
+BASELINE_TASKS = {name: spec.tasks for name, spec in BASELINE_TABLE.items()}
+BASELINES = tuple(BASELINE_TABLE)
 
 
 def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
@@ -99,30 +160,7 @@ def make_baseline(name: str, config: EnvConfig, robot: RobotInfo,
     if name not in BASELINES:
         raise ConfigError(f"--baseline {name!r}: expected one of {', '.join(BASELINES)}")
     check_fits(name, config)
-    if name in ("centerline", "row_follower"):
-        from .row_followers import make_row_follower
-
-        return make_row_follower(name, config, robot, world)
-    if name == "dwa":
-        return DwaController(robot, (settings or BaselinesConfig()).dwa,
-                             collision_tolerance_m=config.collision_tolerance_m)
-    if name == "planner":
-        if world is None:
-            raise ConfigError("--baseline planner: it plans on the simulated world's map, and "
-                              "this env has none (no 'sim:' section: a real robot)")
-        from .planner import PlannerController
-
-        return PlannerController(robot, world,
-                                 **dataclasses.asdict((settings or BaselinesConfig()).planner))
-    if name == "explorer":
-        from .explorer import ExplorerController
-
-        return ExplorerController(robot, (settings or BaselinesConfig()).explorer)
-    if name == "dwa_heading":
-        from .follow import HeadingController
-
-        return HeadingController(config, robot)
-    return GoToGoalController(robot)
+    return BASELINE_TABLE[name].make(config, robot, world, settings or BaselinesConfig())
 
 
 def check_fits(name: str, config: EnvConfig) -> None:
@@ -136,6 +174,6 @@ def check_fits(name: str, config: EnvConfig) -> None:
         raise ConfigError(f"--baseline {name}: it drives {' or '.join(tasks)}; this env's task "
                           f"is {config.task!r}. Test it with {other}, or give a "
                           f"{tasks[0]} config")
-    if name in ("planner", "centerline", "row_follower") and config.episodes.world_variants:
+    if BASELINE_TABLE[name].one_world and config.episodes.world_variants:
         raise ConfigError(f"--baseline {name}: it drives on one world's map; this env draws "
                           "its world per episode (episodes.world_variants): unset it")

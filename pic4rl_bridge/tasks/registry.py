@@ -1,9 +1,10 @@
 """The tasks: each declares here, in one entry, its env ids, the sensors it observes, its
-config (its own reward scales, and its own section if it has one) and the baselines that
-drive it.
+config (its own reward scales, and its own section if it has one) and the experts that label
+its states for imitation (the baselines name the tasks they drive in their own table,
+``pic4rl_bridge.baselines.registry.BASELINE_TABLE``).
 
-``TaskName``, ``make_task``, ``pic4rl_bridge.ENV_IDS``, the env's per-task choices and
-``BASELINE_TASKS`` derive from ``TASKS``. Pure dataclasses (no numpy, no ROS), so that
+``TaskName``, ``SensorName``, ``make_task``, ``pic4rl_bridge.ENV_IDS``, imitation's experts and
+the env's per-task choices derive from ``TASKS``. Pure dataclasses (no numpy, no ROS), so that
 ``import pic4rl_bridge`` registers the ids without importing a task's code, which
 ``TaskSpec.build`` names by string, as Gymnasium's entry points do.
 
@@ -131,8 +132,7 @@ class EnvId:
 class TaskSpec:
     """One task. ``sensors``: the ``sensor`` values it observes through (the first its
     default); ``reward``: its scales' class; ``section``: its own ``nav_env`` section (name,
-    class), if any; ``baselines``: the ``pic4rl-test --baseline`` names that drive it;
-    ``experts``: the ``imitation.expert`` names that label its states;
+    class), if any; ``experts``: the ``imitation.expert`` names that label its states;
     ``build``: ``"module:function"`` making the task from ``(config, robot, world)``;
     ``uses_world``: it reads the simulated world (the vineyard's lanes); ``per_sensor``: its
     bags' task fact names the sensor (``goToPose/lidar``); ``headline``: the outcome that is
@@ -144,7 +144,6 @@ class TaskSpec:
     sensors: tuple[str, ...]
     reward: type[CommonReward]
     build: str
-    baselines: tuple[str, ...] = ()
     experts: tuple[str, ...] = ()
     section: tuple[str, type] | None = None
     uses_world: bool = False
@@ -173,21 +172,20 @@ TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
               EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True})),
              sensors=("lidar", "depth"), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
-             baselines=("proportional", "dwa", "planner", "explorer"),
              experts=("planner", "explorer"), per_sensor=True),
     TaskSpec("vineyard",
              (EnvId("pic4rl/Vineyard-v0", "depth",
                     {"world": "vineyard", "depth.enabled": True}),),
              sensors=("depth",), reward=VineyardReward,
              build="pic4rl_bridge.tasks.vineyard:build",
-             baselines=("centerline", "row_follower"), experts=("centerline",),
+             experts=("centerline",),
              section=("vineyard", VineyardConfig), uses_world=True,
              headline=("goal", "row ends")),
     TaskSpec("personMonitoring",
              (EnvId("pic4rl/PersonMonitoring-v0", "lidar", {"robot": "omni", "world": "person"}),),
              sensors=("lidar",), reward=PersonReward,
              build="pic4rl_bridge.tasks.person:build",
-             baselines=("dwa_heading",), experts=("heading",), section=("person", PersonConfig),
+             experts=("heading",), section=("person", PersonConfig),
              headline=("timeout", "full runs")),
 )}
 

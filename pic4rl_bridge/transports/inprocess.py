@@ -127,14 +127,14 @@ class _MessageWriter:
 
     def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
         from geometry_msgs.msg import Twist
-        from pic4rl_sim.node.messages import StateMessages, goal_pose, plan_path
+        from pic4rl_sim.node.messages import StateMessages, goal_pose, plan_message
         from rclpy.serialization import serialize_message
 
         self._engine = engine
         self._serialize = serialize_message
         self._twist_type = Twist
         self._goal_pose = goal_pose
-        self._plan_path = plan_path
+        self._plan_message = plan_message
         self.state_messages = StateMessages(engine)
         self._names = {t.name: f"{namespace}/{t.name}"
                        for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
@@ -154,7 +154,7 @@ class _MessageWriter:
         """The episode's goal and, when recorded, its plan, as the node publishes them."""
         self._emit(GOAL_POSE.name, self._goal_pose(engine.goal, stamp_ns), stamp_ns, tap)
         if PLAN.name in self._topics:
-            self._emit(PLAN.name, self._plan_path(engine.plan(), stamp_ns), stamp_ns, tap)
+            self._emit(PLAN.name, self._plan_message(engine.plan(), stamp_ns), stamp_ns, tap)
 
     def command(self, command: Twist2D, stamp_ns: int, tap: Tap) -> None:
         msg = self._twist_type()

@@ -1,5 +1,5 @@
 """The engine's timing and episode set-up rules, apart from the engine so that the sim's
-parameters (``pic4rl_sim.params``) read their defaults without loading MuJoCo."""
+parameters (``pic4rl_sim.config``) read their defaults without loading MuJoCo."""
 
 from __future__ import annotations
 

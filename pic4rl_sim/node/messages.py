@@ -216,7 +216,7 @@ def goal_pose(goal: Goal, stamp_ns: int) -> PoseStamped:
     return msg
 
 
-def plan_path(points: np.ndarray, stamp_ns: int) -> Path:
+def plan_message(points: np.ndarray, stamp_ns: int) -> Path:
     """A plan (k × 2, m) as a ``nav_msgs/Path`` in the world frame: each pose heads along its
     segment (the last one along the one before it); an empty plan has no poses."""
     msg = Path(header=Header(frame_id=WORLD_FRAME))

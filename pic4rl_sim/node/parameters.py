@@ -13,7 +13,7 @@ from rclpy.parameter import Parameter
 
 from ..engine.robot_specs import load_robot
 from ..errors import ConfigError
-from ..params import ROBOT, parameter_table, resolve
+from ..config import ROBOT, parameter_table, resolve
 from ..schema import ParamSpec, ParamType, help_text
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,

@@ -66,10 +66,10 @@ from ..interfaces import (
     Direction,
     Interface,
 )
-from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_path, world_markers
+from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_message, world_markers
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
-from ..params import (
+from ..config import (
     MAX_SEED,
     ClockConfig,
     ClockMode,
@@ -200,7 +200,7 @@ class SimNode(Node):
         engine = self._engine
         self._command = _STOP
         self._goal_pub.publish(goal_pose(engine.goal, self._stamp_ns))
-        self._plan_pub.publish(plan_path(engine.plan(), self._stamp_ns))
+        self._plan_pub.publish(plan_message(engine.plan(), self._stamp_ns))
         self._markers_pub.publish(world_markers(engine.world, engine.goal, self._stamp_ns))
         self._publish_state()
 

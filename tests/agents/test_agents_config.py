@@ -28,6 +28,7 @@ SHIPPED = {
     "train_goto_lidar_td3_imitation.yaml": ("td3", "lidar", "td3_lidar_imitation"),
     "train_goto_lidar_sac_imitation.yaml": ("sac", "lidar", "sac_lidar_imitation"),
     "train_goto_lidar_td3_memory.yaml": ("td3", "lidar", "td3_lidar_memory"),
+    "train_goto_lidar_td3_history.yaml": ("td3", "lidar", "td3_lidar_history"),
     "train_barn_td3_memory.yaml": ("td3", "lidar", "barn_td3_memory"),
     "train_person_hybrid_sac.yaml": ("sac", "lidar", "sac_person_hybrid"),
     "train_person_hybrid_td3.yaml": ("td3", "lidar", "td3_person_hybrid"),

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from pic4rl_sim.engine.model import WHEEL_GRIP, yaw_inertia_kg_m2
-from pic4rl_sim.params import ParamSpec, parameter_table
+from pic4rl_sim.config import ParamSpec, parameter_table
 from pic4rl_sim.engine.robot_specs import BUILT_IN, JACKAL, Drive, RobotSpec
 from pic4rl_sim.engine.sensors import STANDARD_GRAVITY_M_S2
 from pic4rl_sim.engine.worlds.generators import GENERATORS

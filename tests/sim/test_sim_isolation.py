@@ -77,5 +77,5 @@ def test_importing_the_engine_loads_no_ros_or_rl_module() -> None:
 def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
     """A params file is read, checked and its worlds generated without MuJoCo (only a user's
     MJCF world loads it)."""
-    assert _loaded("pic4rl_sim.params, pic4rl_sim.params_file, pic4rl_sim.schema, "
+    assert _loaded("pic4rl_sim.config, pic4rl_sim.params_file, pic4rl_sim.schema, "
                    "pic4rl_sim.engine.worlds.generators") == ([], False)

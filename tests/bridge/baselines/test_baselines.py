@@ -158,3 +158,11 @@ def test_the_baselines_settings_are_their_own_section(tmp_path):
     with pytest.raises(ConfigError, match=r"person.dwa.horizon_s: -1.0 is invalid"):
         EnvConfig().replace(**{"person.dwa.horizon_s": -1.0, "person.dwa.rollout_dt_s": 0.0})
     assert EnvConfig().replace(**{"person.dwa.horizon_s": 2.5}).person.dwa.horizon_s == 2.5
+
+
+def test_the_baseline_table_drives_every_registered_task_and_no_other() -> None:
+    from pic4rl_bridge.baselines.registry import BASELINE_TABLE
+    from pic4rl_bridge.tasks.registry import TASKS
+
+    driven = {t for spec in BASELINE_TABLE.values() for t in spec.tasks}
+    assert driven == set(TASKS)

@@ -14,7 +14,7 @@ from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
 from pic4rl_sim.engine.worlds.generators import make_world
-from pic4rl_sim.node.messages import StateMessages, plan_path
+from pic4rl_sim.node.messages import StateMessages, plan_message
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
@@ -102,7 +102,7 @@ def test_the_engine_read_equals_the_decoded_message(engine: Engine, sensor: Fram
     messages.fill(engine, 123)
     msg = held.get(sensor.interface.name)
     if msg is None:  # an episodic topic: the node publishes it at reset
-        msg = plan_path(engine.plan(), 123)
+        msg = plan_message(engine.plan(), 123)
     decoded = sensor.decode(msg, mount, sensor.interface.name)
     assert read is not None
     if isinstance(read, ScanData):

@@ -13,7 +13,7 @@ import pytest
 from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.errors import ConfigError
 from pic4rl_sim.engine.geometry import Pose2D
-from pic4rl_sim.params import (
+from pic4rl_sim.config import (
     ROBOT,
     ClockMode,
     ParamType,
@@ -209,5 +209,5 @@ def test_the_robot_parameter_comes_first_and_is_a_string():
 
 
 def test_params_does_not_import_rclpy():
-    code = "import sys, pic4rl_sim.params; sys.exit('rclpy' in sys.modules)"
+    code = "import sys, pic4rl_sim.config; sys.exit('rclpy' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
