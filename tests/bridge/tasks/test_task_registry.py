@@ -1,5 +1,6 @@
 """The task registry: each entry of ``TASKS`` drives its env ids, the task built, its reward
-scales, its section and its baselines; nothing else lists tasks."""
+scales, its section and its experts; nothing else lists tasks (a baseline names the tasks it
+drives in its own table)."""
 
 from __future__ import annotations
 
@@ -57,7 +58,7 @@ def test_an_entry_alone_adds_an_id(monkeypatch):
     """A new entry's ids come out of ``env_ids`` with its task, sensor and sim defaults."""
     toy = TaskSpec("toy", (EnvId("pic4rl/Toy-v0", "depth", {"world": "person"}),),
                    sensors=("depth",), reward=GoToPoseReward,
-                   build="pic4rl_bridge.tasks.goto:build", baselines=("proportional",))
+                   build="pic4rl_bridge.tasks.goto:build")
     monkeypatch.setitem(TASKS, "toy", toy)
     assert env_ids()["pic4rl/Toy-v0"] == {"task": "toy", "sensor": "depth",
                                          "sim_defaults": {"world": "person"}}
@@ -122,7 +123,7 @@ def test_a_tasks_section_is_its_entrys():
         EnvConfig(vineyard=VineyardConfig(centerline=(1.0, 2.0)))
 
 
-def test_the_baselines_and_facts_come_from_the_entries():
+def test_the_baselines_come_from_their_table_and_the_facts_from_the_entries():
     assert BASELINE_TASKS == {"proportional": ("goToPose",), "dwa": ("goToPose",),
                               "planner": ("goToPose",), "explorer": ("goToPose",),
                               "centerline": ("vineyard",),
