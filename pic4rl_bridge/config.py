@@ -41,7 +41,7 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
-from .baselines.config import PREFIX as BASELINES_PREFIX
+from .baselines.config import PREFIX as BASELINES_PREFIX, ExplorerConfig
 from .errors import ConfigError, require
 from .transports.sensor_table import SENSORS
 from .tasks.registry import (
@@ -235,10 +235,12 @@ class EnvConfig:
                                          "[0, 1], angle / pi")
     goal_input: GoalInput = param(GoalInput.GOAL, doc="goToPose: what the goal part of the "
                                   "observation points at: goal (the final goal, mapless: the "
-                                  "paper's) | plan (a look-ahead point on topics.plan)")
-    plan_lookahead_m: float = param(1.5, doc="goal_input plan: the point this far along the "
-                                    "plan beyond the robot's projection on it", unit="m",
-                                    range=POSITIVE)
+                                  "paper's) | plan (a look-ahead point on topics.plan) | "
+                                  "explorer (a look-ahead point on the mapless explorer's plan, "
+                                  "made from the episode's own scans: mapless)")
+    plan_lookahead_m: float = param(1.5, doc="goal_input plan or explorer: the point this far "
+                                    "along the plan beyond the robot's projection on it",
+                                    unit="m", range=POSITIVE)
     goal_tolerance_m: float = param(0.4, doc="the goal is reached this close", unit="m",
                                     range=POSITIVE)
     collision_tolerance_m: float = param(0.05, doc="a scan point this close to the footprint is "
@@ -262,6 +264,9 @@ class EnvConfig:
     lidar: LidarObsConfig = section(LidarObsConfig)
     depth: DepthObsConfig = section(DepthObsConfig)
     memory: MemoryObsConfig = section(MemoryObsConfig)
+    explorer: ExplorerConfig = section(ExplorerConfig, "goal_input explorer: the plan's "
+                                       "settings, as the explorer baseline's (its speed limit "
+                                       "unused)")
     vineyard: VineyardConfig = section(VineyardConfig)
     person: PersonConfig = section(PersonConfig)
     episodes: EpisodesConfig = section(EpisodesConfig)
@@ -301,7 +306,7 @@ class EnvConfig:
 #: file or override that contradicts one (``agent_conflicts``). Another ``task`` or ``sensor``
 #: gives other spaces, which the model's own space check refuses.
 AGENT_KEYS = ("normalize_observations", "goal_input", "plan_lookahead_m", "max_linear_m_s",
-              "min_linear_m_s", "max_angular_rad_s", "max_lateral_m_s", "person.")
+              "min_linear_m_s", "max_angular_rad_s", "max_lateral_m_s", "person.", "explorer.")
 
 
 def agent_keys(config: EnvConfig) -> tuple[str, ...]:

@@ -100,8 +100,12 @@ class TopDownView:
         memory = context.extra.get("memory")
         if memory is not None and len(memory.cells):  # goToPose's memory: the cells seen
             raster.points(img, view, *memory.centres().T, COLORS["map"], size=1)
-        if frame.plan is not None and len(frame.plan):
-            raster.polyline(img, view, frame.plan, COLORS["plan"], width=2)
+        explorer = context.extra.get("explorer")  # goal_input explorer: its grid and plan
+        if explorer is not None and len(explorer.grid.cells):
+            raster.points(img, view, *explorer.grid.centres().T, COLORS["map"], size=1)
+        for plan in (frame.plan, explorer.path if explorer is not None else None):
+            if plan is not None and len(plan):
+                raster.polyline(img, view, plan, COLORS["plan"], width=2)
         if context.centerline is not None:
             raster.polyline(img, view, context.centerline, COLORS["centerline"], width=2)
         goal = frame.goal if frame.goal is not None else context.goal

@@ -74,7 +74,16 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
                           f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
     scenario = Scenario(env)
     if name == "explorer":
-        return ExplorerController(scenario.robot, settings.explorer)
+        if env.goal_input == "explorer":  # the student points along the plan the expert follows
+            theirs = dataclasses.replace(env.explorer, max_linear_m_s=settings.explorer.max_linear_m_s)
+            if theirs != settings.explorer:
+                raise ConfigError("imitation.expert: explorer plans with the baselines: section's "
+                                  f"explorer.* ({settings.explorer}), the env's goal_input explorer "
+                                  f"with nav_env's explorer.* ({env.explorer}); expected the same "
+                                  "plan settings (all but max_linear_m_s)")
+        return ExplorerController(scenario.robot, settings.explorer,  # what the student saw
+                                  depth_first=env.sensor == "depth",
+                                  depth_rows=env.memory.depth_rows)
     if name == "heading":
         return HeadingController(env, scenario.robot)
     if name == "centerline":

@@ -6,7 +6,10 @@ policy sees the goal in polar form in the robot's frame and its last action, bes
 sectors or the depth image. With ``goal_input: plan`` the polar target is instead the point
 ``plan_lookahead_m`` along the global plan (``topics.plan``) beyond the robot's projection on
 it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
-the outcome still judge the final goal. With ``memory.enabled`` the observation is a Dict
+the outcome still judge the final goal. ``goal_input: explorer`` points along the plan of the
+mapless explorer instead (``pic4rl_bridge.perception.explorer_plan``, made from the episode's
+own scans and poses and kept in its context: mapless, a classical global planner beside a
+learned local one). With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
 (``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps
 no state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every
@@ -28,6 +31,7 @@ from pic4rl_sim.engine.geometry import Twist2D, point_along
 
 from ..config import EnvConfig
 from ..perception.collision import assess
+from ..perception.explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid, sensed_scan
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
@@ -76,6 +80,7 @@ class _GoToPose(Task):
         super().__init__(config, robot)
         self.action_space = planar_action_space()
         self._plan = config.goal_input == GoalInput.PLAN.value
+        self._explorer = config.goal_input == GoalInput.EXPLORER.value
         if self._plan:
             self.required = self.required | {"plan"}
 
@@ -86,6 +91,10 @@ class _GoToPose(Task):
         if frame.goal is None:
             raise ValueError("goToPose: the episode's first frame has no goal")
         extra: dict[str, Any] = {"memory": OccupancyGrid()} if self.config.memory.enabled else {}
+        if self._explorer:
+            extra["explorer"] = ExplorerPlan(self.robot, self.config.explorer,
+                                             depth_first=self.config.sensor == "depth",
+                                             depth_rows=self.config.memory.depth_rows)
         if self.config.lidar.history > 1:
             extra["scan_history"] = collections.deque(maxlen=self.config.lidar.history)
         return EpisodeContext(start=frame.pose, goal=(float(frame.goal[0]), float(frame.goal[1])),
@@ -133,14 +142,18 @@ class _GoToPose(Task):
                                clipped_action(last_action, 2)))
 
     def _target(self, frame: SensorFrame, context: EpisodeContext) -> tuple[float, float]:
-        """What the observation points at: the goal, or the plan's look-ahead point."""
-        if not self._plan:
+        """What the observation points at: the goal, or the look-ahead point of the plan (the
+        topic's, or the explorer's of the episode's own scans)."""
+        if self._explorer:
+            plan, s = context.extra["explorer"].update(frame)
+        elif not self._plan:
             return _goal(context)
-        plan = frame.plan
-        if plan is None or len(plan) == 0:
-            raise ValueError(f"goToPose (goal_input plan): no plan on topic "
-                             f"{self.config.topics.plan!r} for this episode")
-        s = project(plan, (frame.pose.x, frame.pose.y))[0] if len(plan) > 1 else 0.0
+        else:
+            plan = frame.plan
+            if plan is None or len(plan) == 0:
+                raise ValueError(f"goToPose (goal_input plan): no plan on topic "
+                                 f"{self.config.topics.plan!r} for this episode")
+            s = project(plan, (frame.pose.x, frame.pose.y))[0] if len(plan) > 1 else 0.0
         x, y = point_along(plan, s + self.config.plan_lookahead_m)
         return float(x), float(y)
 

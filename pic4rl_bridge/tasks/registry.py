@@ -39,6 +39,7 @@ class CommonReward:
 class GoalInput(ParamEnum):
     GOAL = "goal"
     PLAN = "plan"
+    EXPLORER = "explorer"
 
 
 @dataclass(frozen=True)

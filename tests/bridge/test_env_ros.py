@@ -42,14 +42,17 @@ def _equal(a: object, b: object) -> bool:
     return np.array_equal(a, b)
 
 
-#: Every registered id, and goToPose's with memory (the grid of the episode's own scans).
+#: Every registered id, and goToPose's with memory (the grid of the episode's own scans) and
+#: with the explorer's plan (made from them) as its target.
 CASES = [(env_id, {}) for env_id in CONFIGS] + [
     (env_id, {"memory.enabled": True})
-    for env_id in ("pic4rl/GoToPoseLidar-v0", "pic4rl/GoToPoseDepth-v0")]
+    for env_id in ("pic4rl/GoToPoseLidar-v0", "pic4rl/GoToPoseDepth-v0")] + [
+    ("pic4rl/GoToPoseLidar-v0", {"goal_input": "explorer"})]
 
 
 @pytest.mark.parametrize(("env_id", "extra"), CASES,
-                         ids=[f"{e}{'-memory' if x else ''}" for e, x in CASES])
+                         ids=[f"{e}{''.join('-' + str(v) for v in x.values())}"
+                              for e, x in CASES])
 def test_ros_and_in_process_agree_and_pass_the_checker(env_id: str, extra: dict, domain: int,
                                                         start_sim) -> None:
     """Same seed and actions: bit-identical observations (the memory crop too), rewards and

@@ -164,8 +164,8 @@ def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
     try:
         expert = imitation.experts[0]
         assert isinstance(expert, ExplorerController)
-        seen, observe = [], expert.observe
-        expert.observe = lambda frame: (seen.append(frame), observe(frame))[1]  # type: ignore
+        seen, observe = [], expert.plan.observe
+        expert.plan.observe = lambda frame: (seen.append(frame), observe(frame))[1]  # type: ignore
         imitation.collect(10, EXPERT)
         assert len(seen) == 10 and len(expert.grid.cells) > 0 and expert.path is not None
         assert all(a.stamp_ns < b.stamp_ns for a, b in zip(seen, seen[1:]))  # one per step
@@ -174,6 +174,33 @@ def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
             again.observe(frame)
         assert np.array_equal(np.sort(again.grid.cells, axis=0),
                               np.sort(expert.grid.cells, axis=0))
+    finally:
+        env.close()
+
+
+def test_the_explorer_expert_labels_along_the_plan_the_student_points_along() -> None:
+    """goal_input explorer beside imitation.expert explorer: the expert's plan and the env's
+    (the observation's target) are one, built from the same frames; plan settings that differ
+    between the baselines: section and nav_env's explorer.* are refused, naming both."""
+    train_args = {**parse_overrides(TINY, flag="test"), "imitation.expert": "explorer"}
+    env_args = {"episode_max_steps": 30, "min_linear_m_s": 0.0, "goal_input": "explorer"}
+    run = load_run_config([LIDAR_TD3], train=train_args, env=env_args)
+    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
+    model = new_model(run.train, env)
+    model.set_logger(configure(None, []))
+    callback = CallbackList([])
+    callback.init_callback(model)
+    imitation = Imitation(ImitationConfig(enabled=True, expert="explorer", bc_steps=10),
+                          env, run.env, model, callback, batch_size=16)
+    try:
+        imitation.collect(8, EXPERT)
+        plan = env.envs[0].unwrapped._context.extra["explorer"].path
+        assert plan is not None and np.array_equal(plan, imitation.experts[0].path)
+        other = load_run_config([LIDAR_TD3], train=train_args,
+                                env={**env_args, "explorer.margin_m": 0.2})
+        with pytest.raises(ConfigError, match=r"explorer\.\*.*same plan settings"):
+            Imitation(ImitationConfig(enabled=True, expert="explorer"), env, other.env, model,
+                      callback, batch_size=16)
     finally:
         env.close()
 

@@ -238,6 +238,48 @@ def test_the_memory_observation_is_the_episodes_own_scans_and_holds_no_plan(sens
     assert not fresh.extra["memory"].cells.size
 
 
+def test_the_explorer_target_points_along_the_plan_of_the_episodes_own_scans():
+    """goal_input explorer: the target is the explorer's plan's point plan_lookahead_m ahead,
+    made from the frames' scans alone (the frame's own plan is ignored, the task has no
+    world): straight at the goal while nothing is seen, off the line once a wall ahead is;
+    the space is the paper's; a new episode's context starts an empty grid and no plan."""
+    config = EnvConfig(normalize_observations=True).replace(goal_input="explorer",
+                                                              plan_lookahead_m=1.0)
+    task = make_task(config, robot(), None)
+    assert task.observation_space == make_task(EnvConfig(normalize_observations=True),
+                                               robot(), None).observation_space
+    open_ = frame(0.0, goal=(3.0, 0.0))
+    context = task.begin(open_)
+    obs = task.observe(dataclasses.replace(open_, plan=np.array([[0.0, 0.0], [0.0, 3.0]])),
+                       context, np.zeros(2))
+    np.testing.assert_allclose(obs[-4:-2], [1.0 / 10.0, 0.0], atol=1e-6)  # 1 m dead ahead
+    walled = dataclasses.replace(frame(0.0, goal=(3.0, 0.0), ahead_m=1.0), stamp_ns=1)
+    walled.scan.ranges[170:191] = 1.0  # a wall across the way, 1 m ahead
+    obs = task.observe(walled, context, np.zeros(2))
+    assert abs(obs[-3]) > 0.05  # the target left the straight line
+    plan = context.extra["explorer"].path
+    assert plan is not None and np.allclose(plan[-1], (3.0, 0.0))
+    assert task.observe(walled, context, np.zeros(2)).tolist() == obs.tolist()  # idempotent
+    fresh = task.begin(open_)
+    assert fresh.extra["explorer"].path is None and not len(fresh.extra["explorer"].grid.cells)
+
+
+def test_a_depth_agents_explorer_plan_is_made_from_its_depth_image_not_the_scan():
+    """goal_input explorer with sensor depth: the plan marks the depth image's pseudo-scan
+    even when the frame carries a scan (the LiDAR a depth env keeps for its collision test):
+    a wall the scan shows and the camera does not leaves the plan straight."""
+    config = EnvConfig(sensor="depth", normalize_observations=True).replace(
+        goal_input="explorer")
+    task = make_task(config, robot(), None)
+    walled = frame(0.0, goal=(3.0, 0.0), ahead_m=1.0,
+                   depth=np.full((60, 80), np.inf, np.float32))
+    walled.scan.ranges[170:191] = 1.0
+    context = task.begin(walled)
+    task.observe(walled, context, np.zeros(2))
+    plan = context.extra["explorer"]
+    assert not len(plan.grid.cells) and np.allclose(plan.path, [(0.0, 0.0), (3.0, 0.0)])
+
+
 def test_the_scan_history_stacks_the_last_scans_newest_first_and_resets():
     """lidar.history 3: the first scan fills the stack; each step shifts it by one; a new
     episode's context starts empty; the goal vector stays at the end."""
