@@ -4,8 +4,9 @@ the start-goal pairs of a kind.
 The robot is a disc of ``robot_radius_m``; for a rectangular footprint callers pass the
 circumscribed radius (``Footprint.bounding_radius_m``): a path that disc follows is free in any
 heading, which a differential-drive robot turning in a doorway needs, and the sampler and the
-engine check starts with the same radius. The world becomes an occupancy grid once per
-(world, radius, resolution): a cell is free when its centre lies inside the bounds with
+engine check starts with the same radius. The world's clearance at the cell centres is
+computed once per (world, resolution) (``clearance_grid``, shared by the radii) and becomes an
+occupancy grid once per (world, radius, resolution): a cell is free when its centre lies inside the bounds with
 ``clearance >= robot_radius_m`` (the obstacles inflated by the radius). The search is Dijkstra
 on the 8-connected grid with corner cutting excluded (a diagonal step needs both orthogonal
 neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
@@ -52,6 +53,34 @@ def segment_samples(a: np.ndarray, b: np.ndarray, step_m: float) -> tuple[np.nda
     t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
     return a[seg] + (b[seg] - a[seg]) * t[:, None], starts
 
+_CLEARANCES: OrderedDict[tuple[int, float], tuple[WorldSpec, np.ndarray]] = OrderedDict()
+
+
+def clearance_grid(world: WorldSpec, resolution_m: float) -> np.ndarray:
+    """The world's clearance (m) at the centres of its cells of ``resolution_m`` (ny x nx,
+    read-only), computed once per (world, resolution) and kept (a few): the planners of one
+    world for different radii (the global plan's margins, line of sight, the sampler's
+    shortest path) threshold the same field, its most costly part."""
+    key = (id(world), float(resolution_m))
+    found = _CLEARANCES.get(key)
+    if found is not None and found[0] is world:
+        _CLEARANCES.move_to_end(key)
+        return found[1]
+    xmin, ymin, xmax, ymax = world.bounds
+    nx = max(1, int((xmax - xmin) / resolution_m + 1e-9))
+    ny = max(1, int((ymax - ymin) / resolution_m + 1e-9))
+    xs = xmin + (np.arange(nx) + 0.5) * resolution_m
+    ys = ymin + (np.arange(ny) + 0.5) * resolution_m
+    centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    clear = np.concatenate([world.clearance(centres[i:i + _CHUNK])
+                            for i in range(0, len(centres), _CHUNK)]).reshape(ny, nx)
+    clear.setflags(write=False)
+    _CLEARANCES[key] = (world, clear)
+    if len(_CLEARANCES) > 4:
+        _CLEARANCES.popitem(last=False)
+    return clear
+
+
 class PathPlanner:
     """Shortest-path lengths between points of one world for a disc robot; build it once
     (tens of milliseconds), query it per episode. Lengths of the last queries are cached."""
@@ -63,14 +92,9 @@ class PathPlanner:
         require(math.isfinite(resolution_m) and resolution_m > 0, "paths.resolution_m",
                 resolution_m, "a positive cell size in m")
         self.world, self.robot_radius_m, self.resolution_m = world, robot_radius_m, resolution_m
-        xmin, ymin, xmax, ymax = world.bounds
-        self.nx = max(1, int((xmax - xmin) / resolution_m + 1e-9))
-        self.ny = max(1, int((ymax - ymin) / resolution_m + 1e-9))
-        xs = xmin + (np.arange(self.nx) + 0.5) * resolution_m
-        ys = ymin + (np.arange(self.ny) + 0.5) * resolution_m
-        centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-        clear = np.concatenate([world.clearance(centres[i:i + _CHUNK])
-                                for i in range(0, len(centres), _CHUNK)])
+        clear = clearance_grid(world, resolution_m)
+        self.ny, self.nx = clear.shape
+        clear = clear.ravel()
         # One blocked cell of padding all round: neighbours never leave the array.
         self.width = self.nx + 2
         free = np.zeros((self.ny + 2, self.width), dtype=bool)
