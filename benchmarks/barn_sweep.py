@@ -9,7 +9,10 @@ real time) needs hours for the same sweep.
     .venv/bin/python benchmarks/barn_sweep.py --agent explorer   # the mapless explorer
     .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_memory --workers 1  # learned
     .venv/bin/python benchmarks/barn_sweep.py --runs 1 --set --bags bags/barn_untuned
+    .venv/bin/python benchmarks/barn_sweep.py --transport ros --worlds 5 --runs 2  # sim nodes
 
+``--transport ros`` drives each cell's own sim node over ROS 2 (in its own ROS domain), as
+``config/suite_barn_demo.yaml`` does; its RESULT names end in ``_ros``.
 ``--set KEY=VALUE ...`` replaces the env file's ``baselines:`` section (its tuned settings)
 with these (none: the baselines' defaults); ``--bags DIR`` keeps the bags and the results
 files (``DIR/barn/results.md``) instead of a temporary folder.
@@ -47,6 +50,8 @@ def main() -> int:
     parser.add_argument("--worlds", type=int, default=50, help="the first N test worlds")
     parser.add_argument("--runs", type=int, default=10, help="runs per world")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--transport", choices=("inprocess", "ros"), default="inprocess",
+                        help="ros: each cell drives its own sim node over ROS 2")
     parser.add_argument("--set", nargs="*", metavar="KEY=VALUE",
                         help="the baselines' settings instead of the env file's")
     parser.add_argument("--bags", help="keep the bags and results here")
@@ -61,7 +66,7 @@ def main() -> int:
             env = str(Path(scratch) / "env_barn.yaml")
             Path(env).write_text(yaml.safe_dump(data))
         pairs = PairSet(f"env{args.runs}", episodes=args.runs)
-        cells = [dataclasses.replace(c, pairs=pairs, env=env,
+        cells = [dataclasses.replace(c, pairs=pairs, env=env, transport=args.transport,
                                      name=c.name.replace(c.pairs.label, pairs.label))
                  for c in suite.cells if c.agent == args.agent][:args.worlds]
         suite = dataclasses.replace(suite, cells=tuple(cells))
@@ -78,11 +83,12 @@ def main() -> int:
         " | ".join(str(v) for v in row) for row in (table.header, *table.rows)) + "\n")
     cells = dict(zip(table.header, table.rows[0]))
     k, n = (int(v) for v in str(cells["success"]).split("/"))
-    print(f"RESULT barn_sweep_{args.agent}_episodes {episodes}")
-    print(f"RESULT barn_sweep_{args.agent}_seconds {total:.1f}")
-    print(f"RESULT barn_sweep_{args.agent}_table_seconds {table_s:.1f}")
-    print(f"RESULT barn_sweep_{args.agent}_episodes_per_s {episodes / total:.2f}")
-    print(f"RESULT barn_sweep_{args.agent}_success {k / n:.3f}")
+    name = f"barn_sweep_{args.agent}" + ("_ros" if args.transport == "ros" else "")
+    print(f"RESULT {name}_episodes {episodes}")
+    print(f"RESULT {name}_seconds {total:.1f}")
+    print(f"RESULT {name}_table_seconds {table_s:.1f}")
+    print(f"RESULT {name}_episodes_per_s {episodes / total:.2f}")
+    print(f"RESULT {name}_success {k / n:.3f}")
     return 0
 
 

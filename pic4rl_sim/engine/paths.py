@@ -37,7 +37,8 @@ _SQRT2 = math.sqrt(2.0)
 #: Octile over Euclidean length, at most (a straight line at 22.5°): the grid search's bound.
 _OCTILE_BIAS = math.sqrt(4.0 - 2.0 * _SQRT2)
 _CHUNK = 8192  # cell centres per clearance call: bounds the (points x obstacles) arrays
-_CACHE = 256  # lengths kept per planner (the sampler's query is asked again for the facts)
+_CACHE = 256  # lengths and paths kept per planner (a query is asked again: the facts,
+#               the runs of one pair)
 
 
 
@@ -108,6 +109,7 @@ class PathPlanner:
         self._steps = grid_steps(free)
         self._free_cells = np.flatnonzero(self.free)
         self._cache: OrderedDict[tuple[float, ...], float] = OrderedDict()
+        self._paths: OrderedDict[tuple[float, ...], np.ndarray | None] = OrderedDict()
 
     # -- points and cells -------------------------------------------------------------------
 
@@ -183,7 +185,21 @@ class PathPlanner:
              max_length_m: float = math.inf) -> np.ndarray | None:
         """The taut path's points (k, 2) from start to goal; empty (0, 2) when there is no
         path, ``None`` when the search stopped at ``max_length_m`` without reaching the goal.
-        ``ValueError`` for a point outside the world's bounds."""
+        ``ValueError`` for a point outside the world's bounds. The last queries' paths are
+        kept (a copy is returned): the runs of one start-goal pair plan the same path."""
+        key = (float(start_xy[0]), float(start_xy[1]), float(goal_xy[0]), float(goal_xy[1]),
+               float(max_length_m))
+        if key in self._paths:
+            self._paths.move_to_end(key)
+        else:
+            self._paths[key] = self._search(start_xy, goal_xy, max_length_m)
+            if len(self._paths) > _CACHE:
+                self._paths.popitem(last=False)
+        found = self._paths[key]
+        return None if found is None else found.copy()
+
+    def _search(self, start_xy: Sequence[float], goal_xy: Sequence[float],
+                max_length_m: float) -> np.ndarray | None:
         start = np.array(start_xy[:2], dtype=float)
         goal = np.array(goal_xy[:2], dtype=float)
         s, g = self._snap(start, "start"), self._snap(goal, "goal")

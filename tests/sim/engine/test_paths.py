@@ -133,6 +133,27 @@ def test_a_worlds_clearance_is_computed_once_for_every_radius() -> None:
     assert clearance_grid(world, 0.1).shape == (60, 60)
 
 
+def test_a_repeated_query_reuses_its_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The runs of one start-goal pair ask for the same path: searched once, each caller gets
+    its own copy; another goal is searched anew."""
+    from pic4rl_sim.engine import paths
+
+    searches = []
+    real = paths.grid_search
+    monkeypatch.setattr(paths, "grid_search", lambda *a, **k: searches.append(a[2:4]) or real(
+        *a, **k))
+    planner = PathPlanner(gap_world(), robot_radius_m=RADIUS)
+    first = planner.path((-2.0, -2.0), (2.0, -2.0))
+    assert first is not None and len(first) > 2 and len(searches) == 1
+    first[:] = 0.0  # the caller's copy
+    again = planner.path((-2.0, -2.0), (2.0, -2.0))
+    assert again is not None and len(searches) == 1 and again[0].tolist() == [-2.0, -2.0]
+    assert planner.length((-2.0, -2.0), (2.0, -2.0)) == pytest.approx(
+        float(np.hypot(*np.diff(again, axis=0).T).sum()))
+    planner.path((-2.0, -2.0), (2.0, -1.5))
+    assert len(searches) == 2
+
+
 @pytest.mark.parametrize(("key", "value"), [("robot_radius_m", -0.1),
                                             ("resolution_m", 0.0)])
 def test_bad_parameters_and_points_outside_are_refused(key: str, value: float) -> None:
