@@ -7,7 +7,7 @@ real time) needs hours for the same sweep.
     .venv/bin/python benchmarks/barn_sweep.py                    # the planner, 500 episodes
     .venv/bin/python benchmarks/barn_sweep.py --agent dwa --worlds 10 --runs 2
     .venv/bin/python benchmarks/barn_sweep.py --agent explorer   # the mapless explorer
-    .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_memory --workers 1  # learned
+    .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_memory  # the learned agent
     .venv/bin/python benchmarks/barn_sweep.py --runs 1 --set --bags bags/barn_untuned
     .venv/bin/python benchmarks/barn_sweep.py --transport ros --worlds 5 --runs 2  # sim nodes
 
@@ -17,7 +17,8 @@ real time) needs hours for the same sweep.
 with these (none: the baselines' defaults); ``--bags DIR`` keeps the bags and the results
 files (``DIR/barn/results.md``) instead of a temporary folder.
 
-Target (docs/performance.md): the 500 episodes in <= 3 min on this 2-core machine. The table
+Targets (docs/performance.md, issue 29): the 500 episodes in <= 3 min on this 2-core machine
+in process, and in <= 15 min through the sim nodes over ROS 2. The table
 is printed on stderr; the last lines are ``RESULT <name> <value>``: the wall-clock seconds of
 the sweep (cells and table), of its results pass (table, report, figures), episodes per second
 and the success rate.
