@@ -5,11 +5,11 @@ The robot is a disc of ``robot_radius_m``; for a rectangular footprint callers p
 circumscribed radius (``Footprint.bounding_radius_m``): a path that disc follows is free in any
 heading, which a differential-drive robot turning in a doorway needs, and the sampler and the
 engine check starts with the same radius. The world's clearance at the cell centres is
-computed once per (world, resolution) (``clearance_grid``, shared by the radii) and becomes an
-occupancy grid once per (world, radius, resolution): a cell is free when its centre lies inside the bounds with
-``clearance >= robot_radius_m`` (the obstacles inflated by the radius). The search is Dijkstra
-on the 8-connected grid with corner cutting excluded (a diagonal step needs both orthogonal
-neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
+computed once per (world, resolution) (``clearance_grid``, shared by the radii) and becomes
+an occupancy grid once per (world, radius, resolution): a cell is free when its centre lies
+inside the bounds with ``clearance >= robot_radius_m`` (the obstacles inflated by the
+radius). The search is Dijkstra on the 8-connected grid with corner cutting excluded (a
+diagonal step needs both orthogonal neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
 all cells of a bucket are final at once (``grid_search`` over ``grid_steps``, which the bridge's
 mapless explorer runs on the grid of its own scans too). The cell path is then pulled taut by line of sight on
 the grid (``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight
