@@ -9,11 +9,12 @@ computed once per (world, resolution) (``clearance_grid``, shared by the radii) 
 an occupancy grid once per (world, radius, resolution): a cell is free when its centre lies
 inside the bounds with ``clearance >= robot_radius_m`` (the obstacles inflated by the
 radius). The search is Dijkstra on the 8-connected grid with corner cutting excluded (a
-diagonal step needs both orthogonal neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
-all cells of a bucket are final at once (``grid_search`` over ``grid_steps``, which the bridge's
-mapless explorer runs on the grid of its own scans too). The cell path is then pulled taut by line of sight on
-the grid (``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight
-line at 22.5°).
+diagonal step needs both orthogonal neighbours free), vectorised by buckets one cell wide:
+every step costs at least one cell, so all cells of a bucket are final at once
+(``grid_search`` over ``grid_steps``, which the bridge's mapless explorer runs on the grid of
+its own scans too). The cell path is then pulled taut by line of sight on the grid
+(``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight line at
+22.5°).
 
 Accuracy: the taut path bends at cell centres next to the inflated obstacles, so it lies within
 about one cell of the true shortest path's bends; in open space it is the straight line. A start
@@ -54,6 +55,7 @@ def segment_samples(a: np.ndarray, b: np.ndarray, step_m: float) -> tuple[np.nda
     t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
     return a[seg] + (b[seg] - a[seg]) * t[:, None], starts
 
+
 _CLEARANCES: OrderedDict[tuple[int, float], tuple[WorldSpec, np.ndarray]] = OrderedDict()
 
 
@@ -84,7 +86,8 @@ def clearance_grid(world: WorldSpec, resolution_m: float) -> np.ndarray:
 
 class PathPlanner:
     """Shortest-path lengths between points of one world for a disc robot; build it once
-    (tens of milliseconds), query it per episode. Lengths of the last queries are cached."""
+    (tens of milliseconds), query it per episode. The last queries' lengths and paths are
+    kept."""
 
     def __init__(self, world: WorldSpec, *, robot_radius_m: float,
                  resolution_m: float = 0.05) -> None:
