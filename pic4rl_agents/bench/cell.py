@@ -137,6 +137,19 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
         stop_group(sim, 10.0)
 
 
+def preload(cell: Cell) -> None:
+    """Import what driving ``cell`` takes (the tester, the env and its transport; a learned
+    agent's SB3 and torch, seconds of CPU) in the process that forks the cells' workers, so
+    that each forked worker starts with them instead of importing them again."""
+    import pic4rl_agents.testing.tester  # noqa: F401
+    import pic4rl_bridge.env  # noqa: F401
+
+    if cell.transport != "ros":
+        import pic4rl_bridge.transports.inprocess  # noqa: F401
+    if cell.agent_path:
+        import pic4rl_agents.models.algorithms  # noqa: F401
+
+
 def drive_cell(cell: Cell, root: Path) -> str:
     """Drive what is missing of ``cell`` and mark it done; ``"skipped"`` when it was done
     already, else ``"done"``. Errors propagate (the caller retries)."""

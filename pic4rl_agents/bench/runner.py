@@ -82,7 +82,8 @@ def check_bags(root: Path) -> None:
 
 
 class LocalPool:
-    """Cells as processes of this machine, ``workers`` at a time (forked: no re-import)."""
+    """Cells as processes of this machine, ``workers`` at a time, forked from this one after
+    it imported what the cells need (``cell.preload``): no worker imports them again."""
 
     name = "a local process pool"
 
@@ -91,6 +92,7 @@ class LocalPool:
         self._ctx = multiprocessing.get_context("fork")
 
     def submit(self, cell: Cell) -> Any:
+        bench_cell.preload(cell)  # once per kind of cell: later ones find them imported
         proc = self._ctx.Process(target=_cell_process, args=(cell, self.root),
                                  name=f"cell-{cell.name}", daemon=True)
         proc.start()

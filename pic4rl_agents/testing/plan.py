@@ -126,7 +126,9 @@ def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
     the value the params file or override gives, and the agent's own (from ``config``)."""
     conflicts = agent_conflicts(trained, test)
     if not conflicts:
-        mine, theirs = (_drive(Scenario(env).robot) for env in (trained, test))
+        # The robots alone: not the hundreds of training worlds a Scenario would build.
+        mine, theirs = (_drive(Scenario(env.replace(**{"episodes.world_variants": ""})).robot)
+                        for env in (trained, test))
         if mine != theirs:  # the same keys, another robot or control period under them
             raise ConfigError(f"{agent}: its test robot drives {theirs} but the agent was "
                               f"trained on {mine} ({config}); an action must mean what it "

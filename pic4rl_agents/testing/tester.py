@@ -83,8 +83,12 @@ class Policy:
         self.model = None
         self.controller = None
         if spec.model is not None:
+            import torch
+
             from pic4rl_agents.models.algorithms import check_spaces, load_model
 
+            if spec.run.train.torch_threads > 0:  # as trained: a policy call is small
+                torch.set_num_threads(spec.run.train.torch_threads)
             self.model = load_model(spec.model, spec.run.train.algorithm)
             check_spaces(self.model.observation_space, self.model.action_space, env,
                          model=f"--agent {spec.model} ({spec.trained})",

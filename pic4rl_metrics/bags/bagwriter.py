@@ -32,6 +32,8 @@ from rosbags.interfaces import (
     QosTime,
 )
 from rosbags.rosbag2 import Writer, WriterError
+from rosbags.rosbag2.enums import CompressionMode, StoragePlugin
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
 from ..contract import (
     FACTS_TOPIC,
@@ -68,6 +70,29 @@ def qos_record(depth: int, *, reliable: bool, transient_local: bool) -> Qos:
                _UNSET, _UNSET, QosLiveliness.AUTOMATIC, _UNSET, False)
 
 
+class _Sqlite3Storage(Sqlite3Writer):
+    """rosbags' sqlite3 storage whose empty tables are created without an fsync (about
+    0.13 s of waiting per bag on a virtual disk, for tables that hold nothing to lose); the
+    connection keeps sqlite's default syncing for what is written after."""
+
+    def __init__(self, path: Path, compression: CompressionMode) -> None:
+        if compression == CompressionMode.STORAGE:
+            super().__init__(path, compression)  # rosbags' own error
+        self.path = path / f"{path.name}.db3"
+        self.conn = sqlite3.connect(f"file:{self.path}", uri=True)
+        level = self.conn.execute("PRAGMA synchronous").fetchone()[0]
+        self.conn.execute("PRAGMA synchronous=OFF")
+        self.conn.executescript(self.SQLITE_SCHEMA)
+        self.conn.execute(f"PRAGMA synchronous={int(level)}")
+        self.cursor = self.conn.cursor()
+
+
+class _Writer(Writer):
+    """rosbags' writer with ``_Sqlite3Storage`` for sqlite3."""
+
+    STORAGE_PLUGINS = {**Writer.STORAGE_PLUGINS, StoragePlugin.SQLITE3: _Sqlite3Storage}
+
+
 class BagWriter:
     """One bag being written at ``path`` (a new directory) with ``storage`` (a key of
     ``STORAGES``); every failure is an ``OutputError`` naming the bag.
@@ -91,8 +116,8 @@ class BagWriter:
         #: Messages written per topic (facts and outcome included).
         self.counts: dict[str, int] = {}
         self._connections: dict[tuple[str, str], Connection] = {}
-        self._writer: Writer | None = Writer(self.path, version=9,
-                                             storage_plugin=STORAGES[storage])
+        self._writer: Writer | None = _Writer(self.path, version=9,
+                                              storage_plugin=STORAGES[storage])
         try:
             self._writer.open()
         except (WriterError, OSError) as err:

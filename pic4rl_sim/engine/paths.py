@@ -4,15 +4,17 @@ the start-goal pairs of a kind.
 The robot is a disc of ``robot_radius_m``; for a rectangular footprint callers pass the
 circumscribed radius (``Footprint.bounding_radius_m``): a path that disc follows is free in any
 heading, which a differential-drive robot turning in a doorway needs, and the sampler and the
-engine check starts with the same radius. The world becomes an occupancy grid once per
-(world, radius, resolution): a cell is free when its centre lies inside the bounds with
-``clearance >= robot_radius_m`` (the obstacles inflated by the radius). The search is Dijkstra
-on the 8-connected grid with corner cutting excluded (a diagonal step needs both orthogonal
-neighbours free), vectorised by buckets one cell wide: every step costs at least one cell, so
-all cells of a bucket are final at once (``grid_search`` over ``grid_steps``, which the bridge's
-mapless explorer runs on the grid of its own scans too). The cell path is then pulled taut by line of sight on
-the grid (``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight
-line at 22.5°).
+engine check starts with the same radius. The world's clearance at the cell centres is
+computed once per (world, resolution) (``clearance_grid``, shared by the radii) and becomes
+an occupancy grid once per (world, radius, resolution): a cell is free when its centre lies
+inside the bounds with ``clearance >= robot_radius_m`` (the obstacles inflated by the
+radius). The search is Dijkstra on the 8-connected grid with corner cutting excluded (a
+diagonal step needs both orthogonal neighbours free), vectorised by buckets one cell wide:
+every step costs at least one cell, so all cells of a bucket are final at once
+(``grid_search`` over ``grid_steps``, which the bridge's mapless explorer runs on the grid of
+its own scans too). The cell path is then pulled taut by line of sight on the grid
+(``taut_path``), which removes the 8-connected grid's bias (up to 8 % on a straight line at
+22.5°).
 
 Accuracy: the taut path bends at cell centres next to the inflated obstacles, so it lies within
 about one cell of the true shortest path's bends; in open space it is the straight line. A start
@@ -36,7 +38,8 @@ _SQRT2 = math.sqrt(2.0)
 #: Octile over Euclidean length, at most (a straight line at 22.5°): the grid search's bound.
 _OCTILE_BIAS = math.sqrt(4.0 - 2.0 * _SQRT2)
 _CHUNK = 8192  # cell centres per clearance call: bounds the (points x obstacles) arrays
-_CACHE = 256  # lengths kept per planner (the sampler's query is asked again for the facts)
+_CACHE = 256  # lengths and paths kept per planner (a query is asked again: the facts,
+#               the runs of one pair)
 
 
 
@@ -52,9 +55,39 @@ def segment_samples(a: np.ndarray, b: np.ndarray, step_m: float) -> tuple[np.nda
     t = (np.arange(counts.sum()) - starts[seg]) / np.maximum(counts - 1, 1)[seg]
     return a[seg] + (b[seg] - a[seg]) * t[:, None], starts
 
+
+_CLEARANCES: OrderedDict[tuple[int, float], tuple[WorldSpec, np.ndarray]] = OrderedDict()
+
+
+def clearance_grid(world: WorldSpec, resolution_m: float) -> np.ndarray:
+    """The world's clearance (m) at the centres of its cells of ``resolution_m`` (ny x nx,
+    read-only), computed once per (world, resolution) and kept (a few): the planners of one
+    world for different radii (the global plan's margins, line of sight, the sampler's
+    shortest path) threshold the same field, its most costly part."""
+    key = (id(world), float(resolution_m))
+    found = _CLEARANCES.get(key)
+    if found is not None and found[0] is world:
+        _CLEARANCES.move_to_end(key)
+        return found[1]
+    xmin, ymin, xmax, ymax = world.bounds
+    nx = max(1, int((xmax - xmin) / resolution_m + 1e-9))
+    ny = max(1, int((ymax - ymin) / resolution_m + 1e-9))
+    xs = xmin + (np.arange(nx) + 0.5) * resolution_m
+    ys = ymin + (np.arange(ny) + 0.5) * resolution_m
+    centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    clear = np.concatenate([world.clearance(centres[i:i + _CHUNK])
+                            for i in range(0, len(centres), _CHUNK)]).reshape(ny, nx)
+    clear.setflags(write=False)
+    _CLEARANCES[key] = (world, clear)
+    if len(_CLEARANCES) > 4:
+        _CLEARANCES.popitem(last=False)
+    return clear
+
+
 class PathPlanner:
     """Shortest-path lengths between points of one world for a disc robot; build it once
-    (tens of milliseconds), query it per episode. Lengths of the last queries are cached."""
+    (tens of milliseconds), query it per episode. The last queries' lengths and paths are
+    kept."""
 
     def __init__(self, world: WorldSpec, *, robot_radius_m: float,
                  resolution_m: float = 0.05) -> None:
@@ -63,14 +96,9 @@ class PathPlanner:
         require(math.isfinite(resolution_m) and resolution_m > 0, "paths.resolution_m",
                 resolution_m, "a positive cell size in m")
         self.world, self.robot_radius_m, self.resolution_m = world, robot_radius_m, resolution_m
-        xmin, ymin, xmax, ymax = world.bounds
-        self.nx = max(1, int((xmax - xmin) / resolution_m + 1e-9))
-        self.ny = max(1, int((ymax - ymin) / resolution_m + 1e-9))
-        xs = xmin + (np.arange(self.nx) + 0.5) * resolution_m
-        ys = ymin + (np.arange(self.ny) + 0.5) * resolution_m
-        centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-        clear = np.concatenate([world.clearance(centres[i:i + _CHUNK])
-                                for i in range(0, len(centres), _CHUNK)])
+        clear = clearance_grid(world, resolution_m)
+        self.ny, self.nx = clear.shape
+        clear = clear.ravel()
         # One blocked cell of padding all round: neighbours never leave the array.
         self.width = self.nx + 2
         free = np.zeros((self.ny + 2, self.width), dtype=bool)
@@ -84,6 +112,7 @@ class PathPlanner:
         self._steps = grid_steps(free)
         self._free_cells = np.flatnonzero(self.free)
         self._cache: OrderedDict[tuple[float, ...], float] = OrderedDict()
+        self._paths: OrderedDict[tuple[float, ...], np.ndarray | None] = OrderedDict()
 
     # -- points and cells -------------------------------------------------------------------
 
@@ -159,7 +188,21 @@ class PathPlanner:
              max_length_m: float = math.inf) -> np.ndarray | None:
         """The taut path's points (k, 2) from start to goal; empty (0, 2) when there is no
         path, ``None`` when the search stopped at ``max_length_m`` without reaching the goal.
-        ``ValueError`` for a point outside the world's bounds."""
+        ``ValueError`` for a point outside the world's bounds. The last queries' paths are
+        kept (a copy is returned): the runs of one start-goal pair plan the same path."""
+        key = (float(start_xy[0]), float(start_xy[1]), float(goal_xy[0]), float(goal_xy[1]),
+               float(max_length_m))
+        if key in self._paths:
+            self._paths.move_to_end(key)
+        else:
+            self._paths[key] = self._search(start_xy, goal_xy, max_length_m)
+            if len(self._paths) > _CACHE:
+                self._paths.popitem(last=False)
+        found = self._paths[key]
+        return None if found is None else found.copy()
+
+    def _search(self, start_xy: Sequence[float], goal_xy: Sequence[float],
+                max_length_m: float) -> np.ndarray | None:
         start = np.array(start_xy[:2], dtype=float)
         goal = np.array(goal_xy[:2], dtype=float)
         s, g = self._snap(start, "start"), self._snap(goal, "goal")

@@ -1,4 +1,5 @@
-"""``benchmarks/barn_sweep.py`` on 2 test worlds x 1 run ends with its figures.
+"""``benchmarks/barn_sweep.py`` on 2 test worlds x 1 run ends with its figures, in process
+and through sim nodes over ROS 2.
 
 Only the shape of the output is checked, never a speed: timings belong to the benchmark.
 """
@@ -22,3 +23,13 @@ def test_the_benchmark_ends_with_one_result_line_per_figure() -> None:
     assert all(math.isfinite(v) and v > 0 for v in results.values()), results
     assert 0 <= results["barn_sweep_planner_success"] <= 1
     assert "BARN score" in done.stderr
+
+
+@pytest.mark.integration
+def test_through_sim_nodes_its_figures_are_named_ros() -> None:
+    done = run_benchmark("barn_sweep.py", "--transport", "ros", "--worlds", "1", "--runs", "2",
+                         "--workers", "1")
+    names = tuple(n.replace("planner_", "planner_ros_") for n in FIGURES)
+    results = read_results(done.stdout, names)
+    assert results["barn_sweep_planner_ros_episodes"] == 2
+    assert all(math.isfinite(v) and v > 0 for v in results.values()), results

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -127,6 +128,26 @@ def test_a_suite_runs_yields_its_table_and_a_rerun_does_nothing(tmp_path: Path) 
     again = bench.bench_suite(suite, workers=2, local=True, progress=False)
     assert _bags(suite.root) == before and again.rows == table.rows
     assert (suite.root / "results.md").read_text() == text
+
+
+def test_the_pool_imports_torch_before_forking_only_for_a_learned_agent(
+        tmp_path: Path) -> None:
+    """``cell.preload``, which the local pool runs before forking a cell's worker (so that no
+    worker imports them again), imports the env's transport for every cell, and SB3 and torch
+    only for a learned agent's: a baseline's cells never load torch."""
+    suite = load_suite(_files(tmp_path, baselines=["dwa"],
+                              agents={"td3": str(REPO / "checkpoints" / "td3_lidar")}))
+    script = ("import pickle, sys\n"
+              "from pic4rl_agents.bench import cell\n"
+              "cell.preload(pickle.loads(bytes.fromhex(sys.argv[1])))\n"
+              "print(*(m in sys.modules for m in ('pic4rl_bridge.transports.inprocess', "
+              "'torch', 'stable_baselines3')))\n")
+    imported = {}
+    for c in suite.cells:
+        out = subprocess.run([sys.executable, "-c", script, pickle.dumps(c).hex()],
+                             capture_output=True, text=True, check=True, cwd=REPO)
+        imported[c.agent] = out.stdout.split()
+    assert imported == {"dwa": ["True", "False", "False"], "td3": ["True", "True", "True"]}
 
 
 def test_a_cell_that_keeps_failing_is_a_failed_row(tmp_path: Path) -> None:

@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pic4rl_sim.errors import ConfigError
-from pic4rl_sim.engine.paths import PathPlanner, planner_for, shortest_path_length
+from pic4rl_sim.engine.paths import (PathPlanner, clearance_grid, planner_for,
+                                     shortest_path_length)
 from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec
 
 OPEN = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0))
@@ -111,6 +112,46 @@ def test_planners_are_built_once_per_world_radius_and_resolution() -> None:
     first = planner_for(world, robot_radius_m=0.2)
     assert planner_for(world, robot_radius_m=0.2) is first
     assert planner_for(world, robot_radius_m=0.3) is not first
+
+
+def test_a_worlds_clearance_is_computed_once_for_every_radius() -> None:
+    """The planners of one world for two radii threshold the same clearance field (computed
+    once, the world's exact clearance at the cell centres); another world, even an equal one,
+    or another resolution gets its own."""
+    world = gap_world()
+    grid = clearance_grid(world, 0.05)
+    assert grid.shape == (120, 120) and not grid.flags.writeable
+    assert clearance_grid(world, 0.05) is grid
+    np.testing.assert_array_equal(grid[0, :3], world.clearance(np.array(
+        [[-2.975, -2.975], [-2.925, -2.975], [-2.875, -2.975]])))
+    small, large = PathPlanner(world, robot_radius_m=0.1), PathPlanner(world, robot_radius_m=0.3)
+    assert clearance_grid(world, 0.05) is grid
+    assert small.free.sum() > large.free.sum()  # the same field, thresholded apart
+    other = gap_world()
+    assert clearance_grid(other, 0.05) is not grid
+    np.testing.assert_array_equal(clearance_grid(other, 0.05), grid)
+    assert clearance_grid(world, 0.1).shape == (60, 60)
+
+
+def test_a_repeated_query_reuses_its_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The runs of one start-goal pair ask for the same path: searched once, each caller gets
+    its own copy; another goal is searched anew."""
+    from pic4rl_sim.engine import paths
+
+    searches = []
+    real = paths.grid_search
+    monkeypatch.setattr(paths, "grid_search", lambda *a, **k: searches.append(a[2:4]) or real(
+        *a, **k))
+    planner = PathPlanner(gap_world(), robot_radius_m=RADIUS)
+    first = planner.path((-2.0, -2.0), (2.0, -2.0))
+    assert first is not None and len(first) > 2 and len(searches) == 1
+    first[:] = 0.0  # the caller's copy
+    again = planner.path((-2.0, -2.0), (2.0, -2.0))
+    assert again is not None and len(searches) == 1 and again[0].tolist() == [-2.0, -2.0]
+    assert planner.length((-2.0, -2.0), (2.0, -2.0)) == pytest.approx(
+        float(np.hypot(*np.diff(again, axis=0).T).sum()))
+    planner.path((-2.0, -2.0), (2.0, -1.5))
+    assert len(searches) == 2
 
 
 @pytest.mark.parametrize(("key", "value"), [("robot_radius_m", -0.1),
