@@ -19,8 +19,10 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all,test]'
 	touch $(STAMP)
 
-# The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar) and the three baselines
-# (proportional, DWA and the privileged planner) on the paper's 5 indoor test pairs, each
+# The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar, the paper's observation),
+# the best mapless agent (checkpoints/td3_lidar_explorer: TD3-LiDAR pointed along the mapless
+# explorer's plan of its own scans) and four baselines (proportional, DWA, the privileged
+# planner and the mapless explorer) on the paper's 5 indoor test pairs, each
 # through the sim node over ROS 2 (pic4rl-run starts and stops it), one bag per episode under
 # bags/demo*/, then the metrics table of those bags and a video of each episode beside its bag
 # (bags/demo*/<agent>/episode_NNNN.mp4; the last line says where). `make demo TRAIN=1` trains
@@ -39,7 +41,7 @@ VINEYARD_LANES := build/vineyard_lanes_101.json
 VINEYARD_DEMO := --agent checkpoints/vineyard_td3 --agent checkpoints/vineyard_sac \
 	--baseline centerline --baseline row_follower --episodes 7 --sim-kwargs world_variant:101 \
 	--env-kwargs episodes.file:$(VINEYARD_LANES) --run demo_vineyard --video
-# `make demo CASE=barn`: the shipped BARN agent (checkpoints/barn_td3_memory: mapless, learned
+# `make demo CASE=barn`: the shipped BARN agent (checkpoints/barn_td3_explorer: mapless, learned
 # on training worlds only) beside DWA and the privileged planner on 5 of BARN's 50 test worlds,
 # one run each, through the sim node over ROS 2 (config/suite_barn_demo.yaml): a bag per
 # episode, the BARN table (bags/demo_barn/results.md) and a video per bag in bags/demo_barn/videos/.
@@ -57,7 +59,7 @@ else ifdef TRAIN
 	$(VENV)/bin/pic4rl-train --run $(DEMO_RUN) --ros-args --params-file config/train_goto_lidar_td3.yaml
 	$(VENV)/bin/pic4rl-run test --agent td3_lidar=runs/$(DEMO_RUN) --baseline proportional --baseline dwa --baseline planner --run demo --video
 else
-	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --agent checkpoints/td3_lidar_memory --baseline proportional --baseline dwa --baseline planner --baseline explorer --run demo --video
+	$(VENV)/bin/pic4rl-run test --agent checkpoints/td3_lidar --agent checkpoints/td3_lidar_explorer --baseline proportional --baseline dwa --baseline planner --baseline explorer --run demo --video
 endif
 
 test: setup

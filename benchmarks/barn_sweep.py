@@ -7,7 +7,8 @@ real time) needs hours for the same sweep.
     .venv/bin/python benchmarks/barn_sweep.py                    # the planner, 500 episodes
     .venv/bin/python benchmarks/barn_sweep.py --agent dwa --worlds 10 --runs 2
     .venv/bin/python benchmarks/barn_sweep.py --agent explorer   # the mapless explorer
-    .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_memory  # the learned agent
+    .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_explorer  # the learned agents
+    .venv/bin/python benchmarks/barn_sweep.py --agent barn_td3_memory
     .venv/bin/python benchmarks/barn_sweep.py --runs 1 --set --bags bags/barn_untuned
     .venv/bin/python benchmarks/barn_sweep.py --transport ros --worlds 5 --runs 2  # sim nodes
 
@@ -46,8 +47,9 @@ SUITE = Path(__file__).resolve().parents[1] / "config" / "suite_barn.yaml"
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--agent", default="planner",
-                        choices=("planner", "dwa", "explorer", "barn_td3_memory"),
-                        help="a baseline, or the shipped learned agent (checkpoints/)")
+                        choices=("planner", "dwa", "explorer", "barn_td3_explorer",
+                                 "barn_td3_memory"),
+                        help="a baseline, or a shipped learned agent (checkpoints/)")
     parser.add_argument("--worlds", type=int, default=50, help="the first N test worlds")
     parser.add_argument("--runs", type=int, default=10, help="runs per world")
     parser.add_argument("--workers", type=int, default=2)

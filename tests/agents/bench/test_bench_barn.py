@@ -26,7 +26,7 @@ def test_the_demo_is_the_agent_dwa_and_the_planner_on_5_test_worlds_over_ros(
     """``make demo CASE=barn``'s suite: through the sim node, on test worlds only."""
     suite = load_suite(REPO / "config" / "suite_barn_demo.yaml", bags_dir=tmp_path)
     assert {c.transport for c in suite.cells} == {"ros"} and suite.table == "barn"
-    assert sorted({c.agent for c in suite.cells}) == ["barn_td3_memory", "dwa", "planner"]
+    assert sorted({c.agent for c in suite.cells}) == ["barn_td3_explorer", "dwa", "planner"]
     assert sorted({c.variant for c in suite.cells}) == [0, 60, 120, 180, 240]
     assert len(suite.cells) == 15 and {c.pairs.episodes for c in suite.cells} == {1}
 
@@ -34,8 +34,8 @@ def test_the_demo_is_the_agent_dwa_and_the_planner_on_5_test_worlds_over_ros(
 def test_the_protocol_is_the_50_test_worlds_times_10_runs(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
     assert suite.table == "barn"
-    assert len(suite.cells) == 4 * 50  # the learned agent and the three baselines
-    for agent in ("barn_td3_memory", "dwa", "planner", "explorer"):
+    assert len(suite.cells) == 5 * 50  # the two learned agents and the three baselines
+    for agent in ("barn_td3_explorer", "barn_td3_memory", "dwa", "planner", "explorer"):
         cells = [c for c in suite.cells if c.agent == agent]
         assert [c.variant for c in cells] == list(range(0, 300, 6))
         assert {c.pairs.episodes for c in cells} == {10} and {c.world for c in cells} == {"barn"}
