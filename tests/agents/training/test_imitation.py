@@ -146,14 +146,13 @@ MEMORY = ["imitation.expert:explorer", "policy.cnn_channels:[4, 8]", "policy.cnn
 MEMORY_ENV = ["memory.enabled:true", "memory.size_px:32", "memory.resolution_m:0.3"]
 
 
-def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
-    """imitation.expert explorer: one grid per env, marked with each step's frame (the
-    student's scan and pose), reset with the episode."""
-    from pic4rl_bridge.baselines.explorer import ExplorerController
+EXPLORER_TRAIN = {**parse_overrides(TINY, flag="test"), "imitation.expert": "explorer"}
+EXPLORER_ENV = {"episode_max_steps": 30, "min_linear_m_s": 0.0}
 
-    run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
-                                              "imitation.expert": "explorer"},
-                          env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+
+def _explorer_imitation(env_args: dict):
+    """One env of ``env_args``, a fresh TD3 model and imitation of the explorer on it."""
+    run = load_run_config([LIDAR_TD3], train=EXPLORER_TRAIN, env=env_args)
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
     model = new_model(run.train, env)
     model.set_logger(configure(None, []))
@@ -161,6 +160,15 @@ def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
     callback.init_callback(model)
     imitation = Imitation(ImitationConfig(enabled=True, expert="explorer", bc_steps=10),
                           env, run.env, model, callback, batch_size=16)
+    return env, model, callback, imitation
+
+
+def test_the_explorer_expert_marks_the_frames_the_student_saw() -> None:
+    """imitation.expert explorer: one grid per env, marked with each step's frame (the
+    student's scan and pose), reset with the episode."""
+    from pic4rl_bridge.baselines.explorer import ExplorerController
+
+    env, model, callback, imitation = _explorer_imitation(EXPLORER_ENV)
     try:
         expert = imitation.experts[0]
         assert isinstance(expert, ExplorerController)
@@ -182,21 +190,13 @@ def test_the_explorer_expert_labels_along_the_plan_the_student_points_along() ->
     """goal_input explorer beside imitation.expert explorer: the expert's plan and the env's
     (the observation's target) are one, built from the same frames; plan settings that differ
     between the baselines: section and nav_env's explorer.* are refused, naming both."""
-    train_args = {**parse_overrides(TINY, flag="test"), "imitation.expert": "explorer"}
-    env_args = {"episode_max_steps": 30, "min_linear_m_s": 0.0, "goal_input": "explorer"}
-    run = load_run_config([LIDAR_TD3], train=train_args, env=env_args)
-    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
-    model = new_model(run.train, env)
-    model.set_logger(configure(None, []))
-    callback = CallbackList([])
-    callback.init_callback(model)
-    imitation = Imitation(ImitationConfig(enabled=True, expert="explorer", bc_steps=10),
-                          env, run.env, model, callback, batch_size=16)
+    env_args = {**EXPLORER_ENV, "goal_input": "explorer"}
+    env, model, callback, imitation = _explorer_imitation(env_args)
     try:
         imitation.collect(8, EXPERT)
         plan = env.envs[0].unwrapped._context.extra["explorer"].path
         assert plan is not None and np.array_equal(plan, imitation.experts[0].path)
-        other = load_run_config([LIDAR_TD3], train=train_args,
+        other = load_run_config([LIDAR_TD3], train=EXPLORER_TRAIN,
                                 env={**env_args, "explorer.margin_m": 0.2})
         with pytest.raises(ConfigError, match=r"explorer\.\*.*same plan settings"):
             Imitation(ImitationConfig(enabled=True, expert="explorer"), env, other.env, model,
