@@ -121,7 +121,7 @@ class MemoryObsConfig:
     size_px: int = param(64, doc="the crop's width and height", unit="px", range=POSITIVE)
     resolution_m: float = param(0.15, doc="the crop's pixel size", unit="m", range=POSITIVE)
     depth_rows: int = param(0, doc="depth robots: the pseudo-scan's middle rows of the depth "
-                            "image (0: all)", range=NON_NEGATIVE)
+                            "image (0: all; the floor's pixels never)", range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)

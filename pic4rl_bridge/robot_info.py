@@ -34,6 +34,10 @@ class RobotInfo:
     control_dt_s: float
     mounts: Mapping[str, Pose2D] = field(default_factory=dict, hash=False)
     depth_hfov_rad: float = _STOCK_HFOV_RAD
+    #: the depth camera's height above the floor (m; ``None``: unknown, so no pixel is taken
+    #: for the floor) and downward pitch (rad): where its lower rows see the floor
+    depth_height_m: float | None = None
+    depth_pitch_rad: float = 0.0
     max_linear_accel_m_s2: float = math.inf  # the robot's (classical planners' window)
     max_angular_accel_rad_s2: float = math.inf
 
@@ -54,6 +58,8 @@ class RobotInfo:
             max_lateral_m_s=_limit(c.max_lateral_m_s, spec.max_lateral_m_s) if omni else 0.0,
             control_dt_s=control_dt_s, mounts=mounts,
             depth_hfov_rad=math.radians(spec.depth.hfov_deg) if spec.depth else _STOCK_HFOV_RAD,
+            depth_height_m=spec.depth.mount_xyz_m[2] if spec.depth else None,
+            depth_pitch_rad=spec.depth.mount_pitch_rad if spec.depth else 0.0,
             max_linear_accel_m_s2=spec.max_linear_accel_m_s2,
             max_angular_accel_rad_s2=spec.max_angular_accel_rad_s2)
 

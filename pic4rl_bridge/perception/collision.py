@@ -4,7 +4,8 @@ The paper's collision test: any scan point closer to the footprint than
 ``collision_tolerance_m``. It runs every step on every beam, so it is plain vectorized numpy:
 beams to points in the base frame (``ScanData.points``), then the exact signed distance to the
 footprint, a circle or a box (``Footprint.signed_distance``).
-Robots without a LiDAR fall back on the depth image (each column's nearest pixel). Any range
+Robots without a LiDAR fall back on the depth image (each column's nearest pixel that is not
+the floor). Any range
 sensor whose reading decodes to a ``ScanData`` (a sonar's fan, a point cloud's slice) senses
 obstacles the same way, in the sensor table's order, with no change here.
 """
@@ -24,15 +25,46 @@ from ..transports.frame import ScanData, SensorFrame
 from ..transports.sensor_table import SENSORS
 
 
-def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarray:
-    """The nearest pixel of each column of a depth image (H × W, m along the optical axis) as
-    a point (n, 2) in the base frame, for a level pinhole camera of horizontal field of view
-    ``hfov_rad`` mounted at ``mount``. ``+inf``/NaN pixels are ignored; ``-inf`` (closer than
-    the camera's minimum) counts as depth 0, so a blinded camera reads as touching."""
+#: Pixels whose point lies this high above the floor or lower are the floor, not an obstacle
+#: (``pointcloud_to_laserscan``'s ``min_height``): a camera sees the floor in its lower rows,
+#: and a pseudo-scan of every row's nearest pixel would ring the robot with it.
+FLOOR_M = 0.05
+
+
+def _nearest_per_column(depth: np.ndarray, hfov_rad: float, rows: int,
+                        height_m: float | None, pitch_rad: float) -> np.ndarray:
+    """Each column's nearest obstacle pixel's forward distance (m, level; ``inf``: none,
+    ``0``: a ``-inf`` pixel, closer than the camera's minimum) of the ``rows`` middle rows
+    (0: all), the floor's pixels dropped (``height_m``: the camera's height above the floor,
+    ``pitch_rad`` its downward pitch; ``None``: no floor is known, every pixel counts)."""
     image = np.asarray(depth, dtype=np.float64)
-    image = np.where(np.isneginf(image), 0.0, image)
-    nearest = np.where(np.isfinite(image), image, np.inf).min(axis=0)
-    width = image.shape[1]
+    height, width = image.shape
+    focal_px = 0.5 * width / math.tan(0.5 * hfov_rad)
+    down = (np.arange(height) + 0.5 - 0.5 * height) / focal_px  # image rows: down +
+    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
+    image = np.where(np.isneginf(image), 0.0, np.where(np.isnan(image), np.inf, image))
+    forward = image * (cp - sp * down)[:, None]
+    if height_m is not None:
+        with np.errstate(invalid="ignore"):  # inf x 0 on a row level with the floor's horizon
+            up = height_m - image * (sp + cp * down)[:, None]
+        forward = np.where(np.isfinite(image) & (image > 0.0) & (up <= FLOOR_M), np.inf,
+                           forward)
+    if 0 < rows < height:
+        top = (height - rows) // 2
+        forward = forward[top:top + rows]
+    return forward.min(axis=0)
+
+
+def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float, *,
+                 height_m: float | None = None, pitch_rad: float = 0.0) -> np.ndarray:
+    """The nearest obstacle pixel of each column of a depth image (H × W, m along the optical
+    axis) as a point (n, 2) in the base frame, for a pinhole camera of horizontal field of view
+    ``hfov_rad`` mounted at ``mount`` (``height_m`` above the floor, pitched down ``pitch_rad``:
+    the floor's pixels are not obstacles; ``None``: every pixel is). ``+inf``/NaN pixels are
+    ignored; ``-inf`` (closer than the camera's minimum) counts as depth 0, so a blinded camera
+    reads as touching."""
+    nearest = _nearest_per_column(depth, hfov_rad, 0, height_m, pitch_rad)
+    width = nearest.shape[0]
     focal_px = 0.5 * width / math.tan(0.5 * hfov_rad)
     right = (np.arange(width) + 0.5 - 0.5 * width) / focal_px  # tan of the bearing, right +
     keep = np.isfinite(nearest)
@@ -40,22 +72,19 @@ def depth_points(depth: np.ndarray, mount: Pose2D, hfov_rad: float) -> np.ndarra
     return np.column_stack(sensor_to_base(d, -d * right[keep], mount))
 
 
-def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float,
-               rows: int = 0) -> ScanData:
-    """A pseudo-scan from a depth image (H × W, m along the optical axis) of a level pinhole
-    camera of horizontal field of view ``hfov_rad`` mounted at ``mount``, as
+def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float, rows: int = 0, *,
+               height_m: float | None = None, pitch_rad: float = 0.0) -> ScanData:
+    """A pseudo-scan from a depth image (H × W, m along the optical axis) of a pinhole camera
+    of horizontal field of view ``hfov_rad`` mounted at ``mount``, as
     ``depthimage_to_laserscan`` makes one: ``W`` beams evenly spaced across the field of view
-    (counter-clockwise, the scan's convention), each the nearest pixel of the column its ray
-    crosses (of the ``rows`` middle rows; 0: all) over the cosine of its bearing, so a wall
-    square to the camera reads as its true range. ``+inf``/NaN pixels give ``+inf`` (no
-    return), ``-inf`` (closer than the camera's minimum) ``-inf``."""
-    image = np.asarray(depth, dtype=np.float64)
-    height, width = image.shape
-    if 0 < rows < height:
-        top = (height - rows) // 2
-        image = image[top:top + rows]
-    image = np.where(np.isneginf(image), 0.0, image)
-    nearest = np.where(np.isnan(image), np.inf, image).min(axis=0)
+    (counter-clockwise, the scan's convention), each the nearest obstacle pixel of the column
+    its ray crosses (of the ``rows`` middle rows; 0: all) over the cosine of its bearing, so a
+    wall square to the camera reads as its true range. With ``height_m`` (the camera's height
+    above the floor, pitched down ``pitch_rad``) the floor's pixels are dropped, as
+    ``pointcloud_to_laserscan``'s ``min_height`` does (``FLOOR_M``). ``+inf``/NaN pixels give
+    ``+inf`` (no return), ``-inf`` (closer than the camera's minimum) ``-inf``."""
+    nearest = _nearest_per_column(depth, hfov_rad, rows, height_m, pitch_rad)
+    width = nearest.shape[0]
     step = hfov_rad / width
     angles = -0.5 * hfov_rad + (np.arange(width) + 0.5) * step
     focal_px = 0.5 * width / math.tan(0.5 * hfov_rad)
@@ -75,7 +104,8 @@ def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
             return reading.points()
         if sensor.name == "depth" and reading is not None:
             mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
-            return depth_points(reading, mount, robot.depth_hfov_rad)
+            return depth_points(reading, mount, robot.depth_hfov_rad,
+                                height_m=robot.depth_height_m, pitch_rad=robot.depth_pitch_rad)
     return np.empty((0, 2))
 
 

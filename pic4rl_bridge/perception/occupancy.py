@@ -46,7 +46,8 @@ def sensed_scan(frame: SensorFrame, robot: RobotInfo, depth_rows: int = 0, *,
         return frame.scan
     if frame.depth is not None:
         return depth_scan(frame.depth, robot.depth_mount or Pose2D(0.0, 0.0, 0.0),
-                          robot.depth_hfov_rad, depth_rows)
+                          robot.depth_hfov_rad, depth_rows, height_m=robot.depth_height_m,
+                          pitch_rad=robot.depth_pitch_rad)
     return None
 
 

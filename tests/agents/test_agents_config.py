@@ -32,6 +32,8 @@ SHIPPED = {
     "train_barn_td3_memory.yaml": ("td3", "lidar", "barn_td3_memory"),
     "train_goto_lidar_td3_explorer.yaml": ("td3", "lidar", "td3_lidar_explorer"),
     "train_goto_lidar_sac_explorer.yaml": ("sac", "lidar", "sac_lidar_explorer"),
+    "train_goto_depth_td3_explorer.yaml": ("td3", "depth", "td3_depth_explorer"),
+    "train_goto_depth_sac_explorer.yaml": ("sac", "depth", "sac_depth_explorer"),
     "train_barn_td3_explorer.yaml": ("td3", "lidar", "barn_td3_explorer"),
     "train_person_hybrid_sac.yaml": ("sac", "lidar", "sac_person_hybrid"),
     "train_person_hybrid_td3.yaml": ("td3", "lidar", "td3_person_hybrid"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -105,6 +106,24 @@ def test_depth_points_pinhole_geometry():
     pts = depth_points(image, Pose2D(0.1, 0.05, 0.0), math.radians(90.0))
     # column 0's centre: tan(bearing) = (W/2 - 0.5) / f, f = (W/2) / tan(45 deg) = 4
     np.testing.assert_allclose(pts, [[3.1, 0.05 + 3.0 * 3.5 / 4.0]])
+
+
+def test_depth_points_of_the_floor_are_not_obstacles():
+    """A level camera 0.4 m up: a pixel below the horizon at the depth where its ray meets
+    the floor is the floor (no obstacle with the robot's camera height; one without it), and
+    the same pixel nearer is an obstacle."""
+    image = np.full((4, 8), np.inf, np.float32)
+    down = 1.5 / 4.0  # row 3's centre, f = 4 px
+    image[3, 4] = 0.4 / down  # where its ray meets the floor
+    mount = Pose2D(0.1, 0.0, 0.0)
+    assert len(depth_points(image, mount, math.radians(90.0))) == 1
+    assert not len(depth_points(image, mount, math.radians(90.0), height_m=0.4))
+    info = robot(CIRCLE, depth_mount=mount)
+    info = dataclasses.replace(info, depth_height_m=0.4)
+    assert obstacle_distance(frame(depth=image), info) == math.inf
+    image[3, 4] = 0.5  # 0.21 m above the floor: a box, 0.5 m ahead and 1/8 of that right
+    assert obstacle_distance(frame(depth=image), info) == pytest.approx(
+        math.hypot(0.6, 0.5 / 8.0) - 0.3, abs=1e-6)
 
 
 def test_depth_too_close_counts_as_touching():
