@@ -81,9 +81,7 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
                                   f"explorer.* ({settings.explorer}), the env's goal_input explorer "
                                   f"with nav_env's explorer.* ({env.explorer}); expected the same "
                                   "plan settings (all but max_linear_m_s)")
-        return ExplorerController(scenario.robot, settings.explorer,  # what the student saw
-                                  depth_first=env.sensor == "depth",
-                                  depth_rows=env.memory.depth_rows)
+        return ExplorerController.for_env(scenario.robot, env, settings.explorer)
     if name == "heading":
         return HeadingController(env, scenario.robot)
     if name == "centerline":

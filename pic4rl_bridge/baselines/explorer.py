@@ -6,14 +6,16 @@ robot. Its plan is ``pic4rl_bridge.perception.explorer_plan``'s (the shortest pa
 occupancy grid of its own scans, unknown space free, kept until something newly seen blocks
 it), which a goToPose observation with ``goal_input: explorer`` points along too; it follows
 that plan with the privileged planner's pursuit law (``planner.pursuit_command``) within its
-own speed limit (``max_linear_m_s``). As a depth student's expert (``depth_first``) it marks
-the depth image's pseudo-scan, as the student's memory does, even where a scan is there.
+own speed limit (``max_linear_m_s``). In a depth env (``for_env``: the baseline and a depth
+student's expert) it marks the depth image's pseudo-scan, as the student's memory does, even
+where a scan is there.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..config import EnvConfig
 from ..perception.explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid
 from ..robot_info import RobotInfo
@@ -36,6 +38,15 @@ class ExplorerController:
         self.lookahead_m, self.turn_in_place_rad = lookahead_m, turn_in_place_rad
         cap = self.config.max_linear_m_s
         self.max_linear_m_s = min(cap, robot.max_linear_m_s) if cap > 0 else robot.max_linear_m_s
+
+    @classmethod
+    def for_env(cls, robot: RobotInfo, env: EnvConfig,
+                config: ExplorerConfig | None = None) -> ExplorerController:
+        """The explorer that sees what ``env``'s agent sees: in a depth env, the depth image's
+        pseudo-scan (its LiDAR, if any, serves only the collision test), as a depth student's
+        memory and plan do; else the scan."""
+        return cls(robot, config, depth_first=env.sensor == "depth",
+                   depth_rows=env.memory.depth_rows)
 
     def reset(self) -> None:
         """Forget the grid and the plan (a new episode)."""

@@ -13,7 +13,8 @@ checks follow).
   path with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
 - ``explorer``: the mapless explorer (``pic4rl_bridge.baselines.explorer``): the shortest path on an
   occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
-  followed by the planner's pursuit law; it knows no map, as no agent does.
+  followed by the planner's pursuit law; it knows no map, as no agent does. In a depth env it
+  sees what a depth agent sees: the depth image's pseudo-scan.
 - ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
   bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
   hybrid.
@@ -105,7 +106,7 @@ def _explorer(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
               settings: BaselinesConfig) -> Baseline:
     from .explorer import ExplorerController
 
-    return ExplorerController(robot, settings.explorer)
+    return ExplorerController.for_env(robot, config, settings.explorer)
 
 
 def _row_follower(name: str) -> Callable[..., Baseline]:

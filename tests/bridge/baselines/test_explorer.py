@@ -114,6 +114,20 @@ def test_it_never_reads_the_world_a_frame_without_one_still_plans():
     assert explorer.path is None and len(explorer.grid.cells) == 0
 
 
+def test_in_a_depth_env_it_plans_on_what_the_camera_sees_not_the_lidar():
+    # A depth env keeps the LiDAR for its collision test: the baseline, the depth agents'
+    # classical opponent, plans on the depth image (nothing in view) and drives straight.
+    scan = ScanData(np.full(90, 1.0, np.float32), -math.pi / 4, math.pi / 180, 0.05, 10.0)
+    frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(3.0, 0.0), scan=scan,
+                        depth=np.full((6, 8), np.inf, np.float32))
+    lidar = make_baseline("explorer", EnvConfig(), ROBOT, world=None)
+    depth = make_baseline("explorer", EnvConfig(sensor="depth"), ROBOT, world=None)
+    for explorer in (lidar, depth):
+        explorer.command(frame)
+    assert len(lidar.grid.cells) and not len(depth.grid.cells)
+    assert np.allclose(depth.path, [(0.0, 0.0), (3.0, 0.0)])
+
+
 def test_its_own_speed_limit_caps_the_pursuit_and_never_raises_the_robots():
     # An open world, the goal straight ahead: full speed is the robot's, or the cap below it.
     world = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0), boxes=(Box(4.5, 0.0, 0.1, 2.0, 1.0),))
