@@ -6,11 +6,16 @@ compressed whole, ``.zstd``), the storage files of a split bag that lost its
 ``metadata.yaml`` (read in index order as one bag), or a ROS 1 ``.bag``. Messages are decoded
 with the types the bag embeds; where it embeds none, or an incomplete set, with ROS 2 Jazzy's
 (ROS 1 Noetic's for a ROS 1 bag), and a type known to neither is named in the error.
+
+SQLite opens a ``.db3`` through a ``file:`` URI, where ``#``, ``?`` and ``%xx`` in a folder's
+name would end or change the path: every path that becomes such a URI goes through
+``uri_path`` (the writer's too).
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import shutil
 import struct
 import sys
@@ -19,12 +24,15 @@ from collections.abc import Callable, Iterator
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote_from_bytes
 
 from apsw import Error as SqliteError
 from rosbags.interfaces import Connection, MessageDefinitionFormat
 from rosbags.rosbag1 import Reader as Reader1
 from rosbags.rosbag1 import ReaderError as ReaderError1
 from rosbags.rosbag2 import Reader, ReaderError
+from rosbags.rosbag2.reader import DirectoryReader
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 from rosbags.serde import SerdeError
 from rosbags.typesys import (
     Stores,
@@ -66,6 +74,38 @@ def bag_errors(path: Path) -> Iterator[None]:
     except DAMAGE as err:
         msg = f"{str(path)!r}: damaged bag or message: {type(err).__name__}: {err}"
         raise BagError(msg) from err
+
+
+def uri_path(path: Path) -> str:
+    """``path`` as the path of a ``file:`` URI: every byte but letters, digits and ``/_.-~``
+    percent-quoted, so that ``#``, ``?``, ``%``, spaces and unicode stay part of the name."""
+    return quote_from_bytes(os.fsencode(path), safe="/")
+
+
+class _UriPath(type(Path())):  # type: ignore[misc]
+    """A path that formats as ``uri_path`` of itself: rosbags' sqlite3 reader opens
+    ``f"file:{path}?immutable=1"`` from the path unquoted."""
+
+    def __format__(self, spec: str) -> str:
+        return uri_path(self)
+
+
+class _Sqlite3Reader(Sqlite3Reader):
+    """rosbags' sqlite3 reader, given a path that it puts into its URI quoted."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(_UriPath(path))
+
+
+class _DirectoryReader(DirectoryReader):
+    STORAGE_PLUGINS = {**DirectoryReader.STORAGE_PLUGINS, "sqlite3": _Sqlite3Reader}
+
+
+class _Reader(Reader):
+    """rosbags' reader whose ``.db3`` files (alone or in a directory) open whatever their
+    folders are named."""
+
+    STORAGE_PLUGINS = {**Reader.STORAGE_PLUGINS, "dir": _DirectoryReader, ".db3": _Sqlite3Reader}
 
 
 def _default_store(ros1: bool) -> Typestore:
@@ -160,7 +200,7 @@ class OpenBag:
     def __enter__(self) -> OpenBag:
         try:
             for part in self._parts():
-                reader = Reader1(part) if self.ros1 else Reader(self._plain(part))
+                reader = Reader1(part) if self.ros1 else _Reader(self._plain(part))
                 self._readers.append(self._stack.enter_context(reader))
         except BaseException:
             self._stack.close()

@@ -50,6 +50,7 @@ from ..contract import (
     typestore,
 )
 from ..errors import OutputError
+from .bagfile import uri_path
 
 STRING = "std_msgs/msg/String"
 
@@ -79,7 +80,7 @@ class _Sqlite3Storage(Sqlite3Writer):
         if compression == CompressionMode.STORAGE:
             super().__init__(path, compression)  # rosbags' own error
         self.path = path / f"{path.name}.db3"
-        self.conn = sqlite3.connect(f"file:{self.path}", uri=True)
+        self.conn = sqlite3.connect(f"file:{uri_path(self.path)}", uri=True)
         level = self.conn.execute("PRAGMA synchronous").fetchone()[0]
         self.conn.execute("PRAGMA synchronous=OFF")
         self.conn.executescript(self.SQLITE_SCHEMA)
