@@ -22,7 +22,7 @@ from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim import params_file
 
 from pic4rl_agents import rundir
-from pic4rl_agents.config import ENV_NODE, NODES, RunConfig, run_config
+from pic4rl_agents.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
 
 Sections = dict[str, dict[str, Any]]
 
@@ -113,18 +113,58 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         if config:
             own_run = run_config(own, [str(config)])
             check_trained(f"--agent {path}", config, own_run.env, run.env,
-                          plan.params_files, plan.env_overrides)
+                          plan.params_files, plan.env_overrides, plan.sim_overrides)
             trained = own_run.origin
         specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
     return specs
 
 
+#: The ``sim:`` settings that shape what an agent observes or what its actions do: its robot,
+#: the control period, and the fields of its sensor (``lidar.*`` or ``depth.*``: the agent's
+#: ``sensor``) that set the beams, field of view, ranges and image. A test takes them from the
+#: agent's own config, as it takes ``pic4rl_bridge.config.agent_keys`` (``check_trained``);
+#: the others (the world, its variant, seeds, sensor noise) are the test's to choose.
+AGENT_SIM_KEYS = ("robot", "control_dt_s",
+                  "lidar.enabled", "lidar.beams", "lidar.fov_deg", "lidar.range_min_m",
+                  "lidar.range_max_m",
+                  "depth.enabled", "depth.width", "depth.height", "depth.hfov_deg",
+                  "depth.min_depth_m", "depth.max_depth_m")
+
+
+def sim_conflicts(trained: EnvConfig, test: EnvConfig) -> list[tuple[str, Any, Any]]:
+    """``(key, trained value, test value)`` of every ``AGENT_SIM_KEYS`` setting of
+    ``trained``'s sensor that the simulator of ``test`` changes (both read with the sim's
+    defaults for their robot); none when ``test`` drives no pic4rl simulator."""
+    if not test.simulated:
+        return []
+    mine, theirs = _sim_values(trained), _sim_values(test)
+    keys = [k for k in AGENT_SIM_KEYS
+            if "." not in k or k.startswith(f"{trained.sensor}.")]
+    return [(k, mine[k], theirs[k]) for k in keys if mine[k] != theirs[k]]
+
+
+def _sim_values(env: EnvConfig) -> dict[str, Any]:
+    """Every sim parameter of ``env``'s sim section, defaults (its robot's sensors) filled in."""
+    from pic4rl_sim.config import SimParams, parameter_table, resolve
+    from pic4rl_sim.engine.robot_specs import load_robot
+    from pic4rl_sim.errors import SimError
+
+    try:
+        robot = load_robot(env.sim_params.get("robot", SimParams.robot))
+        return resolve(parameter_table(robot), env.sim_params, where="sim parameters")
+    except SimError as err:
+        raise ConfigError(f"sim parameters: {err}") from err
+
+
 def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
-                  params_files: Sequence[str], overrides: Mapping[str, Any]) -> None:
+                  params_files: Sequence[str], overrides: Mapping[str, Any],
+                  sim_overrides: Mapping[str, Any]) -> None:
     """``ConfigError`` in one line when ``test`` changes a setting that shapes what the agent
-    observes or what its actions do (``pic4rl_bridge.config.agent_keys``): it names the key,
-    the value the params file or override gives, and the agent's own (from ``config``)."""
-    conflicts = agent_conflicts(trained, test)
+    observes or what its actions do (``pic4rl_bridge.config.agent_keys``, the sim's
+    ``AGENT_SIM_KEYS``): it names the key, the value the params file or override gives, and
+    the agent's own (from ``config``)."""
+    conflicts = [(ENV_NODE, *c) for c in agent_conflicts(trained, test)] or [
+        (SIM_NODE, *c) for c in sim_conflicts(trained, test)]
     if not conflicts:
         # The robots alone: not the hundreds of training worlds a Scenario would build.
         mine, theirs = (_drive(Scenario(env.replace(**{"episodes.world_variants": ""})).robot)
@@ -134,11 +174,15 @@ def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
                               f"trained on {mine} ({config}); an action must mean what it "
                               "meant in training: test it on a robot as fast, at its period")
         return
-    key, mine, theirs = conflicts[0]
-    source = "-p/--env-kwargs" if key in overrides else next(
-        (f for f in reversed(params_files)
-         if key in params_file.read_sections(f, (ENV_NODE,))[ENV_NODE]), "the test env")
-    more = f" (also {', '.join(k for k, _, _ in conflicts[1:])})" if conflicts[1:] else ""
+    node, key, mine, theirs = conflicts[0]
+    flag, section = (("-p/--env-kwargs", "") if node == ENV_NODE else
+                     ("--sim-kwargs", " (sim section)"))
+    given = overrides if node == ENV_NODE else sim_overrides
+    source = flag if key in given else next(
+        (f"{f}{section}" for f in reversed(params_files)
+         if key in params_file.read_sections(f, (ENV_NODE, SIM_NODE))[node]),
+        "the test env")
+    more = f" (also {', '.join(c[1] for c in conflicts[1:])})" if conflicts[1:] else ""
     raise ConfigError(f"{agent}: {key}: {source} gives {theirs!r} but the agent was trained "
                       f"with {mine!r} ({config}){more}; a test env must not change what an "
                       f"agent observes or how it acts: remove {key} there or set it to "

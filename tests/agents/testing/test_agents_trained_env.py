@@ -17,7 +17,7 @@ from agents_helpers import ROOT
 from pic4rl_agents.testing import tester
 from pic4rl_agents.bench.cell import _plan
 from pic4rl_agents.bench.suite import load_suite
-from pic4rl_agents.testing.plan import resolve_agents
+from pic4rl_agents.testing.plan import TestPlan, resolve_agents
 from pic4rl_bridge.config import AGENT_KEYS, EnvConfig, agent_keys
 from pic4rl_bridge.errors import ConfigError
 
@@ -118,12 +118,12 @@ def test_the_table1_suite_gives_each_agent_its_trained_observation(tmp_path: Pat
 def test_a_test_robot_that_changes_the_agents_speed_range_or_period_is_refused(
         tmp_path: Path) -> None:
     """The same keys, but a slower robot (the Burger's 0.22 m/s caps the agent's 0.5) or
-    another control period: the agent's actions would mean something else."""
-    for sim, theirs in (
+    another control period, given to the env: the agent's actions would mean something else."""
+    for env, theirs in (
             ("robot:burger", "v in [0.1, 0.22] m/s, |ω| ≤ 1 rad/s every 0.1 s"),
             ("control_dt_s:0.05", "v in [0.1, 0.5] m/s, |ω| ≤ 1 rad/s every 0.05 s")):
         code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path),
-                              "--sim-kwargs", sim])
+                              "--env-kwargs", env])
         assert code == 2
         assert err.splitlines() == [
             f"pic4rl-test: --agent {TD3_LIDAR}: its test robot drives {theirs} but the agent was "
@@ -131,3 +131,69 @@ def test_a_test_robot_that_changes_the_agents_speed_range_or_period_is_refused(
             f"({TD3_LIDAR / 'config.yaml'}); an action must mean what it meant in training: test "
             "it on a robot as fast, at its period"]
     assert not list(tmp_path.iterdir())
+
+
+def _sim_refusal(key: str, source: str, theirs: object, mine: object, also: str = "") -> str:
+    return (f"pic4rl-test: --agent {TD3_LIDAR}: {key}: {source} gives {theirs!r} but the agent "
+            f"was trained with {mine!r} ({TD3_LIDAR / 'config.yaml'}){also}; a test env must "
+            f"not change what an agent observes or how it acts: remove {key} there or set it "
+            f"to {mine!r}")
+
+
+@pytest.mark.bad_input
+@pytest.mark.parametrize(("sim", "key", "theirs", "mine", "also"), [
+    ("lidar.range_max_m:1.5", "lidar.range_max_m", 1.5, 10.0, ""),
+    ("lidar.beams:180", "lidar.beams", 180, 360, ""),
+    ("lidar.fov_deg:270", "lidar.fov_deg", 270.0, 360.0, ""),
+    ("control_dt_s:0.05", "control_dt_s", 0.05, 0.1, ""),
+    # the Burger's own LiDAR starts at another range: named after the robot
+    ("robot:burger", "robot", "burger", "jackal", " (also lidar.range_min_m)"),
+])
+def test_a_sim_override_that_changes_what_the_agent_observes_is_refused(
+        tmp_path: Path, sim: str, key: str, theirs: object, mine: object, also: str) -> None:
+    """td3_lidar was trained on the sim's 10 m, 360-beam LiDAR (its config.yaml's sim
+    section): a 1.5 m sensor would show free space where obstacles stand 2-3.5 m away."""
+    code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path), "--no-progress",
+                          "--sim-kwargs", sim])
+    assert code == 2
+    assert err.splitlines() == [_sim_refusal(key, "--sim-kwargs", theirs, mine, also)]
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.bad_input
+def test_a_params_files_sim_section_that_changes_the_agents_sensor_is_refused_naming_it(
+        tmp_path: Path) -> None:
+    env = tmp_path / "env.yaml"
+    env.write_text(yaml.safe_dump({"sim": {"ros__parameters": {"lidar": {"range_max_m": 2.0}}},
+                                   "nav_env": {"ros__parameters": {"episode_max_steps": 50}}}))
+    code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path / "bags"),
+                          "--ros-args", "--params-file", str(env)])
+    assert code == 2
+    assert err.splitlines() == [
+        _sim_refusal("lidar.range_max_m", f"{env} (sim section)", 2.0, 10.0)]
+    assert not (tmp_path / "bags").exists()
+
+
+def test_sim_settings_that_leave_the_agents_input_alone_are_accepted(tmp_path: Path) -> None:
+    """The world, its variant, the seed and sensor noise are the test's to choose; the
+    agent's own values, given again, are no change; another sensor's settings (the depth
+    camera a depth agent beside it needs) do not touch a LiDAR agent's input."""
+    env = tmp_path / "env.yaml"
+    env.write_text(yaml.safe_dump({"sim": {"ros__parameters": {
+        "world_variant": 3, "lidar": {"range_max_m": 10.0, "beams": 360}}}}))
+    plan = TestPlan(agents=(str(TD3_LIDAR),), params_files=(str(env),), sim_overrides={
+        "seed": 7, "lidar.noise_std_m": 0.01, "depth.enabled": True, "depth.width": 40})
+    spec, = resolve_agents(plan)
+    sim = spec.run.env.sim_params
+    assert (sim["world_variant"], sim["seed"], sim["lidar.noise_std_m"]) == (3, 7, 0.01)
+    assert (sim["lidar.range_max_m"], sim["depth.width"]) == (10.0, 40)
+
+
+def test_the_input_shaping_sim_keys_are_sim_parameters() -> None:
+    from pic4rl_agents.testing.plan import AGENT_SIM_KEYS
+    from pic4rl_sim.config import parameter_table
+    from pic4rl_sim.engine.robot_specs import load_robot
+
+    names = {spec.name for spec in parameter_table(load_robot("jackal"))}
+    assert set(AGENT_SIM_KEYS) <= names
+    assert not {"world", "world_variant", "seed", "lidar.noise_std_m"} & set(AGENT_SIM_KEYS)
