@@ -98,6 +98,25 @@ WRITTEN_OUTCOMES = (*OUTCOMES, Outcome.ABORTED.value)
 #: Outcomes that say nothing of the agent: out of the success rate's denominator.
 UNJUDGED = (Outcome.ABORTED, Outcome.UNKNOWN)
 
+#: The world set of the BARN challenge's worlds (``barn:<n>``), where the BARN columns apply.
+BARN_WORLDS = "barn"
+
+
+def world_set(world: str | None) -> str | None:
+    """The set a ``world`` fact belongs to: ``KIND`` of the env's ``KIND:VARIANT``
+    (``barn:12`` → ``barn``, ``indoor:0`` → ``indoor``), else the name whole; None unknown."""
+    if not world:
+        return None
+    kind, sep, variant = str(world).rpartition(":")
+    return kind if sep and kind and variant.isdigit() else str(world)
+
+
+def task_name(task: str | None) -> str | None:
+    """The task of a ``task`` fact without its sensor (``goToPose/lidar`` → ``goToPose``):
+    agents on one task are compared whatever they observe through; None unknown."""
+    return str(task).split("/", 1)[0] or None if task else None
+
+
 #: What the metrics assume for a tolerance (m) the facts do not give.
 TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": 0.3, "collision_tolerance_m": 0.05,
                         "safety_margin_m": 0.3}

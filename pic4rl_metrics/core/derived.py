@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..contract import UNJUDGED, EpisodeFacts, Outcome
+from ..contract import BARN_WORLDS, UNJUDGED, EpisodeFacts, Outcome, world_set
 from ..geometry import distance_to_polyline
 from .kinematics import (
     Derivative,
@@ -127,8 +127,13 @@ class Derived:
 
     @cached_property
     def success(self) -> float:
-        """1 or 0; NaN when the end says nothing of the agent (``UNJUDGED``)."""
-        return NAN if self.outcome in UNJUDGED else float(self.outcome is Outcome.GOAL)
+        """1 or 0; NaN when the end says nothing of the agent (``UNJUDGED``) or the episode
+        has no goal (no goal fact, no recorded ``goal`` outcome: person monitoring, a real log
+        without one), where a table heads with the full runs instead."""
+        goal_less = self.facts.goal is None and self.outcome is not Outcome.GOAL
+        if self.outcome in UNJUDGED or goal_less:
+            return NAN
+        return float(self.outcome is Outcome.GOAL)
 
     @cached_property
     def time_s(self) -> float:
@@ -256,6 +261,8 @@ INPUT_TESTS: dict[str, Callable[[Derived], bool]] = {
     "pose": lambda d: True,
     **{role.name: role.present for role in SERIES_ROLES.values()},
     "goal": lambda d: d.facts.goal is not None,
+    "barn_world": lambda d: (d.facts.reference_path_m is not None
+                             or world_set(d.facts.world) == BARN_WORLDS),
     "footprint": lambda d: d.facts.footprint is not None,
     "max_speed": lambda d: d.facts.max_speed_mps is not None,
     "row_centerline": lambda d: d.facts.row_centerline is not None,

@@ -184,10 +184,13 @@ def _barn_time(d: Derived) -> float:
     return d.time_s - float(d.t_s[moved[0]] - d.t_s[0])
 
 
-_register("barn_time_s", "s", "BARN time", quality=True)(_barn_time)
+#: The BARN columns' episodes: a goal in a BARN world (its ``reference_path_m`` fact, or a
+#: ``barn:<n>`` world); NaN elsewhere (an indoor episode, a real log without a goal).
+BARN_NEEDS = ("goal", "barn_world")
+_register("barn_time_s", "s", "BARN time", BARN_NEEDS, quality=True)(_barn_time)
 
 
-@_register("barn_score", "-", "BARN score", ("goal",))
+@_register("barn_score", "-", "BARN score", BARN_NEEDS)
 def _barn_score(d: Derived) -> float:
     reference = d.facts.reference_path_m or d.optimal[0]
     if not reference > 0 or math.isnan(d.success):

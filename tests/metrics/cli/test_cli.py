@@ -53,13 +53,14 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: object) -> tuple[int, str, s
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Two agents' episodes: alpha reaches its goal (5, 0); beta times out (goal (10, 0))."""
+    """Two agents' episodes in a BARN world: alpha reaches its goal (5, 0); beta times out
+    (goal (10, 0))."""
     root = tmp_path_factory.mktemp("cli") / "runs"
     fp = {"radius_m": 0.2}
     write_episode_bag(root / "alpha_ep0", LINE, obstacles=WALL, goal=(5.0, 0.0), outcome="goal",
-                      facts={"agent": "alpha", "footprint": fp})
+                      facts={"agent": "alpha", "footprint": fp, "world": "barn:0"})
     write_episode_bag(root / "beta_ep0", LINE, obstacles=WALL, goal=(10.0, 0.0),
-                      facts={"agent": "beta", "footprint": fp})
+                      facts={"agent": "beta", "footprint": fp, "world": "barn:0"})
     return root
 
 

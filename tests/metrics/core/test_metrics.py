@@ -195,8 +195,22 @@ def test_barn_score_by_hand(line_bags, reference_m: float, expected: float) -> N
 
 
 def test_barn_score_without_a_reference_uses_the_optimal_path(line_bags) -> None:
-    # No reference_path_m: l_ref = the straight 5 m line, OT = 2.5 s.
-    assert _row(line_bags["goal"])["barn_score"] == pytest.approx(2.5 / BARN_AT, abs=EXACT)
+    # A BARN world without reference_path_m: l_ref = the straight 5 m line, OT = 2.5 s.
+    facts, given = EpisodeFacts(world="barn:7"), frozenset({"world"})
+    row = _row(line_bags["goal"], facts=facts, given=given)
+    assert row["barn_score"] == pytest.approx(2.5 / BARN_AT, abs=EXACT)
+
+
+@pytest.mark.parametrize("world", [None, "indoor:0", "barn_like:3"])
+def test_the_barn_columns_are_nan_outside_a_barn_world(line_bags, world: str | None) -> None:
+    """Issue 37.6: an indoor episode or a real log (no world, no reference path) has no BARN
+    score and no BARN time, and a log without a goal has neither even in a BARN world."""
+    given = frozenset({"world"} if world else set())
+    row = _row(line_bags["goal"], facts=EpisodeFacts(world=world), given=given)
+    assert math.isnan(row["barn_score"]) and math.isnan(row["barn_time_s"])
+    no_goal = _row(line_bags["plain"], facts=EpisodeFacts(world="barn:7"),
+                   given=frozenset({"world"}))
+    assert math.isnan(no_goal["barn_score"]) and math.isnan(no_goal["barn_time_s"])
 
 
 def test_heading_error_of_a_goal_to_the_side(tmp_path: Path) -> None:
@@ -312,7 +326,8 @@ def test_collision_inferred_from_scan_margin(tmp_path: Path) -> None:
         tmp_path / "crash", CRASH, obstacles=CRASH_WORLD, facts={"footprint": {"radius_m": 0.2}}
     )
     m = _row(bag)
-    assert m["outcome"] == "collision" and m["success"] == 0.0
+    # no goal: a crash, but no success to speak of (issue 37.6: NaN, not 0)
+    assert m["outcome"] == "collision" and math.isnan(m["success"])
     assert m["obstacle_dist_min_m"] == pytest.approx(WALL_X - 2.85, abs=F32)
     # margin = (3.03 - x) - 0.2 <= 0.05 from x = 2.80 on: one rising edge.
     assert m["collision_count"] == 1.0

@@ -43,7 +43,8 @@ def _bag(tmp_path: Path, name: str, facts: dict[str, object], outcome: str = "go
 
 
 def test_the_shortest_path_fact_makes_spl_and_path_optimality(tmp_path: Path) -> None:
-    row = _row(_bag(tmp_path, "sim", {"shortest_path_m": SHORTEST, "straight_line_m": STRAIGHT}))
+    row = _row(_bag(tmp_path, "sim", {"shortest_path_m": SHORTEST, "straight_line_m": STRAIGHT,
+                                      "world": "barn:0"}))
     assert row["path_length_m"] == pytest.approx(TRAVELLED, abs=1e-9)
     assert row["optimal_path_source"] == "shortest"
     assert row["optimal_path_m"] == pytest.approx(SHORTEST, abs=1e-12)
@@ -66,7 +67,8 @@ def test_without_the_fact_the_straight_line_stands_in(tmp_path: Path) -> None:
     assert row["optimal_path_m"] == pytest.approx(STRAIGHT, abs=1e-12)
     assert row["spl"] == pytest.approx(STRAIGHT / TRAVELLED, abs=1e-9)
     assert row["path_optimality"] == pytest.approx(STRAIGHT / TRAVELLED, abs=1e-9)
-    assert row["barn_score"] == pytest.approx((STRAIGHT / 2.0) / row["barn_time_s"], abs=1e-9)
+    # no BARN world: no BARN columns (issue 37.6)
+    assert math.isnan(row["barn_score"]) and math.isnan(row["barn_time_s"])
 
 
 def test_a_recorded_straight_line_and_an_infinite_shortest_path(tmp_path: Path) -> None:
@@ -81,7 +83,8 @@ def test_a_crash_into_the_wall_scores_zero_spl_and_partial_soft_spl(tmp_path: Pa
     """Straight at the wall, stopped 0.2 m before it: SPL 0; soft-SPL = progress
     1 - d_final / straight = 1 - 2.2 / 4 with weight l*/max(p, l*) = 1 (p = 1.8 m < l*)."""
     crash = from_waypoints([(0.0, 0.0), (1.8, 0.0)], SPEED, dt_s=0.05)
-    row = _row(_bag(tmp_path, "crash", {"shortest_path_m": SHORTEST}, "collision", crash))
+    row = _row(_bag(tmp_path, "crash", {"shortest_path_m": SHORTEST, "world": "barn:0"},
+                    "collision", crash))
     assert row["spl"] == 0.0 and row["barn_score"] == 0.0
     assert row["soft_spl"] == pytest.approx(1 - 2.2 / STRAIGHT, abs=1e-9)
     assert row["path_optimality"] == pytest.approx(SHORTEST / 1.8, abs=1e-9)
