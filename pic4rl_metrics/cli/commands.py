@@ -24,12 +24,12 @@ from ..core.registry import METRICS, REGISTRY
 from ..core.roles import ROLES, Role
 from ..entry import entry_point
 from ..errors import ConfigError, OutputError
-from ..tables.aggregate import aggregate
+from ..tables.groups import BY_CHOICES, parse_by, render_groups
 from ..tables.batch import MetricsResult, compute
 from ..tables.layouts import FORMATS
 from ..tables.paired import render_paired
 from ..tables.results import METRIC_COLUMNS, table_columns
-from ..tables.text import EPISODE_VIEW, render_comparison, render_episodes
+from ..tables.text import EPISODE_VIEW, render_episodes
 from .video import add_video_options, run_video_command
 
 
@@ -100,6 +100,14 @@ def _frames(text: str) -> tuple[str, str]:
         raise argparse.ArgumentTypeError(str(err).strip()) from err
 
 
+def _by(text: str) -> tuple[str, ...]:
+    """compare --by: row-key columns, comma-separated."""
+    try:
+        return parse_by(text)
+    except ConfigError as err:
+        raise argparse.ArgumentTypeError(str(err)) from err
+
+
 def _names(text: str) -> tuple[str, ...]:
     return tuple(n.strip() for n in text.split(",") if n.strip())
 
@@ -122,8 +130,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="agents or runs side by side (the paper's Table 1)")
     _add_input_options(p)
     _add_output_options(p, "table")
-    p.add_argument("--by", default="agent", choices=("agent", "run", "task", "world"),
-                   help="what makes a row")
+    p.add_argument("--by", type=_by, default=("agent",), metavar="COL[,COL...]",
+                   help=f"what makes a row ({', '.join(BY_CHOICES)}; default agent); rows "
+                        "are grouped by task and world set, a header per group, except for "
+                        "what --by names")
     p.add_argument("--with-std", action="store_true", help="cells as mean ± std")
     p.add_argument("--over", choices=("success", "all"), default="success",
                    help="episodes the trajectory-quality columns average: the successful "
@@ -291,10 +301,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                      inputs=[str(b) for b in args.bags], title=args.title)
         print(f"wrote {args.out}", file=sys.stderr)
     elif args.command == "compare":
-        table = aggregate(result.frame, by=args.by, over=args.over,
-                          count_aborted=args.count_aborted)
-        columns = _shown(result, table_columns(result.frame), numeric=True)
-        text = render_comparison(table, args.format, columns=columns, with_std=args.with_std)
+        text = render_groups(
+            result.frame, args.format, by=args.by, over=args.over,
+            count_aborted=args.count_aborted, with_std=args.with_std,
+            columns=lambda rows: _shown(result, table_columns(rows), numeric=True))
         _emit(text, args.out, args.force)
     else:
         _plot(args, result)

@@ -41,9 +41,15 @@ OVER_CHOICES: tuple[str, ...] = ("success", "all")
 #: Count columns of an aggregate, in the order they appear before the statistics:
 #: ``n_averaged`` episodes entered the quality columns' means, as ``over`` says.
 COUNT_COLUMNS: tuple[str, ...] = (
-    "n_episodes", "n_failed", "n_judged", "n_success", "success",
+    "n_episodes", "n_failed", "n_judged", "n_success", "success", "n_full_runs", "full_runs",
     *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", "over",
 )
+#: The headline of a row without a goal (person monitoring): its episodes that ran the time
+#: budget out, ``timeout``, over those that ended so or otherwise (collision, diverged).
+FULL_RUN = Outcome.TIMEOUT.value
+#: The aggregate's column of those, "k/n"; the headline column of a table of such rows.
+FULL_RUNS = "full_runs"
+_RAN = (FULL_RUN, Outcome.COLLISION.value, Outcome.DIVERGED.value)
 
 
 def _missing(value: object) -> bool:
@@ -86,9 +92,12 @@ def aggregate(
 
     Error rows are left out of every statistic and counted in ``n_failed``. Columns:
     ``n_episodes`` (good rows), ``n_failed``, ``n_judged`` (success not NaN), ``n_success``
-    (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), ``n_collision``,
+    (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), for a group
+    without a goal (no success judged, some episode ended) ``n_full_runs`` and ``full_runs``
+    ("k/n": timeouts over the episodes that ended; "–" and 0 elsewhere), ``n_collision``,
     ``n_timeout``, ``n_diverged``, ``n_aborted`` (by outcome), ``n_averaged`` (episodes in the
-    trajectory-quality means: the successful ones for ``over="success"``, every good row for
+    trajectory-quality means: the successful ones (a group without a goal: its full runs) for
+    ``over="success"``, every good row for
     ``"all"``), ``over``, then ``<m>_mean`` and ``<m>_std`` per metric. The std of a single
     value is NaN; a quality column of a group without a success is NaN. Index: the group
     name(s), in order of first appearance. Aborted episodes (cut short, no outcome) are out of
@@ -127,7 +136,7 @@ def aggregate(
     episode_cols = [f"{m}_episodes" for m in EPISODE_COUNTED if m in metrics]
     out = pd.DataFrame(rows, index=index, columns=list(COUNT_COLUMNS) + stat_cols + episode_cols)
     int_cols = [
-        "n_episodes", "n_failed", "n_judged", "n_success",
+        "n_episodes", "n_failed", "n_judged", "n_success", "n_full_runs",
         *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", *episode_cols,
     ]
     return out.astype({c: "int64" for c in int_cols})
@@ -157,9 +166,15 @@ def _group_row(group: pd.DataFrame, outcomes: pd.Series, metrics: list[str],
     n_success = int((judged == 1.0).sum())
     row: dict[str, object] = {"n_judged": len(judged), "n_success": n_success,
                               "success": f"{n_success}/{len(judged)}" if len(judged) else DASH}
+    ran, full = outcomes.isin(_RAN), (outcomes == FULL_RUN).to_numpy()
+    goal_less = not len(judged) and bool(ran.any())
+    row["n_full_runs"] = int(full.sum()) if goal_less else 0
+    row[FULL_RUNS] = f"{int(full.sum())}/{int(ran.sum())}" if goal_less else DASH
     for word in COUNTED_OUTCOMES:
         row[f"n_{word}"] = int((outcomes == word).sum())
-    averaged = group if over == "all" or not quality else group[group["success"] == 1.0]
+    averaged = group
+    if over == "success" and quality:  # the headline's episodes: successes, or full runs
+        averaged = group[full if goal_less else (group["success"] == 1.0).to_numpy()]
     row["n_averaged"] = len(averaged)
     row["over"] = over
     means, stds = group.mean(skipna=True), group.std(ddof=1, skipna=True)

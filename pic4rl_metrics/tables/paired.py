@@ -8,8 +8,10 @@ an error row or an unjudged (aborted, unknown) partner — is left out and count
 
 On the matched couples: the success difference (mean of ``s_A − s_ref``), a percentile
 bootstrap interval that resamples whole start–goal pairs (couples on one pair are not
-independent), and McNemar's exact test on the discordant couples. ``compare --paired`` prints
-these; the HTML report (``html_report``) shows them. Definitions in ``docs/metrics.md``.
+independent), and McNemar's exact test on the discordant couples. Agents are compared within
+one group only (``groups``: one task in one world set; ``grouped_paired``). ``compare
+--paired`` prints these; the HTML report (``html_report``) shows them. Definitions in
+``docs/metrics.md``.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import pandas as pd
 
 from ..errors import ConfigError
 from .aggregate import _error_mask, _group_keys
+from .groups import Group, join, split
 from .layouts import check_format, render_rows
 
 if TYPE_CHECKING:
@@ -184,11 +187,7 @@ def paired_table(frame: pd.DataFrame, pairs: pd.Series,
     if references is None:
         return [paired_diff(frame, pairs, a, r, n_boot=n_boot, seed=seed)
                 for i, a in enumerate(agents) for r in agents[i + 1:]]
-    for ref in references:
-        if ref not in agents:
-            msg = (f"--paired/--reference {ref!r}: no episode of that agent; the agents are "
-                   f"{', '.join(agents) or 'none'}")
-            raise ConfigError(msg)
+    _check_references(agents, references)
     chosen: dict[frozenset[str], tuple[str, str]] = {}
     for ref in references:  # two references against each other: once
         for a in agents:
@@ -196,6 +195,31 @@ def paired_table(frame: pd.DataFrame, pairs: pd.Series,
                 chosen.setdefault(frozenset((a, ref)), (a, ref))
     return [paired_diff(frame, pairs, a, r, n_boot=n_boot, seed=seed)
             for a, r in chosen.values()]
+
+
+def _check_references(agents: Sequence[str], references: Sequence[str]) -> None:
+    for ref in references:
+        if ref not in agents:
+            msg = (f"--paired/--reference {ref!r}: no episode of that agent; the agents are "
+                   f"{', '.join(agents) or 'none'}")
+            raise ConfigError(msg)
+
+
+def grouped_paired(frame: pd.DataFrame, pairs: pd.Series,
+                   references: Sequence[str] | None = None, *, n_boot: int = N_BOOT,
+                   seed: int = 0) -> list[tuple[Group, list[PairedDiff]]]:
+    """``paired_table`` within each group of ``frame`` (``groups.split``: one task in one
+    world set), never across two: each group's agents against the ``references`` it has
+    (``ConfigError`` for a reference with no episode at all)."""
+    if references is not None:
+        _check_references(agent_names(frame), references)
+    out = []
+    for group in split(frame):
+        rows = frame.loc[list(group.rows)]
+        mine = None if references is None else [r for r in references if r in agent_names(rows)]
+        out.append((group, paired_table(rows, pairs.loc[rows.index], mine, n_boot=n_boot,
+                                        seed=seed)))
+    return out
 
 
 def seed_spread(frame: pd.DataFrame) -> pd.DataFrame:
@@ -252,13 +276,21 @@ def render_paired(result: MetricsResult, references: Sequence[str], fmt: str, *,
     text, markdown, CSV, LaTeX or JSON (numbers as fractions), with a note on what the
     columns mean below the text tables."""
     check_format(fmt)
-    diffs = paired_table(result.frame, pair_labels(result), references, n_boot=n_boot,
-                         seed=seed)
+    grouped = grouped_paired(result.frame, pair_labels(result), references, n_boot=n_boot,
+                             seed=seed)
+    shown = [(g, diffs) for g, diffs in grouped if diffs] or grouped[:1]
     if fmt == "json":
-        return json.dumps([paired_record(d) for d in diffs], indent=2, allow_nan=False) + "\n"
-    text = render_rows(PAIRED_COLUMNS, [paired_cells(d) for d in diffs], fmt)
+        parts = [(g, json.dumps([paired_record(d) for d in diffs], allow_nan=False))
+                 for g, diffs in shown]
+    else:
+        parts = [(g, render_rows(PAIRED_COLUMNS, [paired_cells(d) for d in diffs], fmt))
+                 for g, diffs in shown]
+    text = join(parts, fmt) if parts else render_rows(PAIRED_COLUMNS, [], fmt)
+    if fmt == "json" and len(parts) == 1:  # one group: the records as they always were
+        text = json.dumps(json.loads(text), indent=2, allow_nan=False) + "\n"
     if fmt in ("table", "markdown"):
-        note = (f"On episodes sharing a start–goal pair and world; difference: success minus "
+        note = (f"Within one task and world set, on episodes sharing a start–goal pair and "
+                f"world; difference: success minus "
                 f"the reference's; CI: percentile bootstrap over pairs ({n_boot} resamples); "
                 "b, c: couples only the agent / only the reference succeeded in; McNemar p: "
                 f"exact, two-sided; {NOT_DISTINGUISHABLE} unless p < {ALPHA} and the CI "

@@ -19,7 +19,7 @@ import pandas as pd
 
 from ..core.registry import METRICS
 from ..errors import ConfigError
-from .aggregate import DASH, EPISODE_COUNTED
+from .aggregate import DASH, EPISODE_COUNTED, FULL_RUNS
 from .layouts import check_format, csv_text, fixed_width, latex_escape, markdown, tabular
 from .results import ERROR_COLUMN, TABLE1_COLUMNS
 
@@ -124,6 +124,8 @@ def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None
 
 def _check_columns(agg: pd.DataFrame, columns: Sequence[str]) -> None:
     for col in columns:
+        if col == FULL_RUNS and "full_runs" in agg.columns:
+            continue
         if col not in METRICS:
             close = difflib.get_close_matches(col, list(METRICS), n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
@@ -152,12 +154,19 @@ OUTCOME_COUNTS: dict[str, str] = {"n_success": "goals", "n_collision": "collisio
 
 def _unit(col: str) -> str:
     """A comparison column's unit: episodes for an ``EPISODE_COUNTED`` metric."""
+    if col == FULL_RUNS:
+        return "n/total"
     return "episodes" if col in EPISODE_COUNTED else METRICS[col].unit
 
 
+def _tex_label(col: str) -> str:
+    """A comparison column's label in LaTeX (``full runs`` for a task without a goal)."""
+    return "full runs" if col == FULL_RUNS else METRICS[col].label
+
+
 def _comparison_cell(row: pd.Series, col: str, with_std: bool, pm: str) -> str | None:
-    if col == "success":
-        return _success_cell(row["success"])
+    if col in ("success", FULL_RUNS):
+        return _success_cell(row[col])
     if col in EPISODE_COUNTED:
         value = row.get(f"{col}_episodes")
         return None if _is_missing(value) else str(int(value))
@@ -175,15 +184,16 @@ def footnote(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
 
 
 def _over_note(agg: pd.DataFrame, columns: Sequence[str]) -> str | None:
-    quality = [c for c in columns if METRICS[c].quality]
+    quality = [c for c in columns if c in METRICS and METRICS[c].quality]
     if "over" not in agg.columns or not quality or agg.empty:
         return None
     labels = ", ".join(plain_text(METRICS[c].label) for c in quality)
     if agg["over"].iloc[0] == "all":
         return "All columns: mean over every judged episode of the row (--over all)."
     counts = ", ".join(str(int(n)) for n in agg["n_averaged"])
+    which = "full runs" if FULL_RUNS in columns else "successful episodes"
     return (
-        f"{labels}: mean over the row's successful episodes only (n = {counts}); the other "
+        f"{labels}: mean over the row's {which} only (n = {counts}); the other "
         "columns over every judged episode. --over all averages every episode."
     )
 
@@ -239,7 +249,7 @@ def render_comparison(
          *(_comparison_cell(row, c, with_std, pm) for c in columns)]
         for name, (_, row) in zip(names, agg.iterrows())
     ]
-    labels = [*counts.values(), *(plain_text(METRICS[c].label) for c in columns)]
+    labels = [*counts.values(), *(plain_text(_tex_label(c)) for c in columns)]
     units = [*(["[episodes]"] * len(counts)), *(f"[{plain_text(_unit(c))}]" for c in columns)]
     right = [False] + [True] * len(labels)
     below = f"\n{note}\n" if note is not None else ""
@@ -255,7 +265,7 @@ def render_comparison(
         return csv_text(header, rows)
 
     headers = [["", *(latex_escape(c) for c in counts.values()),
-                *(METRICS[c].label for c in columns)],
+                *(_tex_label(c) for c in columns)],
                ["", *(["[episodes]"] * len(counts)), *(f"[{_unit(c)}]" for c in columns)]]
     return _comparison_latex(rows, headers, caption=caption, label=label, note=note)
 
@@ -268,8 +278,8 @@ def _comparison_json(agg: pd.DataFrame, names: list[str], first: str, columns: l
         rec: dict[str, object] = {first: name}
         rec.update({label: int(row[c]) for c, label in counts.items()})
         for col in columns:
-            if col == "success":
-                rec[col] = _success_cell(row["success"])
+            if col in ("success", FULL_RUNS):
+                rec[col] = _success_cell(row[col])
                 continue
             if col in EPISODE_COUNTED:
                 rec[col] = _json_value(row.get(f"{col}_episodes"))
