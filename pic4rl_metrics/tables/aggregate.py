@@ -41,7 +41,8 @@ OVER_CHOICES: tuple[str, ...] = ("success", "all")
 #: Count columns of an aggregate, in the order they appear before the statistics:
 #: ``n_averaged`` episodes entered the quality columns' means, as ``over`` says.
 COUNT_COLUMNS: tuple[str, ...] = (
-    "n_episodes", "n_failed", "n_judged", "n_success", "success", "n_full_runs", "full_runs",
+    "n_episodes", "n_failed", "n_judged", "n_success", "success", "n_full_runs", "n_ran",
+    "full_runs",
     *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", "over",
 )
 #: The headline of a row without a goal (person monitoring): its episodes that ran the time
@@ -93,8 +94,9 @@ def aggregate(
     Error rows are left out of every statistic and counted in ``n_failed``. Columns:
     ``n_episodes`` (good rows), ``n_failed``, ``n_judged`` (success not NaN), ``n_success``
     (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), for a group
-    without a goal (no success judged, some episode ended) ``n_full_runs`` and ``full_runs``
-    ("k/n": timeouts over the episodes that ended; "–" and 0 elsewhere), ``n_collision``,
+    without a goal (no success judged, some episode ended) ``n_full_runs``, ``n_ran`` and
+    ``full_runs`` ("k/n": timeouts over the episodes that ended in a timeout, a collision or
+    diverged; "–" and 0 elsewhere), ``n_collision``,
     ``n_timeout``, ``n_diverged``, ``n_aborted`` (by outcome), ``n_averaged`` (episodes in the
     trajectory-quality means: the successful ones (a group without a goal: its full runs) for
     ``over="success"``, every good row for
@@ -136,7 +138,7 @@ def aggregate(
     episode_cols = [f"{m}_episodes" for m in EPISODE_COUNTED if m in metrics]
     out = pd.DataFrame(rows, index=index, columns=list(COUNT_COLUMNS) + stat_cols + episode_cols)
     int_cols = [
-        "n_episodes", "n_failed", "n_judged", "n_success", "n_full_runs",
+        "n_episodes", "n_failed", "n_judged", "n_success", "n_full_runs", "n_ran",
         *(f"n_{o}" for o in COUNTED_OUTCOMES), "n_averaged", *episode_cols,
     ]
     return out.astype({c: "int64" for c in int_cols})
@@ -169,6 +171,7 @@ def _group_row(group: pd.DataFrame, outcomes: pd.Series, metrics: list[str],
     ran, full = outcomes.isin(_RAN), (outcomes == FULL_RUN).to_numpy()
     goal_less = not len(judged) and bool(ran.any())
     row["n_full_runs"] = int(full.sum()) if goal_less else 0
+    row["n_ran"] = int(ran.sum()) if goal_less else 0
     row[FULL_RUNS] = f"{int(full.sum())}/{int(ran.sum())}" if goal_less else DASH
     for word in COUNTED_OUTCOMES:
         row[f"n_{word}"] = int((outcomes == word).sum())

@@ -1,7 +1,7 @@
 """``pic4rl-metrics report``: one self-contained HTML page of a benchmark, from its bags alone.
 
 In order: the leaderboard (``aggregate``'s counts and means, the Wilson interval), the paired
-comparisons on shared start–goal pairs (``paired``), how each agent fails (outcome counts, the
+comparisons on shared start–goal pairs (``paired``) — both per task and world set (``groups``), how each agent fails (outcome counts, the
 ends of its failed episodes on the scan-built map), each pair's trajectories on one small map
 (``report_maps``), every episode (sortable, filterable, linked to its bag and video), the bags
 that could not be read, and the inputs (folders, config hashes, version, date). The page's
@@ -15,7 +15,7 @@ import html
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -27,10 +27,11 @@ from .. import atomic
 from ..contract import Outcome
 from ..core.registry import METRICS
 from ..errors import ConfigError, OutputError
-from ..tables.aggregate import _group_keys, aggregate, wilson_interval
+from ..tables.aggregate import FULL_RUNS, _group_keys, aggregate, wilson_interval
 from ..tables.batch import MetricsResult
+from ..tables.groups import Group, headline, split
 from ..tables.paired import N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, pair_labels, paired_cells
-from ..tables.paired import paired_table, seed_spread
+from ..tables.paired import grouped_paired, seed_spread
 from ..tables.results import ROW_COLUMNS
 from ..tables.text import plain_text, short_bag
 from . import html_page as hp
@@ -58,15 +59,42 @@ def _label(col: str) -> str:
     return f"{plain_text(METRICS[col].label)}" + (f" [{unit}]" if unit and unit != "–" else "")
 
 
+def _per_group(frame: pd.DataFrame, section: Callable[[pd.DataFrame, int], str],
+               groups: list[Group] | None = None) -> str:
+    """``section(rows, table_id)`` for each group of ``frame`` (one task in one world set),
+    under a heading per group when there are several; table ids ``<id>``, ``<id>-2``, ..."""
+    groups = split(frame) if groups is None else groups
+    return "".join((f"<h3>{html.escape(g.label)}</h3>" if len(groups) > 1 else "")
+                   + section(frame.loc[list(g.rows)], k) for k, g in enumerate(groups, 1))
+
+
+def _id(name: str, k: int) -> str:
+    return name if k == 1 else f"{name}-{k}"
+
+
 def _leaderboard(frame: pd.DataFrame) -> str:
+    note = ("<p class=note>One table per task and world set. Success is k/n over the judged "
+            "episodes (aborted and unknown ones are out of n and counted apart); a task "
+            "without a goal heads with its full runs (timeouts over the episodes that ended); "
+            "the interval is Wilson's score interval. Time and path are means over each "
+            "agent's successful episodes (full runs), SPL over every judged one; a column "
+            "shows where some episode has it. Collisions, timeouts, aborted: episodes that "
+            "ended so; unreadable: bags of the agent that could not be judged (those whose "
+            "agent is unknown are listed below). Click a header to sort.</p>")
+    return note + _per_group(frame, _board)
+
+
+def _board(frame: pd.DataFrame, index: int) -> str:
     agg = aggregate(frame, by="agent")
+    full = headline(agg) == FULL_RUNS
     task = [c for c in TASK_COLUMNS if f"{c}_mean" in agg and agg[f"{c}_mean"].notna().any()]
-    means = [c for c in (*BOARD_MEANS, *task) if f"{c}_mean" in agg]
-    header = ["agent", "episodes", "success", "Wilson 95% CI", *(_label(c) for c in means),
-              "collisions", "timeouts", "aborted", "unreadable"]
+    means = [c for c in (*BOARD_MEANS, *task) if c in frame and frame[c].notna().any()]
+    header = ["agent", "episodes", "full runs" if full else "success", "Wilson 95% CI",
+              *(_label(c) for c in means), "collisions", "timeouts", "aborted", "unreadable"]
     rows = []
     for name, r in agg[agg["n_episodes"] > 0].iterrows():
-        k, n = int(r["n_success"]), int(r["n_judged"])
+        k, n = (int(r["n_full_runs"]), int(r["n_ran"])) if full else (int(r["n_success"]),
+                                                                       int(r["n_judged"]))
         low, high = wilson_interval(k, n)
         rate = k / n if n else math.nan
         rows.append((rate, [
@@ -77,39 +105,42 @@ def _leaderboard(frame: pd.DataFrame) -> str:
             hp.number(r["n_collision"], 0), hp.number(r["n_timeout"], 0),
             hp.number(r["n_aborted"], 0), hp.number(r["n_failed"], 0)]))
     rows.sort(key=lambda item: -1.0 if math.isnan(item[0]) else item[0], reverse=True)
-    note = ("<p class=note>Success is k/n over the judged episodes (aborted and unknown ones "
-            "are out of n and counted apart); the interval is Wilson's score interval. Time "
-            "and path are means over each agent's successful episodes, SPL over every judged "
-            "one. Collisions, timeouts, aborted: episodes that ended so; unreadable: bags of the "
-            "agent that could not be judged (those whose agent is unknown are listed below). "
-            "Click a header to sort.</p>")
-    return note + hp.table("leaderboard", header, [r for _, r in rows])
+    return hp.table(_id("leaderboard", index), header, [r for _, r in rows])
 
 
 def _paired(frame: pd.DataFrame, pairs: pd.Series, references: Sequence[str] | None,
             n_boot: int) -> str:
-    diffs = paired_table(frame, pairs, references, n_boot=n_boot)
-    rows = []
-    for d in diffs:
-        cells = paired_cells(d)
-        sorts = [None, None, d.pairs, d.couples, d.unpaired, d.success, d.reference_success,
-                 d.difference, d.ci_low, d.b, d.c, d.p_value, None]
-        rows.append([hp.text(c) if s is None else hp.shown_as(c or "–", s)
-                     for c, s in zip(cells, sorts)])
+    grouped = grouped_paired(frame, pairs, references, n_boot=n_boot)
+
+    def section(rows: pd.DataFrame, k: int) -> str:
+        cells = [(paired_cells(d), [None, None, d.pairs, d.couples, d.unpaired, d.success,
+                                    d.reference_success, d.difference, d.ci_low, d.b, d.c,
+                                    d.p_value, None]) for d in grouped[k - 1][1]]
+        table = [[hp.text(c) if s is None else hp.shown_as(c or "–", s) for c, s in zip(*row)]
+                 for row in cells]
+        body = (hp.table(_id("paired", k), PAIRED_COLUMNS, table) if table else
+                "<p>No comparison: fewer than two agents (or no reference) here.</p>")
+        return body + _spread(rows, k)
+
     good = frame["error"].fillna("") == ""
     lone = int((pairs.isna() & good).sum())
     note = (
-        "<p class=note>Each agent against each reference on the episodes that share a "
-        "start–goal pair and world: the i-th episode of one on a pair is matched with the i-th "
-        "of the other. <b>difference</b>: success of the agent minus the reference's, over "
-        "the matched couples, in percentage points; <b>95% CI</b>: percentile bootstrap "
-        f"({n_boot} resamples of whole start–goal pairs); <b>b</b>, <b>c</b>: couples only "
-        "the agent, only the reference succeeded in; <b>McNemar p</b>: exact two-sided test on "
-        f"those. <b>{NOT_DISTINGUISHABLE}</b> unless p &lt; 0.05 and the interval excludes 0. "
+        "<p class=note>Within one task and world set, each agent against each reference on "
+        "the episodes that share a start–goal pair and world: the i-th episode of one on a "
+        "pair is matched with the i-th of the other. <b>difference</b>: success of the agent "
+        "minus the reference's, over the matched couples, in percentage points; <b>95% "
+        f"CI</b>: percentile bootstrap ({n_boot} resamples of whole start–goal pairs); "
+        "<b>b</b>, <b>c</b>: couples only the agent, only the reference succeeded in; "
+        "<b>McNemar p</b>: exact two-sided test on those. "
+        f"<b>{NOT_DISTINGUISHABLE}</b> unless p &lt; 0.05 and the interval excludes 0. "
         "<b>unpaired</b>: episodes (agent + reference) without a partner, left out. "
         f"Episodes without a start–goal pair in their facts: {lone}.</p>")
-    body = hp.table("paired", PAIRED_COLUMNS, rows) if rows else "<p>Fewer than two agents.</p>"
-    spread = seed_spread(frame)
+    return note + _per_group(frame, section, [g for g, _ in grouped])
+
+
+def _spread(frame: pd.DataFrame, k: int) -> str:
+    """The spread of each agent's success rate between its runs, when some has two."""
+    spread, body = seed_spread(frame), ""
     if len(spread):
         srows = [[hp.text(r.agent), hp.number(r.runs, 0),
                   hp.text(", ".join(f"{100 * v:.0f}%" for v in r.rates)),
@@ -118,9 +149,9 @@ def _paired(frame: pd.DataFrame, pairs: pd.Series, references: Sequence[str] | N
         body += ("<h3>Spread between runs (seeds, repetitions)</h3><p class=note>Success rate "
                  "of each run of an agent; a difference between agents smaller than this "
                  "spread is seed noise.</p>" + hp.table(
-                     "spread", ["agent", "runs", "success per run", "mean", "std", "max − min"],
-                     srows))
-    return note + body
+                     _id("spread", k), ["agent", "runs", "success per run", "mean", "std",
+                                        "max − min"], srows))
+    return body
 
 
 def _outcome_counts(frame: pd.DataFrame, names: pd.Series) -> str:
