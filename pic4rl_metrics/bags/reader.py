@@ -22,6 +22,7 @@ from rosbags.interfaces import Connection
 from tqdm import tqdm
 
 from ..contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
+from ..core.plausibility import check_one_track
 from ..core.roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from ..core.scan_summary import ScanStream
 from ..core.series import Episode, PoseSeries
@@ -244,6 +245,7 @@ def read_episode(
             warnings: list[str] = list(bag.notes)
             pose, offset = _pose(bag, topic_map, warnings)
             merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
+            check_one_track(pose, merged.max_speed_mps, bag.pose_topic)
             with bag_errors(path):
                 bag.read_scans(opened, merged, full_scans)
             inputs = {name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]

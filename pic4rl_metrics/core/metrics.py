@@ -17,7 +17,7 @@ from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
 from .series import Episode
-from .timebase import PLAUSIBLE_SPEED_MPS
+from .plausibility import PLAUSIBLE_ACC_MPS2, PLAUSIBLE_SPEED_MPS, PLAUSIBLE_YAW_RATE_RADPS
 
 #: Below these the robot counts as standing still (m/s, rad/s).
 STILL_SPEED_MPS = 0.05
@@ -31,10 +31,6 @@ MIN_PATH_M = 0.01
 BARN_SPEED_MPS = 2.0
 BARN_MOVED_M = 0.1
 BARN_CLIP = (2.0, 8.0)
-#: Beyond these (and ``timebase.PLAUSIBLE_SPEED_MPS``) no ground robot moves: a series that
-#: exceeds one is flagged as damaged.
-PLAUSIBLE_YAW_RATE_RADPS = 50.0
-PLAUSIBLE_ACC_MPS2 = 100.0
 
 
 def _finite(values: np.ndarray) -> np.ndarray:

@@ -10,7 +10,8 @@ One rule guards the time of every topic, here and nowhere else: a sensor topic r
 two publishers, or whose stamps jump back more than once, holds two sources (two simulators or
 robots in one ROS domain) and the bag is refused as corrupt (``CorruptBagError``); a single
 jump back is the clock's, repaired in arrival order so that no difference spans it
-(``repair_clock``, docs/metrics.md "Clock jumps and mixed sources").
+(``repair_clock``, docs/metrics.md "Clock jumps and mixed sources"). What the pose series
+then shows (two tracks, speeds no robot reaches) is judged by ``plausibility``.
 """
 
 from __future__ import annotations
@@ -20,15 +21,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import CorruptBagError
+from .plausibility import PLAUSIBLE_SPEED_MPS
 from .scan_summary import ScanStream, ScanSummary
 from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
 
 #: A header stamp this far (ns) behind the one received before it is no reordered message:
 #: the topic's clock jumped back, or a second source publishes it.
 JUMP_NS = 500_000_000
-#: Beyond this no ground robot moves (m/s): a series that exceeds it is flagged as damaged, and
-#: a pose that would cross a clock jump faster is another robot's.
-PLAUSIBLE_SPEED_MPS = 20.0
 
 
 class Samples:
