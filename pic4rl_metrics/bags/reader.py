@@ -77,11 +77,11 @@ class _BagContents:
         if self.topics["tf_static"].rows and self._scans:
             self._frames(bag, conns)
 
-    def read_scans(self, bag: OpenBag, facts: EpisodeFacts, full: bool) -> None:
+    def read_scans(self, bag: OpenBag, facts: EpisodeFacts, full: bool, sample: int = 0) -> None:
         """Read the scan topic, reduced to what the metrics use (``ScanStream``; whole scans
-        too when ``full``)."""
+        too when ``full``, at most ``sample`` of them when that is given)."""
         if self._scans:
-            self.topics["scan"].rows = ScanStream(facts, full=full)
+            self.topics["scan"].rows = ScanStream(facts, full=full, sample=sample)
             self._read(bag, self._scans)
         self._bar.close()
 
@@ -226,12 +226,15 @@ def read_episode(
     *,
     full_scans: bool = False,
     progress: bool = False,
+    scan_sample: int = 0,
 ) -> Episode:
     """Read the bag at ``path`` (see ``bagfile``) into an ``Episode``.
 
     ``facts``/``given``: values from the command line or a topic map, overriding the bag's.
     The scan is kept as what the metrics use of it (``ScanSummary``); ``full_scans`` keeps
-    every beam (``ScanSeries``, for plots and videos). ``progress``: a bar on stderr for a
+    every beam (``ScanSeries``, for plots and videos); ``scan_sample`` keeps, beside the
+    summary, at most that many whole scans evenly spread over the bag (``ScanSummary.sample``,
+    for maps; memory bounded in the bag's length). ``progress``: a bar on stderr for a
     long bag. Raises ``BagError`` (``CorruptBagError`` for a bag mixing two sources),
     ``TopicError`` or ``EpisodeError`` naming the bag and the problem.
     """
@@ -247,7 +250,7 @@ def read_episode(
             merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
             check_one_track(pose, merged.max_speed_mps, bag.pose_topic)
             with bag_errors(path):
-                bag.read_scans(opened, merged, full_scans)
+                bag.read_scans(opened, merged, full_scans, scan_sample)
             inputs = {name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]
                       for name, role in SERIES_ROLES.items()}
     except CorruptBagError as err:

@@ -188,9 +188,12 @@ def _inputs(args: argparse.Namespace) -> tuple[TopicMap, EpisodeFacts, frozenset
 def _run(args: argparse.Namespace) -> MetricsResult:
     topic_map, facts, given = _inputs(args)
     progress = sys.stderr.isatty() if args.progress is None else args.progress
+    sample = 0
+    if args.command == "report":  # its maps draw a few scans: only those are kept
+        from ..viz.report_maps import SKETCH_SCANS as sample
     return compute(args.bags, topic_map=topic_map, facts=facts, given=given,
                    jobs=args.jobs, progress=progress, metrics=args.metrics,
-                   full_scans=args.command in ("plot", "report"))  # their maps draw returns
+                   full_scans=args.command == "plot", scan_sample=sample)
 
 
 def _shown(result: MetricsResult, default: Sequence[str], *, numeric: bool) -> list[str]:

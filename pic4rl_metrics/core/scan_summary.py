@@ -6,8 +6,9 @@ nearest valid return, the sum and count of its valid returns, its footprint marg
 vineyard episode without a centre line, the crop rows it sees (``rows``); ``summarize``
 computes them from a chunk of whole scans (``ScanSeries``), with the footprint and LiDAR mount
 of the episode's facts. The reader summarizes its scans in chunks as it reads them
-(``ScanStream``) and keeps the beams only when asked (plots, videos); ``Derived`` summarizes an
-episode built in memory the same way, so both give the same numbers.
+(``ScanStream``) and keeps the beams only when asked (plots, videos), or a bounded, evenly
+spread sample of whole scans beside the summary (``sample``: the report's maps); ``Derived``
+summarizes an episode built in memory the same way, so both give the same numbers.
 """
 
 from __future__ import annotations
@@ -73,6 +74,9 @@ class ScanSummary:
     lanes: np.ndarray | None  # (n, 4) crop rows seen (``rows.lane_sides``), None: not fitted
     footprint: Footprint | None = None
     mount: Mount | None = None
+    #: A few whole scans evenly spread over the episode (``ScanStream(sample=n)``), sorted by
+    #: stamp, for drawing maps; not indexed like the arrays above. None: not kept.
+    sample: ScanSeries | None = None
 
     def __len__(self) -> int:
         return len(self.t_ns)
@@ -140,10 +144,16 @@ def scan_block(rows: Sequence[Any], t_ns: Sequence[int]) -> ScanSeries:
 
 class ScanStream:
     """A scan topic's payloads as the reader appends them (``append``, like a list): reduced
-    to their ``ScanSummary`` every ``CHUNK`` scans, and kept whole too when ``full``."""
+    to their ``ScanSummary`` every ``CHUNK`` scans, and kept whole too when ``full``; with
+    ``sample`` (and not ``full``), at most that many whole scans are kept beside the summary
+    (``ScanSummary.sample``), evenly spread over the stream: every ``stride``-th payload is
+    kept, and the stride doubles (every other kept one dropped) whenever more than twice
+    ``sample`` are held, so memory stays bounded whatever the log's length."""
 
-    def __init__(self, facts: EpisodeFacts, *, full: bool = False) -> None:
-        self.facts, self.full = facts, full
+    def __init__(self, facts: EpisodeFacts, *, full: bool = False, sample: int = 0) -> None:
+        self.facts, self.full, self.sample = facts, full, max(0, sample)
+        self._kept: list[tuple[int, Any]] = []  # (arrival index, payload) of the sample
+        self._stride = 1
         self.width = 0  # the most beams of a scan
         self._count = 0
         self._pending: list[Any] = []
@@ -154,6 +164,10 @@ class ScanStream:
         return self._count
 
     def append(self, row: Any) -> None:
+        if self.sample and not self._count % self._stride:
+            self._kept.append((self._count, row))
+            if len(self._kept) > 2 * self.sample:
+                self._kept, self._stride = self._kept[::2], 2 * self._stride
         self._pending.append(row)
         self._count += 1
         if len(self._pending) >= CHUNK:
@@ -185,4 +199,16 @@ class ScanStream:
             rmax = np.concatenate([b.range_max for b in self._blocks])
             return ScanSeries(t_ns[keep], ranges[keep], angles[keep], rmin[keep], rmax[keep])
         summary = concat(self._parts)
-        return replace(summary.take(keep), t_ns=np.asarray(t_ns, dtype=np.int64)[keep])
+        t_ns = np.asarray(t_ns, dtype=np.int64)
+        return replace(summary.take(keep), t_ns=t_ns[keep], sample=self._sample(t_ns, keep))
+
+    def _sample(self, t_ns: np.ndarray, keep: np.ndarray) -> ScanSeries | None:
+        """The kept payloads among ``keep`` (in its order): every other one until at most
+        ``sample`` remain, so they stay evenly spaced (between half of ``sample`` and it)."""
+        payload = dict(self._kept)
+        chosen = np.asarray(keep)[np.isin(keep, list(payload))]
+        if not len(chosen):
+            return None
+        while len(chosen) > self.sample:
+            chosen = chosen[::2]
+        return scan_block([payload[int(i)] for i in chosen], t_ns[chosen])

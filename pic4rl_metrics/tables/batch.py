@@ -105,14 +105,16 @@ def judge_bag(
     metrics: Sequence[str] | None = None,
     full_scans: bool = False,
     progress: bool = False,
+    scan_sample: int = 0,
 ) -> BagResult:
     """Read and judge one bag (all metrics, or the named ones); every failure is caught and
     described, never raised. ``full_scans``: the episode keeps every beam (plots, videos);
+    ``scan_sample``: at most that many whole scans beside the summary (maps);
     ``progress``: a bar on stderr while a long bag is read."""
     try:
         selected = REGISTRY.select(metrics)
         episode = read_episode(bag, topic_map, facts, given, full_scans=full_scans,
-                               progress=progress)
+                               progress=progress, scan_sample=scan_sample)
         judged = compute_metrics(episode, selected, explicit=metrics is not None)
         return BagResult(str(bag), episode, judged)
     except MetricsError as err:
@@ -124,7 +126,7 @@ def judge_bag(
 
 def _judge_args(
     args: tuple[Path, TopicMap | None, EpisodeFacts | None, frozenset[str], Sequence[str] | None,
-                bool, bool],
+                bool, bool, int],
 ) -> BagResult:
     return judge_bag(*args)
 
@@ -147,13 +149,15 @@ def compute(
     progress: bool = False,
     metrics: Sequence[str] | None = None,
     full_scans: bool = False,
+    scan_sample: int = 0,
 ) -> MetricsResult:
     """Judge every bag named by ``inputs`` (see ``inputs.discover``), ``jobs`` at a time (0:
     one per core). ``metrics``: the columns to compute (default: every registered metric;
     ``outcome`` and ``success`` always), else ``topic_map.metrics``.
 
     Inputs that name no bag become error rows too. ``progress`` shows a bar on stderr (and,
-    one bag at a time, one per long bag). ``full_scans``: the episodes keep every beam.
+    one bag at a time, one per long bag). ``full_scans``: the episodes keep every beam;
+    ``scan_sample``: they keep at most that many whole scans each, evenly spread (maps).
     Unknown metric names or a negative ``jobs`` raise ``ConfigError``.
     """
     jobs = resolve_jobs(jobs)
@@ -163,7 +167,8 @@ def compute(
     found = discover(inputs)
     unmatched = [BagResult(item, None, None, f"{item!r}: {why}") for item, why in found.unmatched]
     chosen = names if metrics is not None else None
-    work = [(bag, topic_map, facts, given, chosen, full_scans, progress and jobs == 1)
+    work = [(bag, topic_map, facts, given, chosen, full_scans, progress and jobs == 1,
+             scan_sample)
             for bag in found.bags]
     results = run_parallel(_judge_args, work, jobs=jobs, progress=progress, what="bags")
     return MetricsResult(tuple(unmatched + results), result_columns(names), found.skipped)

@@ -22,6 +22,7 @@ from .. import atomic
 from ..contract import EpisodeFacts, Outcome
 from ..core.kinematics import differentiate, seconds, velocity_series
 from ..core.registry import METRICS
+from ..core.scan_summary import ScanSummary
 from ..core.series import Episode, ScanSeries
 from ..errors import ConfigError
 from ..geometry import Mount
@@ -39,6 +40,18 @@ END_STYLE: dict[Outcome, tuple[str, str, str]] = {
 OBSTACLE_COLOR = "0.6"
 
 
+def drawn_scans(episode: Episode) -> ScanSeries | None:
+    """The whole scans a map of ``episode`` can draw: every scan (``full_scans``), else the
+    sample kept beside the summary (``scan_sample``); None without a scan topic."""
+    scan = episode.scan
+    if isinstance(scan, ScanSummary):
+        if scan.sample is None:
+            raise ValueError(f"{str(episode.bag)!r}: its scans were kept as per-scan figures "
+                             "only; read it with full_scans=True or scan_sample=N to draw them")
+        return scan.sample
+    return scan
+
+
 def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np.ndarray,
                                                                      np.ndarray]:
     """Returns of every ``every``-th scan in the pose frame (m): the scans' rows, and x and y
@@ -48,15 +61,11 @@ def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np
     angle), its beams by the LiDAR's mount (``facts.scan_mount``, the base origin when
     unknown); scans outside the pose time range are dropped rather than extrapolated. The
     still plots and the episode videos build their map from these. The episode needs its
-    whole scans (``read_episode(..., full_scans=True)``), else ``ValueError``.
+    whole scans or a sample of them (``drawn_scans``: rows index those), else ``ValueError``.
     """
     if every < 1:
         raise ValueError(f"every={every!r} must be >= 1")
-    scan, pose = episode.scan, episode.pose
-    if scan is not None and not isinstance(scan, ScanSeries):
-        msg = (f"{str(episode.bag)!r}: its scans were kept as per-scan figures only; read it "
-               "with read_episode(..., full_scans=True) to draw their returns")
-        raise ValueError(msg)
+    scan, pose = drawn_scans(episode), episode.pose
     none = (np.zeros(0, dtype=np.intp), np.zeros((0, 0)), np.zeros((0, 0)))
     if scan is None or len(scan) == 0 or len(pose) == 0:
         return none

@@ -20,7 +20,7 @@ from PIL import Image
 
 from ..core.series import Episode
 from . import raster
-from .plots import scan_hits_world
+from .plots import drawn_scans, scan_hits_world
 from .raster import COLORS, View
 
 #: One colour per agent, in order (matplotlib's tab10).
@@ -34,6 +34,9 @@ END_COLORS: dict[str, tuple[int, int, int]] = {
     "diverged": (148, 103, 189), "aborted": (150, 150, 150), "unknown": (90, 90, 90),
 }
 MAP_SIZE = (280, 280)
+#: At most this many scans of one episode are drawn (evenly spread): the report reads no more
+#: (``compute(..., scan_sample=SKETCH_SCANS)``), so its memory is bounded in a log's length.
+SKETCH_SCANS = 60
 #: At most this many scan returns of one episode enter its sketch (evenly subsampled).
 SKETCH_POINTS = 1500
 SKETCH_POSES = 400
@@ -66,7 +69,8 @@ def sketch(episode: Episode, outcome: str) -> Sketch:
     pose = episode.pose
     path = _even(np.column_stack([np.asarray(pose.x, float), np.asarray(pose.y, float)]),
                  SKETCH_POSES)
-    every = max(1, len(episode.scan) // 60) if episode.scan is not None else 1
+    scans = drawn_scans(episode)
+    every = max(1, len(scans) // SKETCH_SCANS) if scans is not None else 1
     _, px, py = scan_hits_world(episode, every=every)
     keep = np.isfinite(px) & np.isfinite(py)
     returns = _even(np.column_stack([px[keep], py[keep]]), SKETCH_POINTS)
