@@ -38,6 +38,7 @@ END_STYLE: dict[Outcome, tuple[str, str, str]] = {
     Outcome.UNKNOWN: ("D", "0.4", "end: unknown"),
 }
 OBSTACLE_COLOR = "0.6"
+FORWARD_SPEED_LABEL = "forward v [m/s]"  # the body-frame vx, signed as the command is
 
 
 def drawn_scans(episode: Episode) -> ScanSeries | None:
@@ -156,11 +157,13 @@ def _t0(episode: Episode) -> int | None:
 def plot_velocity_profile(
     ax_lin: Axes, ax_ang: Axes, episode: Episode, *, label: str | None = None
 ) -> None:
-    """Linear speed and yaw rate against time since the first pose; commands dashed."""
+    """Signed forward speed (the body-frame ``vx``: negative when reversing) and yaw rate
+    against time since the first pose; the commands (``cmd_vel``'s ``linear.x``, signed too)
+    dashed."""
     vel = velocity_series(episode.pose)
     t0 = _t0(episode)
     t = seconds(vel.t_ns, t0)
-    (line,) = ax_lin.plot(t, vel.speed, label=label, lw=1.2)
+    (line,) = ax_lin.plot(t, vel.vx, label=label, lw=1.2)
     color = line.get_color()
     ax_ang.plot(t, vel.wz, label=label, color=color, lw=1.2)
     cmd = episode.cmd
@@ -170,7 +173,7 @@ def plot_velocity_profile(
         style = dict(where="post", ls="--", lw=1, color=color, alpha=0.7, label=cmd_label)
         ax_lin.step(tc, cmd.vx, **style)
         ax_ang.step(tc, cmd.wz, **style)
-    ax_lin.set_ylabel("v [m/s]")
+    ax_lin.set_ylabel(FORWARD_SPEED_LABEL)
     ax_ang.set_ylabel(r"$\omega$ [rad/s]")
     for ax in (ax_lin, ax_ang):
         ax.set_xlabel("t [s]")
@@ -249,7 +252,7 @@ def _group(episode: Episode, group_by: str) -> str:
 
 
 def trajectories_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -> Figure:
-    """All trajectories on one axes and all speed profiles on another, coloured by group.
+    """All trajectories on one axes and their signed forward speeds on another, by group.
 
     ``group_by`` names an ``EpisodeFacts`` field (agent, task, world, run, ...); an episode
     without that fact forms its own group named after its bag.
@@ -278,11 +281,11 @@ def trajectories_figure(episodes: Sequence[Episode], *, group_by: str = "agent")
         labelled.add(group)
         plot_trajectory(ax_traj, ep, label=label, color=colors[group])
         vel = velocity_series(ep.pose)
-        ax_speed.plot(seconds(vel.t_ns, _t0(ep)), vel.speed, color=colors[group], lw=1,
+        ax_speed.plot(seconds(vel.t_ns, _t0(ep)), vel.vx, color=colors[group], lw=1,
                       alpha=0.8)
     ax_traj.legend(title=group_by, fontsize="small")
     ax_speed.set_xlabel("t [s]")
-    ax_speed.set_ylabel("v [m/s]")
+    ax_speed.set_ylabel(FORWARD_SPEED_LABEL)
     ax_speed.grid(True, alpha=0.3)
     fig.suptitle(f"{len(episodes)} episodes by {group_by}")
     return fig

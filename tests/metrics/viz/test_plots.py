@@ -147,6 +147,24 @@ def test_velocity_profile_speed_and_commands():
     np.testing.assert_allclose(ax_w.lines[0].get_ydata(), 0.0, atol=1e-12)
 
 
+@pytest.mark.parametrize("yaw, vx", [(0.0, -0.5), (math.pi, 0.5)])
+def test_speed_is_drawn_signed_as_the_command(yaw, vx):
+    """Backing along -x facing +x is -0.5 m/s, like its command; driving along -x facing -x
+    is +0.5 (the body frame's forward component, not the world's)."""
+    t = T0 + np.arange(21, dtype=np.int64) * 100_000_000
+    pose = PoseSeries(t, -0.05 * np.arange(21), np.zeros(21), np.full(21, yaw))
+    cmds = CmdSeries(t[::5], np.full(5, vx), np.zeros(5), np.zeros(5))
+    ep = Episode(Path("b"), EpisodeFacts(), pose, "/odom", cmd=cmds)
+    ax_v, ax_w = Figure().subplots(2)
+    plot_velocity_profile(ax_v, ax_w, ep)
+    measured, commanded = ax_v.lines
+    np.testing.assert_allclose(measured.get_ydata(), vx, atol=1e-12)
+    np.testing.assert_allclose(commanded.get_ydata(), vx)
+    assert "forward" in ax_v.get_ylabel()
+    (speed,) = trajectories_figure([ep]).axes[1].lines
+    np.testing.assert_allclose(speed.get_ydata(), vx, atol=1e-12)
+
+
 def test_acceleration_profile_of_a_speed_ramp():
     t = T0 + np.arange(11, dtype=np.int64) * 100_000_000
     ts = np.arange(11) * 0.1
