@@ -26,6 +26,7 @@ BARN's columns (``benchtable.LAYOUTS``).
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -185,22 +186,56 @@ def _list(data: Mapping[str, Any], key: str, where: str, default: list[Any]) -> 
     return value
 
 
-def _agents(data: Mapping[str, Any], where: str, base: Path,
-            env: str) -> list[tuple[str, str]]:
+def _agents(data: Mapping[str, Any], where: str, base: Path, env: str,
+            robots: list[str]) -> list[tuple[str, str]]:
+    """(row name, agent path; empty for a baseline) of the task, each agent and baseline
+    resolved on each of the task's ``robots`` as its cells will run it, before any runs."""
     agents = data.get("agents", {})
     require(isinstance(agents, Mapping), f"{where}.agents", agents, "a mapping NAME: PATH")
     rows = [(_name(n, f"{where}.agents"), _path(p, f"{where}.agents.{n}", base))
             for n, p in agents.items()]
-    for name, path in rows:  # each agent as its cells will run it, checked before any runs
-        try:
-            resolve_agents(TestPlan(agents=(f"{name}={path}",), params_files=(env,)))
-        except ConfigError as err:
-            raise ConfigError(f"{where}.agents.{name}: {err}") from err
     for b in _list(data, "baselines", where, []):
         require(b in BASELINES, f"{where}.baselines", b, f"one of {', '.join(BASELINES)}")
         rows.append((b, ""))
     require(bool(rows), where, dict(data), "at least one of agents, baselines")
+    for name, path in rows:
+        for robot in robots:
+            plan = TestPlan(agents=(f"{name}={path}",) if path else (),
+                            baselines=() if path else (name,), params_files=(env,),
+                            sim_overrides={"robot": robot} if robot else {})
+            try:
+                resolve_agents(plan)
+            except ConfigError as err:
+                key = f"agents.{name}" if path else "baselines"
+                raise ConfigError(f"{where}.{key}: {err}") from err
     return rows
+
+
+def _check_worlds(env: str, worlds: list[tuple[str, int | None, str]], robots: list[str],
+                  where: str) -> None:
+    """Every robot, world and variant of the task built as its cells will build them (the
+    env file's sim section with the cell's world, variant and robot), before any cell runs:
+    ``ConfigError`` naming the robot or the world (``WORLD:VARIANT``) otherwise."""
+    from pic4rl_bridge.scenario import Scenario
+
+    from pic4rl_agents.config import NODES, run_config
+
+    test = run_config(params_file.load([env], NODES), [env]).env.replace(**{
+        "transport": TransportName.INPROCESS.value, "robot": "", "episodes.file": "",
+        "episodes.world_variants": ""})
+
+    def built(key: str, name: str, **sim: Any) -> None:
+        params = {**test.sim_params, **{k: v for k, v in sim.items() if v not in ("", None)}}
+        try:
+            Scenario(dataclasses.replace(test, sim_params=params)).world_at(None)
+        except ConfigError as err:
+            raise ConfigError(f"{where}.{key}: {name}: {err}") from err
+
+    for robot in robots:
+        built("robots", robot, robot=robot)
+    for world, variant in dict.fromkeys((w, v) for w, v, _ in worlds):
+        shown = (world or "env") + ("" if variant is None else f":{variant}")
+        built("worlds", shown, world=world, world_variant=variant)
 
 
 def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]:
@@ -217,10 +252,11 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
         str(sim.get("robot", ""))]
     pairs = [_pair_set(p, f"{where}.pairs", base) for p in _list(data, "pairs", where, ["paper"])]
     _check_pair_worlds(pairs, worlds, sim, f"{where}.pairs")
+    _check_worlds(env, worlds, robots, where)
     reps = _count(data.get("repetitions", 1), f"{where}.repetitions")
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
     cells = []
-    for agent, path in _agents(data, where, base, env):
+    for agent, path in _agents(data, where, base, env, robots):
         for world, variant, label in worlds:
             for robot in robots:
                 for pair_set in pairs:
@@ -241,7 +277,10 @@ def _check_pair_worlds(pairs: list[PairSet], worlds: list[tuple[str, int | None,
     from pic4rl_sim.config import SimParams
 
     for pair_set in (p for p in pairs if p.file):
-        drawn = load_goals_and_poses(pair_set.file).world
+        try:
+            drawn = load_goals_and_poses(pair_set.file).world
+        except ConfigError as err:
+            raise ConfigError(f"{where}: {pair_set.label}: {err}") from err
         for world, variant, _label in worlds:
             if variant is None:
                 variant = sim.get("world_variant", SimParams.world_variant)

@@ -160,17 +160,19 @@ def _rate(row: Sequence[str | None], col: int) -> float:
 def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]],
                  layout: Layout = LAYOUTS["paper"]) -> dict[str, str]:
     """Markdown per task: its rows by success rate, then the layout's rank metric (SPL, the
-    BARN score), best first."""
+    BARN score), best first; a row with a failed cell is never ranked (its episodes are not
+    all there): it is listed below the ranked rows, its rank ``failed``."""
     label = plain_text(METRICS[layout.rank].label)
     success, spl = header.index("success"), header.index(
         f"{label} [{plain_text(METRICS[layout.rank].unit)}]")
     boards = {}
     for task in dict.fromkeys(r[0] for r in rows):
-        mine = sorted((r for r in rows if r[0] == task),
-                      key=lambda r: (_rate(r, success), _rate(r, spl)), reverse=True)
+        mine = sorted((r for r in rows if r[0] == task), key=lambda r: (
+            r[-1] == "ok", _rate(r, success), _rate(r, spl)), reverse=True)
+        ranked = sum(r[-1] == "ok" for r in mine)
         cols = ["rank", *header[1:5], "n", "success", "success 95% CI", label, "status"]
-        body = [[str(i + 1), *r[1:5], r[5], r[success], r[success + 1], r[spl], r[-1]]
-                for i, r in enumerate(mine)]
+        body = [[str(i + 1) if i < ranked else "failed", *r[1:5], r[5], r[success],
+                 r[success + 1], r[spl], r[-1]] for i, r in enumerate(mine)]
         boards[str(task)] = render_rows(cols, body, "markdown")
     return boards
 

@@ -17,7 +17,8 @@ from agents_helpers import ROOT
 from pic4rl_agents.testing import tester
 from pic4rl_agents.bench.cell import _plan
 from pic4rl_agents.bench.suite import load_suite
-from pic4rl_agents.testing.plan import TestPlan, resolve_agents
+from pic4rl_agents.testing import plan as testplan
+from pic4rl_agents.testing.plan import resolve_agents
 from pic4rl_bridge.config import AGENT_KEYS, EnvConfig, agent_keys
 from pic4rl_bridge.errors import ConfigError
 
@@ -181,7 +182,7 @@ def test_sim_settings_that_leave_the_agents_input_alone_are_accepted(tmp_path: P
     env = tmp_path / "env.yaml"
     env.write_text(yaml.safe_dump({"sim": {"ros__parameters": {
         "world_variant": 3, "lidar": {"range_max_m": 10.0, "beams": 360}}}}))
-    plan = TestPlan(agents=(str(TD3_LIDAR),), params_files=(str(env),), sim_overrides={
+    plan = testplan.TestPlan(agents=(str(TD3_LIDAR),), params_files=(str(env),), sim_overrides={
         "seed": 7, "lidar.noise_std_m": 0.01, "depth.enabled": True, "depth.width": 40})
     spec, = resolve_agents(plan)
     sim = spec.run.env.sim_params
