@@ -198,20 +198,29 @@ def make_pool(root: Path, *, workers: int, address: str | None, local: bool) -> 
 
 def dispatch_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> dict[str, str]:
     """Run every unfinished cell of ``suite`` on ``pool``, retrying each failed one up to
-    ``retries`` times; the errors of the cells that failed for good, by name."""
+    ``retries`` times; the errors of the cells that failed for good, by name. One progress
+    bar (on stderr) counts the finished episodes, the cells in its postfix; a cell that failed
+    for good takes its missing episodes off the total, so the bar ends at its total."""
     from tqdm import tqdm
 
     root = suite.root
     todo = deque(c for c in suite.cells if not bench_cell.state(root, c).done)
-    total = {c.name: bench_cell.expected_episodes(c) for c in suite.cells}
-    counted = {c.name: total[c.name] for c in suite.cells if c not in todo}
-    cells_bar = tqdm(total=len(suite.cells), initial=len(counted), desc="cells", unit="cell",
-                     disable=not progress, position=0)
-    episodes_bar = tqdm(total=sum(total.values()), initial=sum(counted.values()),
-                        desc="episodes", unit="episode", disable=not progress, position=1)
+    expected = {c.name: bench_cell.expected_episodes(c) for c in suite.cells}
+    counted = {c.name: expected[c.name] for c in suite.cells if c not in todo}
+    ended = len(counted)
+    bar = tqdm(total=sum(expected.values()), initial=sum(counted.values()), desc="episodes",
+               unit="episode", disable=not progress, dynamic_ncols=True)
     running: dict[Any, Cell] = {}
     attempts: Counter[str] = Counter()
     failed: dict[str, str] = {}
+
+    def count(cell: Cell) -> int:
+        """Add ``cell``'s newly finished episodes to the bar; how many it has."""
+        done = len(bench_cell.state(root, cell).finished)
+        bar.update(done - counted.get(cell.name, 0))
+        counted[cell.name] = done
+        return done
+
     try:
         while todo or running:
             while todo and len(running) < pool.workers:
@@ -221,24 +230,23 @@ def dispatch_cells(suite: Suite, pool: Any, *, retries: int, progress: bool) -> 
             for handle in pool.ready(list(running), POLL_S):
                 cell = running.pop(handle)
                 error = pool.error(handle, cell)
-                if error is None:
-                    cells_bar.update(1)
-                elif attempts[cell.name] <= retries:
+                done = count(cell)  # its last episodes too, before it leaves the running
+                if error is not None and attempts[cell.name] <= retries:
                     log.warning("%s: attempt %d failed (%s); trying again", cell.name,
                                 attempts[cell.name], error)
                     todo.append(cell)
-                else:
+                    continue
+                if error is not None:
                     failed[cell.name] = error
-                    cells_bar.update(1)
-            for cell in suite.cells:
-                if cell.name not in counted or cell in running.values():
-                    done = len(bench_cell.state(root, cell).finished)
-                    episodes_bar.update(done - counted.get(cell.name, 0))
-                    counted[cell.name] = done
+                    bar.total -= max(expected[cell.name] - done, 0)
+                ended += 1
+            for cell in running.values():
+                count(cell)
+            bar.set_postfix_str(f"cells {ended}/{len(suite.cells)}"
+                                + (f", {len(failed)} failed" if failed else ""))
     finally:
         pool.close(list(running))
-        cells_bar.close()
-        episodes_bar.close()
+        bar.close()
     return failed
 
 

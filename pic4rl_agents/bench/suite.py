@@ -141,7 +141,10 @@ def _path(value: Any, where: str, base: Path) -> str:
     return str(path.absolute())
 
 
-def _pair_set(item: Any, where: str, base: Path) -> PairSet:
+def _pair_set(item: Any, where: str, base: Path, seed: int) -> PairSet:
+    """A ``pairs`` item, named after what sets its episodes: ``paper``, its file
+    (``file_<stem>``), its draw (``random<N>_<kind>_s<seed>``) or, for the env's own
+    episodes, their count and the task's ``seed`` (``episodes<N>_s<seed>``)."""
     if item == "paper":
         return PairSet("paper", file=str(DEFAULT_PAIRS))
     if not isinstance(item, Mapping) or not any(k in item for k in PAIR_KEYS):
@@ -159,7 +162,7 @@ def _pair_set(item: Any, where: str, base: Path) -> PairSet:
     if first == "file":
         file = _path(item["file"], f"{where}.file", base)
         return PairSet(f"file_{Path(file).stem}", file=file, episodes=episodes)
-    return PairSet(f"env{episodes}", episodes=episodes)
+    return PairSet(f"episodes{episodes}_s{seed}", episodes=episodes)
 
 
 def _worlds(item: Any, where: str) -> list[tuple[str, int | None, str]]:
@@ -250,11 +253,12 @@ def _task_cells(data: Any, where: str, base: Path, transport: str) -> list[Cell]
         (str(sim.get("world", "")), sim.get("world_variant"), "")]
     robots = [_name(r, f"{where}.robots") for r in _list(data, "robots", where, [])] or [
         str(sim.get("robot", ""))]
-    pairs = [_pair_set(p, f"{where}.pairs", base) for p in _list(data, "pairs", where, ["paper"])]
-    _check_pair_worlds(pairs, worlds, sim, f"{where}.pairs")
-    _check_worlds(env, worlds, robots, where)
     reps = _count(data.get("repetitions", 1), f"{where}.repetitions")
     seed = _count(data.get("seed", 0), f"{where}.seed", 0)
+    pairs = [_pair_set(p, f"{where}.pairs", base, seed)
+             for p in _list(data, "pairs", where, ["paper"])]
+    _check_pair_worlds(pairs, worlds, sim, f"{where}.pairs")
+    _check_worlds(env, worlds, robots, where)
     cells = []
     for agent, path in _agents(data, where, base, env, robots):
         for world, variant, label in worlds:

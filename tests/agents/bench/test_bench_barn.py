@@ -41,7 +41,7 @@ def test_the_protocol_is_the_50_test_worlds_times_10_runs(tmp_path: Path) -> Non
         assert {c.pairs.episodes for c in cells} == {10} and {c.world for c in cells} == {"barn"}
         assert len({c.name for c in cells}) == 50
         assert {tuple(c.row.values()) for c in cells} == {
-            ("barn", agent, "barn:test50", "jackal", "env10")}  # one row per agent
+            ("barn", agent, "barn:test50", "jackal", "episodes10_s0")}  # one row per agent
 
 
 @pytest.mark.bad_input
