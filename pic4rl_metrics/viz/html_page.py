@@ -87,8 +87,9 @@ class Cell:
 
 
 def text(value: object) -> Cell:
-    """A text cell; None is "–"."""
-    return Cell("–" if value is None else html.escape(str(value)))
+    """A text cell; None and NaN (a missing fact of a pandas row) are "–"."""
+    missing = value is None or (isinstance(value, float) and math.isnan(value))
+    return Cell("–" if missing else html.escape(str(value)))
 
 
 def number(value: object, digits: int = 2, suffix: str = "") -> Cell:

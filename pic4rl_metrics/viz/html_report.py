@@ -1,10 +1,12 @@
 """``pic4rl-metrics report``: one self-contained HTML page of a benchmark, from its bags alone.
 
-In order: the leaderboard (``aggregate``'s counts and means, the Wilson interval), the paired
-comparisons on shared start–goal pairs (``paired``) — both per task and world set (``groups``), how each agent fails (outcome counts, the
-ends of its failed episodes on the scan-built map), each pair's trajectories on one small map
-(``report_maps``), every episode (sortable, filterable, linked to its bag and video), the bags
-that could not be read, and the inputs (folders, config hashes, version, date). The page's
+In order: the leaderboard (``aggregate``'s counts and means, the Wilson interval), the logs
+without a goal (``report_logs``: real-robot bags, not ranked), the paired comparisons on shared
+start–goal pairs (``paired``) — leaderboard and comparisons per task and world set
+(``groups``) —, how each agent fails (outcome counts, the ends of its failed episodes on the
+scan-built map), each pair's trajectories on one small map (``report_maps``), every episode
+(sortable, filterable, linked to its bag and video), the bags that could not be read, and the
+inputs (folders, config hashes, version, date). The page's
 markup, style and script are ``html_page``'s. ``pic4rl-bench`` writes one beside its tables.
 """
 
@@ -35,6 +37,7 @@ from ..tables.paired import grouped_paired, seed_spread
 from ..tables.results import ROW_COLUMNS
 from ..tables.text import plain_text, short_bag
 from . import html_page as hp
+from .report_logs import goal_less, logs_section
 from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
 
 #: A task's own columns, shown in the leaderboard when some episode has them.
@@ -302,10 +305,17 @@ def build_report(result: MetricsResult, out_dir: Path, *,
     intro = (f"<p class=note>{good} episodes from {len(result.results)} bags "
              f"({len(failed)} unreadable), {names[~frame['error'].astype(bool)].nunique()} "
              "agents; every figure from the bags alone.</p>")
+    free = goal_less(frame)  # logs without a goal: their own section, not ranked nor failed
+    logs = logs_section(frame, names, sketches, _label)
+    ranked = ~free & (frame["error"].fillna("") == "")
+    board = _leaderboard(frame[~free]) if ranked.any() else (
+        "<p>No episode has a goal: nothing to rank (see Logs without a goal).</p>")
     sections = [
-        ("leaderboard", "Leaderboard", _leaderboard(frame)),
+        ("leaderboard", "Leaderboard", board),
+        *([("logs", "Logs without a goal", logs)] if logs else []),
         ("paired", "Paired comparisons", _paired(frame, pairs, references, n_boot)),
-        ("failures", "How each agent fails", _failures(frame, names, sketches)),
+        ("failures", "How each agent fails", _failures(
+            frame, names, {i: s for i, s in sketches.items() if not free[i]})),
         ("pairs", "Start–goal pairs", _pair_maps(frame, names, pairs, sketches)),
         ("episodes", "Episodes", _episodes(frame, names, pairs, out_dir)),
         ("errors", "Unreadable bags", errors),
