@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import pandas as pd
 
 from ..contract import task_name, world_set
+from ..core.registry import REGISTRY
 from ..errors import ConfigError
 from .aggregate import DASH, FULL_RUNS, UNKNOWN_GROUP, _missing, aggregate
 from .layouts import check_format, latex_escape
@@ -108,18 +109,22 @@ def headline(agg: pd.DataFrame) -> str:
 
 
 def headline_columns(agg: pd.DataFrame, columns: Sequence[str]) -> list[str]:
-    """``columns`` with ``success`` replaced by ``FULL_RUNS`` where ``headline`` says so."""
+    """``columns``, or where ``headline`` says the group has no goal: ``success`` replaced by
+    ``FULL_RUNS`` and the columns that need a goal (heading error, SPL, ...) left out."""
     if headline(agg) == "success":
         return list(columns)
-    return [FULL_RUNS if c == "success" else c for c in columns]
+    return [FULL_RUNS if c == "success" else c for c in columns
+            if c == "success" or c not in REGISTRY.metrics or "goal" not in
+            REGISTRY.metrics[c].needs]
 
 
-def join(parts: Sequence[tuple[Group, str]], fmt: str) -> str:
-    """Several groups' tables (each rendered in ``fmt``) as one text: a header per group in
-    table, markdown and LaTeX; one CSV and one JSON list whose rows lead with the group's
-    dimensions (``Group.record``). One group's table is returned as it is."""
+def join(parts: Sequence[tuple[Group, str]], fmt: str, *, several: bool | None = None) -> str:
+    """Groups' tables (each rendered in ``fmt``) as one text: a header per group in table,
+    markdown and LaTeX; one CSV and one JSON list whose rows lead with the group's dimensions
+    (``Group.record``). A single group's table (``several`` false; default: one part) is
+    returned as it is."""
     check_format(fmt)
-    if len(parts) == 1:
+    if len(parts) == 1 and not several:
         return parts[0][1]
     if fmt == "json":
         records = [{**g.record(), **r} for g, text in parts for r in json.loads(text)]

@@ -285,8 +285,9 @@ def render_paired(result: MetricsResult, references: Sequence[str], fmt: str, *,
     else:
         parts = [(g, render_rows(PAIRED_COLUMNS, [paired_cells(d) for d in diffs], fmt))
                  for g, diffs in shown]
-    text = join(parts, fmt) if parts else render_rows(PAIRED_COLUMNS, [], fmt)
-    if fmt == "json" and len(parts) == 1:  # one group: the records as they always were
+    several = len(grouped) > 1
+    text = join(parts, fmt, several=several) if parts else render_rows(PAIRED_COLUMNS, [], fmt)
+    if fmt == "json" and not several:  # one group: the records as they always were
         text = json.dumps(json.loads(text), indent=2, allow_nan=False) + "\n"
     if fmt in ("table", "markdown"):
         note = (f"Within one task and world set, on episodes sharing a start–goal pair and "
