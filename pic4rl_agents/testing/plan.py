@@ -73,6 +73,13 @@ class AgentSpec:
     episode_set: str = ""  # its test episodes, in words
     trained: str = ""  # a model's training config, in words (``RunConfig.origin``)
     settings: BaselinesConfig | None = None  # a baseline's: the baselines: section
+    env_from: str = ""  # a baseline's env, in words
+
+    @property
+    def env_line(self) -> str:
+        """A baseline's env and step budget in one line (``pic4rl-test`` prints it)."""
+        return (f"{self.name} runs in {self.env_from}: {self.run.env.episode_max_steps} steps "
+                "an episode (episode_max_steps)")
 
 
 def _agent_files(path: Path) -> tuple[Path, Path | None]:
@@ -202,22 +209,29 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
     plan's params files (``files``, read once)."""
     if baseline not in BASELINES:
         raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
+    # The test env's one world, as the agents' (``_test_env``): never a world per episode.
+    unset = {"episodes.world_variants": ""}
     if agents:
         run = agents[0].run
+        env_from = f"the env of agent {agents[0].name} ({run.origin})"
         if "min_linear_m_s" not in plan.env_overrides:
             # An agent's speed floor is its own training choice; a baseline drives the
             # robot's full range unless the user says otherwise.
-            run = run.replace(env={"min_linear_m_s": 0.0})
+            unset["min_linear_m_s"] = 0.0
+            env_from += " at the robot's full speed range"
+        run = run.replace(env=unset)
     elif plan.params_files:
         run = run_config(files, plan.params_files, env=plan.env_overrides,
                          sim=plan.sim_overrides)
+        env_from = f"the params files' env ({run.origin})"
+        run = run.replace(env=unset)
     else:
         raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
                           "or --ros-args --params-file FILE")
     check_fits(baseline, run.env)  # before any run directory or bag exists
     settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
                                 where=" + ".join(plan.params_files))
-    return AgentSpec(baseline, run, baseline=baseline, settings=settings)
+    return AgentSpec(baseline, run, baseline=baseline, settings=settings, env_from=env_from)
 
 
 def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:

@@ -194,6 +194,9 @@ def drive_and_judge(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -
     specs = [recorded(s, run_dir) for s in specs]
     episode_set = specs[-1].episode_set
     log.info("episodes: %s", episode_set)
+    for spec in specs:
+        if spec.baseline:
+            log.info("%s", spec.env_line)
     outcomes: dict[str, list[str]] = {}
     try:
         for spec in specs:
