@@ -33,6 +33,8 @@ from pic4rl_metrics import (
 )
 from pic4rl_metrics.testing import synthetic
 from pic4rl_metrics.core.metrics import MIN_PATH_M
+from pic4rl_metrics.core.plausibility import check_one_track
+from pic4rl_metrics.errors import CorruptBagError
 from pic4rl_metrics.tables.results import METRIC_COLUMNS
 from pic4rl_metrics.core.series import PointSeries, PoseSeries, ScanSeries
 
@@ -598,16 +600,23 @@ def test_reading_and_judging_random_bags_never_raises_anything_but_metrics_error
     with tempfile.TemporaryDirectory() as tmp:
         bag = synthetic.write_episode_bag(Path(tmp) / "bag", **inputs)  # type: ignore[arg-type]
         files_before = {p: p.stat().st_size for p in bag.iterdir()}
+        refused = None
         try:
             episode = read_episode(bag)
         except MetricsError as err:
             assert str(bag) in str(err)
-            episode = None
+            episode, refused = None, err
         result = judge_bag(bag)
         assert {p: p.stat().st_size for p in bag.iterdir()} == files_before
     track = inputs["track"]
     usable = np.isfinite(np.column_stack([track.x, track.y, track.yaw])).all(axis=1)  # type: ignore[attr-defined]
-    if episode is None:
+    if isinstance(refused, CorruptBagError):  # two tracks, or sustained impossible speeds
+        assert result.error == str(refused) and result.metrics is None
+        kept = PoseSeries(*(np.round(track.t_s * 1e9).astype(np.int64)[usable],  # type: ignore[attr-defined]
+                            track.x[usable], track.y[usable], track.yaw[usable]))  # type: ignore[attr-defined]
+        with pytest.raises(CorruptBagError):
+            check_one_track(kept, None, "/ground_truth")
+    elif episode is None:
         assert result.error and result.metrics is None
         assert int(usable.sum()) < 2
     else:
