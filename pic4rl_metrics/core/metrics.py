@@ -17,7 +17,13 @@ from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
 from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
 from .series import Episode
-from .plausibility import PLAUSIBLE_ACC_MPS2, PLAUSIBLE_SPEED_MPS, PLAUSIBLE_YAW_RATE_RADPS
+from .plausibility import (
+    PLAUSIBLE_ACC_MPS2,
+    PLAUSIBLE_SPEED_MPS,
+    PLAUSIBLE_YAW_RATE_RADPS,
+    speed_outlier_warning,
+    speed_outliers,
+)
 
 #: Below these the robot counts as standing still (m/s, rad/s).
 STILL_SPEED_MPS = 0.05
@@ -247,6 +253,8 @@ from . import person_metrics  # noqa: E402, F401
 
 _register("n_poses", "count", "poses")(lambda d: len(d.pose))
 _register("n_scans", "count", "scans")(lambda d: len(d.scan) if d.scan is not None else 0)
+_register("n_speed_outliers", "count", "speed outliers")(
+    lambda d: len(speed_outliers(d.velocity.speed, d.facts.max_speed_mps)))
 
 #: pic4rl's own columns, in table order (user metrics come after them).
 BUILTIN_COLUMNS: tuple[str, ...] = tuple(REGISTRY.metrics)
@@ -256,15 +264,17 @@ BUILTIN_COLUMNS: tuple[str, ...] = tuple(REGISTRY.metrics)
 
 
 def data_warnings(d: Derived) -> list[str]:
-    """What makes the numbers suspect: physically impossible motion (a damaged bag judges
-    silently otherwise) and scans that say nothing."""
+    """What makes the numbers suspect: implausible speeds (``plausibility``), physically
+    impossible motion (a damaged bag judges silently otherwise) and scans that say nothing."""
     out: list[str] = []
     name = d.episode.pose_topic
     v = d.velocity
     dt = np.diff(d.pose.t_ns).astype(float) * 1e-9
     moved = np.hypot(np.diff(d.pose.x), np.diff(d.pose.y)) / dt if dt.size else np.zeros(0)
+    note = speed_outlier_warning(name, d.vel_t_s, v.speed, d.facts.max_speed_mps, d.lin_acc,
+                                 d._linear(d.jerk))
+    out += [note] if note else []
     for what, values, limit, unit in (
-        ("speed", v.speed, PLAUSIBLE_SPEED_MPS, "m/s"),
         ("speed from pose differences", moved, PLAUSIBLE_SPEED_MPS, "m/s"),
         ("yaw rate", np.abs(v.wz), PLAUSIBLE_YAW_RATE_RADPS, "rad/s"),
         ("linear acceleration", d.lin_acc, PLAUSIBLE_ACC_MPS2, "m/s^2"),

@@ -114,3 +114,37 @@ def speed_outliers(speed: np.ndarray, max_speed_mps: float | None) -> np.ndarray
     finite."""
     speed = np.asarray(speed, dtype=float)
     return np.flatnonzero(~np.isfinite(speed) | (speed > speed_limit(max_speed_mps)))
+
+
+def _max_at(values: np.ndarray, touched: np.ndarray, what: str, unit: str) -> str | None:
+    """``what`` (its max) and whether an implausible sample is among those it is taken from."""
+    values = np.asarray(values, dtype=float)
+    if not values.size or not np.isfinite(values).any():
+        return None
+    k = int(np.nanargmax(np.where(np.isfinite(values), values, -np.inf)))
+    return f"{what} {values[k]:.3g} {unit} {'at' if touched[k] else 'not at'} them"
+
+
+def speed_outlier_warning(topic: str, t_s: np.ndarray, speed: np.ndarray,
+                          max_speed_mps: float | None, lin_acc: np.ndarray,
+                          lin_jerk: np.ndarray) -> str | None:
+    """The warning on an episode whose speed samples (m/s, at ``t_s`` s after the first pose)
+    include implausible ones: how many, when, and whether the max linear acceleration and
+    jerk (differences of consecutive speeds, of consecutive accelerations) are taken at them.
+    None when there are none."""
+    bad = speed_outliers(speed, max_speed_mps)
+    if not bad.size:
+        return None
+    touched = np.zeros(len(speed), dtype=bool)
+    touched[bad] = True
+    acc_touched = touched[:-1] | touched[1:]  # an acceleration spans two speeds
+    jerk_touched = acc_touched[:-1] | acc_touched[1:]  # a jerk spans three
+    times = ", ".join(f"{t:.2f}" for t in t_s[bad][:10]) + (", ..." if bad.size > 10 else "")
+    speeds = np.asarray(speed, dtype=float)[bad]
+    worst = float(np.max(np.where(np.isfinite(speeds), speeds, np.inf)))
+    maxima = [m for m in (_max_at(lin_acc, acc_touched, "max linear acceleration", "m/s^2"),
+                          _max_at(lin_jerk, jerk_touched, "max linear jerk", "m/s^3")) if m]
+    return (f"{topic}: {bad.size} implausible speed sample(s) (odometry spikes?), above "
+            f"{_limit_text(max_speed_mps)}, up to {worst:.3g} m/s, at t = {times} s; kept as "
+            "read: the acceleration and jerk columns include them"
+            + (f" ({'; '.join(maxima)})" if maxima else ""))
