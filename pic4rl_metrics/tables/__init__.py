@@ -1,8 +1,9 @@
 """Result tables: bags judged into one row each, and what is computed and printed from those rows.
 
 ``batch`` judges many bags (``compute``), ``results`` names the columns, ``aggregate`` and
-``paired`` compute per-agent and paired statistics, ``text`` and ``layouts`` render tables as
-text, markdown, CSV, LaTeX or JSON.
+``paired`` compute per-agent and paired statistics, ``groups`` keeps tasks and world sets
+apart (a table per group), ``text`` and ``layouts`` render tables as text, markdown, CSV,
+LaTeX or JSON.
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ _HOMES = {
     "compute": "batch", "judge_bag": "batch", "BagResult": "batch", "MetricsResult":
     "batch", "aggregate": "aggregate", "TABLE1_COLUMNS": "results", "ROW_COLUMNS":
     "results", "METRIC_COLUMNS": "results", "paired_table": "paired", "render_paired":
-    "paired", "render_episodes": "text", "render_comparison": "text", "FORMATS": "layouts",
+    "paired", "grouped_paired": "paired", "render_groups": "groups", "render_episodes":
+    "text", "render_comparison": "text", "FORMATS": "layouts",
 }
 __getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals())
 __all__ = sorted(_HOMES)
