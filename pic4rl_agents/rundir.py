@@ -21,16 +21,11 @@ import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pic4rl_bridge.errors import ConfigError
 
 from pic4rl_metrics import atomic
-
-if TYPE_CHECKING:
-    import pandas as pd
-
-    from .config import RunConfig
 
 CONFIG = "config.yaml"
 MODEL = "model.zip"
@@ -271,19 +266,3 @@ def _model_data(model_zip: Path) -> dict[str, Any]:
 def steps_in(model_zip: Path) -> int:
     """The env steps a saved model had trained for (its ``num_timesteps``)."""
     return int(_model_data(model_zip).get("num_timesteps", 0))
-
-
-def session_summary(run: RunConfig, session: int, total_steps: int, session_steps: int,
-                    wall_s: float, episodes: pd.DataFrame) -> dict[str, Any]:
-    """``summary.yaml``: what a session did (docs/agents.md, "The run directory");
-    ``episodes``: every finished training episode of the run (``curves.episode_table``)."""
-    last = episodes.tail(100)
-    return {"run": run.name, "algorithm": run.train.algorithm, "sensor": run.env.sensor,
-            "transport": run.env.transport, "n_envs": run.train.n_envs, "session": session,
-            "total_steps": int(total_steps), "session_steps": int(session_steps),
-            "session_wall_s": round(wall_s, 1),
-            "steps_per_s": round(session_steps / wall_s, 1) if wall_s > 0 else None,
-            "episodes": len(episodes),
-            "last_100_success_rate": (round(float(last["is_success"].mean()), 3)
-                                      if len(last) else None),
-            "last_100_mean_reward": round(float(last["r"].mean()), 1) if len(last) else None}

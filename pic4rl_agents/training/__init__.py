@@ -1,7 +1,8 @@
 """``pic4rl-train`` and what it trains with: the ``Trainer`` (``train``) and its command line
 (``args``), the vectorised envs (``envs``), the curriculum, the SB3 callbacks (progress,
-checkpoints, seeded evaluations, stops), imitation from an expert, the reward and evaluation
-curves (``python -m pic4rl_agents.training.curves``) and the evaluations' videos.
+checkpoints, seeded evaluations, stops), imitation from an expert, the reward and
+evaluation curves (``python -m pic4rl_agents.training.curves``), the run's ``summary.yaml``
+and the evaluations' videos.
 """
 
 from pic4rl_metrics.lazy import homes_of, lazy_exports
@@ -13,6 +14,7 @@ _HOMES = homes_of({
     "curriculum": ("Curriculum",),
     "callbacks": ("Checkpoints", "ProgressCallback", "RewardCurveCallback",
                   "SeededEvalCallback", "StopWhenSet", "WallClockLimit"),
+    "summary": ("session_summary",),
     "imitation": ("EXPERTS", "DecayingCloning", "Imitation", "make_expert"),
     "curves": ("episode_table", "eval_curves", "save_eval_curves", "save_reward_curve"),
     "videos": ("EvalVideoCallback",),

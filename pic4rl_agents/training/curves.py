@@ -1,7 +1,8 @@
 """Training curves: the reward curve of a run, like the paper's Figure 4 (each episode's reward
-and its moving average, from the run's Monitor CSVs, one per env), and the evaluation curves of
-several runs in one figure (eval success against the clock and against env steps, from their
-``evaluations.csv``), so that two recipes compare on one plot::
+and its moving average, from the run's Monitor CSVs, one per env; the expert's, the student's
+and RL's episodes apart), and the evaluation curves of several runs in one figure (eval
+success against the clock and against env steps, from their ``evaluations.csv``), so that two
+recipes compare on one plot::
 
     python -m pic4rl_agents.training.curves runs/td3_lidar sac=runs/sac_lidar -o curves.png
 """
@@ -22,21 +23,53 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import atomic
 
 from pic4rl_agents import rundir
+from .envs import DRIVER_KEY
+
+
+#: The ``driver`` of an episode a monitor file from before drivers were recorded holds.
+UNRECORDED = "unrecorded"
+#: How the reward curve draws each driver (``envs.DRIVERS``): colour and legend label.
+DRIVER_STYLE = {"rl": ("tab:blue", "RL"), "student": ("tab:orange", "student (DAgger)"),
+                "expert": ("tab:gray", "expert (imitation)"),
+                "mixed": ("tab:purple", "mixed (phase change)"),
+                UNRECORDED: ("tab:blue", "episode reward")}
 
 
 def episode_table(monitor_dir: Path) -> pd.DataFrame:
     """Every finished episode of every env in time order: ``r`` (reward), ``l`` (steps),
-    ``t`` (s since the start), ``is_success``, ``outcome``; empty when none finished yet."""
+    ``t`` (s since the start), ``is_success``, ``outcome``, ``driver`` (``envs.DRIVERS``;
+    ``UNRECORDED`` in monitor files written before drivers were); empty when none finished."""
     try:
         df = load_results(str(monitor_dir))
     except LoadMonitorResultsError:
-        return pd.DataFrame(columns=["r", "l", "t", "is_success", "outcome"])
+        df = pd.DataFrame()
+    if df.empty:  # no file, or none with a row (then SB3 gives r, l, t only)
+        return pd.DataFrame(columns=["r", "l", "t", "is_success", "outcome", DRIVER_KEY])
+    if DRIVER_KEY not in df:
+        df[DRIVER_KEY] = UNRECORDED
+    df[DRIVER_KEY] = df[DRIVER_KEY].fillna(UNRECORDED)
     return df.sort_values("t").reset_index(drop=True)
+
+
+def reward_series(episodes: pd.DataFrame, window: int) -> dict[str, pd.DataFrame]:
+    """The reward curve's lines, one per driver in ``DRIVER_STYLE``'s order: ``episode``
+    (1-based, in the run's order), ``r`` and ``mean`` (the moving average over that driver's
+    last ``window`` episodes: the expert's rewards never lift the agent's average)."""
+    numbered = episodes.assign(episode=range(1, len(episodes) + 1))
+    series = {}
+    for driver in DRIVER_STYLE:
+        own = numbered[numbered[DRIVER_KEY] == driver]
+        if len(own):
+            series[driver] = pd.DataFrame({
+                "episode": own["episode"].to_numpy(), "r": own["r"].to_numpy(),
+                "mean": own["r"].rolling(window, min_periods=1).mean().to_numpy()})
+    return series
 
 
 def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
                       title: str = "") -> Path | None:
-    """Write ``out`` (PNG); ``None`` (nothing written) before the first finished episode."""
+    """Write ``out`` (PNG): each driver's episode rewards and moving average in its own
+    colour (``reward_series``); ``None`` (nothing written) before the first finished episode."""
     df = episode_table(monitor_dir)
     if df.empty:
         return None
@@ -45,16 +78,17 @@ def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    episodes = range(1, len(df) + 1)
     fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
-    ax.plot(episodes, df["r"], color="tab:blue", alpha=0.3, lw=0.8, label="episode reward")
-    ax.plot(episodes, df["r"].rolling(window, min_periods=1).mean(), color="tab:blue", lw=2,
-            label=f"moving average ({window} episodes)")
+    for driver, line in reward_series(df, window).items():
+        colour, label = DRIVER_STYLE[driver]
+        ax.plot(line["episode"], line["r"], ".", color=colour, alpha=0.3, ms=3)
+        ax.plot(line["episode"], line["mean"], color=colour, lw=2,
+                label=f"{label}: moving average ({window} episodes)")
     ax.set_xlabel("episode")
     ax.set_ylabel("reward")
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right")
+    ax.legend(loc="lower right", fontsize="small")
     with atomic.replacing(out) as tmp:  # whole or not at all
         fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
     plt.close(fig)

@@ -25,8 +25,49 @@ from pic4rl_sim.schema import to_params
 from pic4rl_agents.config import CurriculumConfig, EvalConfig
 from .curriculum import STAGE_KEY, Curriculum
 
-#: Monitor columns beside r, l, t: what the reward curve and the progress bar show.
-INFO_KEYWORDS = ("is_success", "outcome")
+#: The ``info`` key (a monitor column) naming who drove an ended episode, one of ``DRIVERS``.
+DRIVER_KEY = "driver"
+#: Who drives a training episode: imitation's expert (behaviour cloning), the student's actor
+#: in a DAgger round (the expert only labels), RL (the learner and its exploration noise), or
+#: ``mixed``: more than one of them, an episode across the change from one phase to the next.
+DRIVERS = ("expert", "student", "rl", "mixed")
+#: Monitor columns beside r, l, t: what the reward curve, the summary and the progress bar show.
+INFO_KEYWORDS = ("is_success", "outcome", DRIVER_KEY)
+
+
+class Driven(gym.Wrapper):
+    """Tags each ended episode's ``info`` with who drove it (``DRIVER_KEY``): the driver set by
+    ``set_driver`` (``rl`` until then) for every step of the episode, else ``mixed``.
+    Imitation sets it through the vector env (``set_driver``), so the monitor, the reward
+    curve and the summary keep the expert's episodes apart from the agent's."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.driver = "rl"
+        self._drove: set[str] = set()
+
+    def set_driver(self, driver: str) -> None:
+        if driver not in DRIVERS[:3]:
+            raise ValueError(f"driver: {driver!r} is invalid; expected one of "
+                             f"{', '.join(DRIVERS[:3])}")
+        self.driver = driver
+
+    def reset(self, **kwargs: Any) -> Any:
+        self._drove = set()
+        return self.env.reset(**kwargs)
+
+    def step(self, action: Any) -> Any:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._drove.add(self.driver)
+        if terminated or truncated:
+            info[DRIVER_KEY] = self.driver if len(self._drove) == 1 else "mixed"
+        return obs, reward, terminated, truncated, info
+
+
+def set_driver(env: VecEnv, driver: str) -> None:
+    """Who drives ``env``'s (``make_vec_env``'s) episodes from now on: ``expert``,
+    ``student`` or ``rl``."""
+    env.env_method("set_driver", driver)
 
 
 def env_namespace(config: EnvConfig, rank: int, n_envs: int) -> str:
@@ -83,7 +124,7 @@ def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
     keywords = INFO_KEYWORDS
     if curriculum is not None and curriculum.enabled:
         env, keywords = Curriculum(env, curriculum), (*INFO_KEYWORDS, STAGE_KEY)
-    env = Monitor(env, monitor_file, info_keywords=keywords)
+    env = Monitor(Driven(env), monitor_file, info_keywords=keywords)
     if reward_scale != 1.0:
         env = gym.wrappers.TransformReward(env, lambda r: reward_scale * r)
     return env

@@ -45,6 +45,7 @@ from pic4rl_sim import params_file
 from pic4rl_agents.config import NODES, ImitationConfig
 
 from .callbacks import WallClockLimit
+from .envs import set_driver
 
 log = logging.getLogger(__name__)
 
@@ -165,11 +166,12 @@ class Imitation:
         """Behaviour cloning, the DAgger rounds, then the critic's warm-up; False when a
         callback stopped it (the clock, an evaluation's target)."""
         c = self.config
+        rounds = [(EXPERT, c.bc_steps)] if c.bc_steps else []
+        rounds += [(STUDENT, c.dagger_steps)] * c.dagger_rounds
         self.callback.on_training_start(locals(), globals())
         try:
-            rounds = [(EXPERT, c.bc_steps)] if c.bc_steps else []
-            rounds += [(STUDENT, c.dagger_steps)] * c.dagger_rounds
             for number, (driver, steps) in enumerate(rounds):
+                set_driver(self.env, "expert" if driver == EXPERT else "student")
                 if not self.collect(steps, driver):
                     if self._out_of_steps():  # an imitation-only run: its last data counts
                         self.fit(c.gradient_steps)
@@ -180,6 +182,7 @@ class Imitation:
                          len(self.data), self.losses[-1])
             return self.warm_up_critic(c.critic_warmup_steps)
         finally:
+            set_driver(self.env, "rl")  # what drives after imitation
             self.callback.on_training_end()
 
     def collect(self, steps: int, driver: int) -> bool:

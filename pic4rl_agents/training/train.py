@@ -289,7 +289,8 @@ class Trainer:
     def _save_if_trained(self, model: Any, started: float, start_steps: int) -> None:
         """The final (or interrupted) model, its replay buffer, the curve and a summary, once
         this session has trained at all."""
-        from .curves import episode_table, save_reward_curve
+        from .curves import episode_table, eval_table, save_reward_curve
+        from .summary import session_summary
 
         if model.num_timesteps <= start_steps:
             return
@@ -300,9 +301,14 @@ class Trainer:
         model.save(self.layout.model)
         save_reward_curve(self.layout.monitor, self.layout.reward_curve,
                           window=cfg.reward_window, title=self._title())
-        summary = rundir.session_summary(self.config, self.layout.session, model.num_timesteps,
-                                  model.num_timesteps - start_steps, wall_s,
-                                  episode_table(self.layout.monitor))
+        evaluations = self.layout.eval / rundir.EVALUATIONS
+        best = self.layout.best / "best_model.zip"
+        summary = session_summary(
+            self.config, self.layout.session, model.num_timesteps,
+            model.num_timesteps - start_steps, wall_s, episode_table(self.layout.monitor),
+            eval_table(evaluations) if evaluations.is_file() else None,
+            best_model=best.relative_to(self.run_dir) if best.is_file() else None,
+            model=self.layout.model.relative_to(self.run_dir))
         self.layout.write_summary(yaml.safe_dump(summary, sort_keys=False))
         log.info("%d steps, %d episodes, %.1f min (%s steps/s); saved %s",
                  summary["total_steps"], summary["episodes"], wall_s / 60,

@@ -113,8 +113,12 @@ def test_a_short_run_writes_every_artifact(trained_run: TrainedRun) -> None:
     assert set(episodes["outcome"]) <= {"goal", "collision", "timeout"}
     assert (episodes["outcome"] == "timeout").tolist() == (episodes["l"] == 60).tolist()
     assert (episodes["is_success"] == (episodes["outcome"] == "goal")).all()
-    if summary["last_100_mean_reward"] is not None:
-        assert summary["last_100_mean_reward"] == pytest.approx(episodes["r"].mean(), abs=0.06)
+    assert set(episodes["driver"]) == {"rl"}  # no imitation: every episode is the agent's
+    assert summary["episodes_by_driver"]["rl"]["episodes"] == len(episodes)
+    if summary["agent_last_100_mean_reward"] is not None:
+        assert summary["agent_last_100_mean_reward"] == pytest.approx(episodes["r"].mean(),
+                                                                      abs=0.06)
+    assert list(summary)[0] == "evaluation" and summary["evaluation"]["steps"] == 2 * EVAL_STEPS
 
     progress = pd.read_csv(run / "logs" / "0" / "progress.csv")
     assert {EVAL_STEPS, TRAINED_STEPS} <= set(progress["time/total_timesteps"])

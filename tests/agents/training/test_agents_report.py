@@ -1,0 +1,169 @@
+"""What training reports: who drove each training episode (the expert, the student, RL), a
+``summary.yaml`` that leads with the last evaluation and never gives the expert's success as
+the agent's, and a reward curve drawn per driver."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from agents_helpers import LIDAR_TD3, TINY
+
+from pic4rl_agents.config import load_run_config
+from pic4rl_agents.training import train
+from pic4rl_agents.training.curves import episode_table, reward_series
+from pic4rl_agents.training.envs import DRIVER_KEY, Driven
+from pic4rl_agents.training.summary import session_summary
+
+IMITATION = ["imitation.enabled:true", "imitation.gradient_steps:20",
+             "imitation.critic_warmup_steps:10"]
+SHORT_PAIRS = ["episode_max_steps:60", "min_linear_m_s:0.0", "episodes.min_distance_m:0.6",
+               "episodes.max_distance_m:1.2", "episodes.max_detour:1.2"]
+
+
+def _train(tmp_path: Path, name: str, steps: int, hyperparams: list[str]) -> Path:
+    args = ["--run", name, "--hyperparams", f"runs_dir:{tmp_path}", *TINY, *IMITATION,
+            *hyperparams, "checkpoint.interval_steps:0", "-n", str(steps),
+            "--env-kwargs", *SHORT_PAIRS, "--ros-args", "--params-file", str(LIDAR_TD3)]
+    assert train.main(["--no-progress", *args]) == 0
+    return tmp_path / name
+
+
+# -- who drove ------------------------------------------------------------------------------
+
+
+class _Steps(gym.Env):
+    """Episodes of ``length`` steps, nothing else."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (1,))
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,))
+
+    def __init__(self, length: int) -> None:
+        self.length, self.t = length, 0
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        self.t = 0
+        return np.zeros(1, np.float32), {}
+
+    def step(self, action):
+        self.t += 1
+        return np.zeros(1, np.float32), 0.0, False, self.t >= self.length, {}
+
+
+def _drive(env: Driven, steps: int) -> list[str]:
+    ended = []
+    for _ in range(steps):
+        *_, terminated, truncated, info = env.step(np.zeros(1))
+        if terminated or truncated:
+            ended.append(info[DRIVER_KEY])
+            env.reset()
+    return ended
+
+
+def test_each_ended_episode_names_who_drove_it_and_a_change_mid_episode_is_mixed() -> None:
+    env = Driven(_Steps(length=4))
+    env.reset()
+    assert _drive(env, 4) == ["rl"]  # the default: no imitation
+    env.set_driver("expert")
+    assert _drive(env, 6) == ["expert"]  # 2 steps into the next episode
+    env.set_driver("student")
+    assert _drive(env, 6) == ["mixed", "student"]
+    with pytest.raises(ValueError, match="driver: 'teacher' is invalid"):
+        env.set_driver("teacher")
+
+
+# -- summary.yaml ---------------------------------------------------------------------------
+
+
+def _episodes(drivers: list[tuple[str, int, int]]) -> pd.DataFrame:
+    """Episodes of (driver, how many, how many of them succeeded first); reward 1000 for a
+    success, -150 else."""
+    rows = []
+    for driver, n, succeeded in drivers:
+        rows += [{"r": 1000.0 if i < succeeded else -150.0, "l": 10, "t": 0.0,
+                  "is_success": i < succeeded, "outcome": "goal" if i < succeeded else "collision",
+                  DRIVER_KEY: driver} for i in range(n)]
+    return pd.DataFrame(rows)
+
+
+EVALUATIONS = pd.DataFrame({
+    "steps": [2000, 4000, 6000], "wall_s": [60.0, 121.0, 182.5], "train_wall_s": [55, 110, 160],
+    "eval_s": [5.0, 5.0, 5.0], "episodes": [5, 5, 5], "success_rate": [0.2, 0.4, 0.0],
+    "mean_reward": [100.0, 300.0, -150.0], "mean_length": [50.0, 60.0, 20.0],
+    "collision_rate": [0.6, 0.2, 1.0], "timeout_rate": [0.2, 0.4, 0.0],
+    "diverged_rate": [0.0, 0.0, 0.0]})
+
+
+def test_the_summary_leads_with_the_evaluation_and_keeps_the_experts_success_apart() -> None:
+    """120 expert episodes all successful, then 4 student episodes (1 success) and 40 RL ones
+    (10 successes): the agent's last 100 are its 44 (11 successes: 0.25), never the expert's
+    1.0; the summary opens with the last evaluation (0/5, 5 collisions, at 6,000 steps) and
+    names the saved models (the best: the 4,000-step evaluation, highest mean reward)."""
+    run = load_run_config([LIDAR_TD3])
+    episodes = _episodes([("expert", 120, 120), ("student", 4, 1), ("rl", 40, 10)])
+    summary = session_summary(run, 0, 7724, 7724, 300.0, episodes, EVALUATIONS,
+                              best_model=Path("best/0/best_model.zip"), model=Path("model.zip"))
+    assert list(summary)[:2] == ["evaluation", "saved_models"]
+    assert summary["evaluation"] == {
+        "steps": 6000, "wall_s": 182.5, "episodes": 5, "success_rate": 0.0,
+        "collision_rate": 1.0, "timeout_rate": 0.0, "diverged_rate": 0.0,
+        "mean_reward": -150.0, "steps_before_saved": 1724}
+    assert summary["saved_models"] == {
+        "last": {"file": "model.zip", "steps": 7724},
+        "best": {"file": "best/0/best_model.zip", "steps": 4000, "success_rate": 0.4,
+                 "mean_reward": 300.0}}
+    by_driver = summary["episodes_by_driver"]
+    assert list(by_driver) == ["expert", "student", "rl"]
+    assert by_driver["expert"] == {"episodes": 120, "last_100_success_rate": 1.0,
+                                   "last_100_mean_reward": 1000.0}
+    assert by_driver["student"]["last_100_success_rate"] == 0.25
+    assert by_driver["rl"]["last_100_success_rate"] == 0.25
+    assert summary["episodes"] == 164
+    assert summary["agent_last_100_success_rate"] == 0.25
+    assert summary["agent_last_100_mean_reward"] == pytest.approx((11 * 1000 - 33 * 150) / 44,
+                                                                  abs=0.05)
+    assert "last_100_success_rate" not in summary
+
+
+def test_a_run_that_never_left_imitation_does_not_report_the_experts_success(
+        tmp_path: Path) -> None:
+    """Behaviour cloning's 1,000 expert steps are more than the run's 200: every training
+    episode is the expert's. The summary says so (no agent success rate), and opens with the
+    last evaluation, that of the saved model, equal to evaluations.csv's last row."""
+    run = _train(tmp_path, "bc", 200, ["imitation.bc_steps:1000", "eval.interval_steps:100"])
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    episodes = episode_table(run / "monitor")
+    assert len(episodes) >= 2 and set(episodes[DRIVER_KEY]) == {"expert"}
+    assert list(summary)[0] == "evaluation"
+    last = pd.read_csv(run / "eval" / "0" / "evaluations.csv").iloc[-1]
+    evaluation = summary["evaluation"]
+    assert evaluation["steps"] == last["steps"] == 200 and evaluation["steps_before_saved"] == 0
+    for key in ("success_rate", "collision_rate", "timeout_rate"):
+        assert evaluation[key] == pytest.approx(last[key], abs=1e-3)
+    assert evaluation["wall_s"] == pytest.approx(last["wall_s"], abs=0.06)
+    assert summary["saved_models"]["last"] == {"file": "model.zip", "steps": 200}
+    assert list(summary["episodes_by_driver"]) == ["expert"]
+    expert = summary["episodes_by_driver"]["expert"]
+    assert expert["episodes"] == len(episodes)
+    assert expert["last_100_success_rate"] == pytest.approx(episodes["is_success"].mean(),
+                                                            abs=1e-3)
+    assert summary["agent_last_100_success_rate"] is None
+    assert summary["agent_last_100_mean_reward"] is None
+
+
+# -- the reward curve -----------------------------------------------------------------------
+
+
+def test_the_reward_curve_averages_each_driver_apart() -> None:
+    """Expert episodes of 1000, then RL episodes of -150: the RL line's moving average is
+    -150 from its first episode (the expert's 1000s never enter it), at episodes 4-6."""
+    episodes = _episodes([("expert", 3, 3), ("rl", 3, 0)])
+    series = reward_series(episodes, window=50)
+    assert list(series) == ["rl", "expert"]
+    assert series["rl"]["episode"].tolist() == [4, 5, 6]
+    assert series["rl"]["mean"].tolist() == [-150.0] * 3
+    assert series["expert"]["mean"].tolist() == [1000.0] * 3
