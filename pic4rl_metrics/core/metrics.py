@@ -150,6 +150,14 @@ def _scan_range_mean(d: Derived) -> float:
     return float(s.range_sum_m.sum() / count) if count else NAN  # type: ignore[union-attr]
 
 
+# With a footprint: clearance from its boundary (the scan's margin, the collision test's).
+_register("footprint_clearance_min_m", "m", "min footprint clearance", ("scan", "footprint"),
+          quality=True)(lambda d: _min(d.clearance.margin_m))
+_register("footprint_clearance_mean_m", "m", "mean footprint clearance",
+          ("scan", "footprint"), quality=True)(
+    lambda d: time_mean(seconds(d.scan.t_ns), d.clearance.margin_m))
+
+
 @_register("collision_count", "count", "collisions", ("scan", "footprint"))
 def _collision_count(d: Derived) -> float:
     """Rising edges over the scans with a valid beam (one with none says nothing)."""
