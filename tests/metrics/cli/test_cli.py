@@ -237,6 +237,18 @@ def test_compare_latex_on_the_examples(capsys, example_run: Path) -> None:
     assert cells == {"smooth": "3/3", "wobbly": "2/3"}
 
 
+def test_compare_by_one_or_several_columns(capsys, example_run: Path) -> None:
+    """``--by run`` pools both agents of the one run (5/6); ``--by agent,run`` keys a row by
+    both; the examples share one task and world set (none recorded): no group header."""
+    code, out, err = _run(capsys, "compare", "--by", "run", "--format", "json", example_run)
+    assert code == 0, err
+    (row,) = json.loads(out)
+    assert (row["run"], row["success"]) == ("example", "5/6") and "worlds" not in row
+    code, out, err = _run(capsys, "compare", "--by", "agent,run", example_run)
+    assert code == 0, err
+    assert "==" not in out and "smooth / example" in out and "wobbly / example" in out
+
+
 # --- topic maps and facts from the command line ------------------------------------------------
 
 

@@ -20,12 +20,13 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from metrics_helpers import result_row
 
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.tables.aggregate import aggregate
 from pic4rl_metrics.tables.batch import compute
 from pic4rl_metrics.tables.groups import parse_by, render_groups, split
-from pic4rl_metrics.tables.results import table_columns
+from pic4rl_metrics.tables.results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, table_columns
 from pic4rl_metrics.tables.text import render_comparison
 from pic4rl_metrics.errors import ConfigError
 from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
@@ -245,3 +246,25 @@ def test_the_report_has_a_leaderboard_and_paired_table_per_group(mixed: Path,
     (row,) = paired["paired-2"][1:]
     assert row[:4] == ["explorer", "td3_lidar", "2", "2"] and row[4] == "0 + 0"
     assert math.isfinite(float(row[11]))
+
+
+def test_full_runs_by_hand() -> None:
+    """A group without a goal: full runs = timeouts over the runs that ended (an aborted one is
+    out of n); quality means over the full runs; a goal group keeps its success rate."""
+    nan = math.nan
+    rows = [result_row(f"/b/p{k}", "heading", task="personMonitoring", world="person:0",
+                       outcome=end, success=nan, path_length_m=length)
+            for k, (end, length) in enumerate((("timeout", 2.0), ("timeout", 4.0),
+                                               ("collision", 1.0), ("aborted", 9.0)))]
+    rows.append(result_row("/b/g", "planner", outcome="timeout", success=0.0, path_length_m=5.0))
+    frame = pd.DataFrame(rows, columns=[*ID_COLUMNS, *METRIC_COLUMNS, ERROR_COLUMN])
+    person, goto = split(frame)
+    agg = aggregate(frame.loc[list(person.rows)])
+    row = agg.loc["heading"]
+    assert (row["full_runs"], row["n_full_runs"], row["n_ran"]) == ("2/3", 2, 3)
+    assert row["success"] == "–" and row["n_aborted"] == 1
+    assert row["path_length_m_mean"] == pytest.approx(3.0) and row["n_averaged"] == 2
+    planner = aggregate(frame.loc[list(goto.rows)]).loc["planner"]
+    assert (planner["success"], planner["full_runs"], planner["n_full_runs"]) == ("0/1", "–", 0)
+    assert person.label == "task personMonitoring, worlds person"
+    assert goto.label == "task goal, worlds indoor"
