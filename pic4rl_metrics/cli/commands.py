@@ -256,6 +256,10 @@ def _report_failures(result: MetricsResult) -> int:
     n_bad, n_all = len(result.failed), len(result.results)
     if n_bad:
         print(f"{n_bad} of {n_all} bag(s) failed", file=sys.stderr)
+    if not n_all and result.skipped:  # only FIFOs and the like named: nothing judged
+        print("error: no bag judged: every input was skipped (neither a regular file nor a "
+              "directory)", file=sys.stderr)
+        return 1
     return 1 if n_bad else 0
 
 

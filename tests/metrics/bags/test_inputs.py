@@ -73,3 +73,24 @@ def test_a_fifo_named_like_a_bag_is_skipped_with_a_warning_not_waited_on(
     assert (f"error: {str(inside / 'inside_1.db3')!r} is a FIFO, not a regular file or "
             "directory; not read") in err
     assert good.exists() and stat.S_ISFIFO(fifo.stat().st_mode)  # nothing touched
+
+
+@pytest.mark.bad_input
+def test_a_lone_fifo_exits_non_zero_naming_the_skip(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``compute x.db3`` on a FIFO printed an empty table and exited 0, where an empty folder
+    exits 1 (issue 37, minor): nothing was judged, so it fails, naming what was skipped."""
+    fifo = tmp_path / "x.db3"
+    os.mkfifo(fifo)
+    assert main(["compute", str(fifo)]) == 1
+    err = capsys.readouterr().err
+    assert f"warning: {str(fifo)!r} is a FIFO, not a regular file or directory; skipped" in err
+    assert ("error: no bag judged: every input was skipped (neither a regular file nor a "
+            "directory)") in err
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["compute", str(empty)]) == 1  # as before
+    good = write_episode_bag(tmp_path / "good", straight_line(0.5, 1.0))
+    assert main(["compute", str(good), str(fifo)]) == 0  # a bag judged: the skip is a warning
+    assert "warning:" in capsys.readouterr().err
