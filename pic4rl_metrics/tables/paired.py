@@ -278,7 +278,7 @@ def render_paired(result: MetricsResult, references: Sequence[str], fmt: str, *,
     check_format(fmt)
     grouped = grouped_paired(result.frame, pair_labels(result), references, n_boot=n_boot,
                              seed=seed)
-    shown = [(g, diffs) for g, diffs in grouped if diffs] or grouped[:1]
+    shown = [(g, diffs) for g, diffs in grouped if diffs]  # groups with a comparison
     if fmt == "json":
         parts = [(g, json.dumps([paired_record(d) for d in diffs], allow_nan=False))
                  for g, diffs in shown]

@@ -179,6 +179,8 @@ def test_paired_comparisons_stay_within_a_group(capsys, mixed: Path) -> None:
     assert only["success"] == 1.0 and only["reference_success"] == 0.5
     code, out, _ = _run(capsys, "compare", "--paired", "heading", "--format", "json", mixed)
     assert json.loads(out) == []  # alone in its group: compared with nobody
+    code, out, _ = _run(capsys, "compare", "--paired", "heading", mixed)
+    assert "==" not in out.split("\n\n")[0]  # an empty table, under no group's header
     code, out, _ = _run(capsys, "compare", "--paired", "nobody", mixed)
     assert code == 2 and "'nobody': no episode of that agent" in out + _
 
