@@ -96,10 +96,9 @@ def aggregate(
     (success == 1), ``success`` ("n_success/n_judged", "–" when none judged), for a group
     without a goal (no success judged, some episode ended) ``n_full_runs``, ``n_ran`` and
     ``full_runs`` ("k/n": timeouts over the episodes that ended in a timeout, a collision or
-    diverged; "–" and 0 elsewhere), ``n_collision``,
-    ``n_timeout``, ``n_diverged``, ``n_aborted`` (by outcome), ``n_averaged`` (episodes in the
-    trajectory-quality means: the successful ones (a group without a goal: its full runs) for
-    ``over="success"``, every good row for
+    diverged; "–" and 0 elsewhere), ``n_collision``, ``n_timeout``, ``n_diverged``,
+    ``n_aborted`` (by outcome), ``n_averaged`` (episodes in the trajectory-quality means: the
+    successful ones, or a group's full runs, for ``over="success"``; every good row for
     ``"all"``), ``over``, then ``<m>_mean`` and ``<m>_std`` per metric. The std of a single
     value is NaN; a quality column of a group without a success is NaN. Index: the group
     name(s), in order of first appearance. Aborted episodes (cut short, no outcome) are out of
