@@ -69,11 +69,29 @@ def bag_errors(path: Path) -> Iterator[None]:
     try:
         yield
     except (ReaderError, ReaderError1, OSError) as err:
-        msg = f"{str(path)!r}: cannot open bag: {err}"
+        msg = f"{str(path)!r}: cannot open bag: {_one_line(path, str(err))}"
         raise BagError(msg) from err
     except DAMAGE as err:
         msg = f"{str(path)!r}: damaged bag or message: {type(err).__name__}: {err}"
         raise BagError(msg) from err
+
+
+#: rosbags' words for a ``metadata.yaml`` that is no YAML, or no rosbag2 metadata.
+_METADATA_ERRORS = {"Could not load YAML from ": "not valid YAML",
+                    "Invalid bag metadata: ": "not rosbag2 metadata"}
+
+
+def _one_line(bag: Path, text: str) -> str:
+    """rosbags' message on one line: a ``metadata.yaml`` that is no YAML (the parser's error,
+    several lines) or no rosbag2 metadata is named, with what is wrong."""
+    meta = bag / "metadata.yaml"
+    for prefix, what in _METADATA_ERRORS.items():
+        if text.startswith(prefix):
+            text = text.removeprefix(prefix).removeprefix(f"{meta}: ").rstrip(".")
+            text = f"{str(meta)!r}: {what}: {text}"
+            break
+    lines = (line.strip() for line in text.splitlines())
+    return "; ".join(line for line in lines if line).replace('in "<unicode string>", ', "at ")
 
 
 def uri_path(path: Path) -> str:

@@ -252,6 +252,26 @@ def test_garbage_metadata_is_a_bag_error(bad: Path) -> None:
         read_episode(bad / "garbage_metadata")
 
 
+@pytest.mark.parametrize(("text", "why"), [
+    ("rosbag2_bagfile_information: [\n  {: garbage\n",
+     "not valid YAML: while parsing a flow node; did not find expected node content; at line "
+     "2, column 4"),
+    ("\x00\x01 garbage: : :\n", "not valid YAML: unacceptable character #x0000: control "
+     "characters are not allowed; at position 0"),
+    ("just a string\n", "not rosbag2 metadata: string indices must be integers, not 'str'"),
+])
+def test_a_garbage_metadata_yaml_is_one_line_naming_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, why: str,
+) -> None:
+    """It printed the YAML parser's 4-line error (issue 37, minor)."""
+    bag = write_episode_bag(tmp_path / "bag", LINE)
+    (bag / "metadata.yaml").write_text(text)
+    assert main(["compute", "--format", "csv", str(bag)]) == 1
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"error: {str(bag)!r}: cannot open bag: {str(bag / 'metadata.yaml')!r}: {why}",
+                     "1 of 1 bag(s) failed"]
+
+
 def test_a_bag_without_the_pose_topic_names_the_topics_it_has(bad: Path) -> None:
     with pytest.raises(
         TopicError,
