@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import optuna
+from sqlalchemy.engine import URL
 from stable_baselines3.common.callbacks import BaseCallback
 
 from pic4rl_bridge.errors import BridgeError, ConfigError
@@ -266,7 +267,9 @@ def settings_from(args: argparse.Namespace) -> TuneSettings:
     name = args.study_name or base.name
     study_dir = Path(args.study_dir or Path(base.train.runs_dir) / "tune" / name)
     study_dir.mkdir(parents=True, exist_ok=True)
-    storage = args.storage or f"sqlite:///{(study_dir / 'study.db').resolve()}"
+    # Quoted (URL.create): a folder named with '?', '#' or '%xx' stays that folder.
+    storage = args.storage or URL.create(
+        "sqlite", database=str((study_dir / "study.db").resolve())).render_as_string(False)
     return TuneSettings(base, fixed, name, study_dir, storage, args.max_steps,
                         args.trial_seconds, args.n_evaluations, args.eval_episodes,
                         args.objective)
