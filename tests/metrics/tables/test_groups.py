@@ -270,3 +270,21 @@ def test_full_runs_by_hand() -> None:
     assert (planner["success"], planner["full_runs"], planner["n_full_runs"]) == ("0/1", "–", 0)
     assert person.label == "task personMonitoring, worlds person"
     assert goto.label == "task goal, worlds indoor"
+
+
+@pytest.mark.parametrize(("world", "expected"), [
+    ("barn:12", "barn"), ("indoor:0", "indoor"), ("barn_like:3", "barn_like"),
+    ("maps/room.xml", "maps/room.xml"), ("barn:ci3", "barn:ci3"), ("", None), (None, None)])
+def test_the_world_set_of_a_world_fact(world: str | None, expected: str | None) -> None:
+    from pic4rl_metrics.contract import world_set
+
+    assert world_set(world) == expected
+
+
+@pytest.mark.parametrize(("task", "expected"), [
+    ("goToPose/lidar", "goToPose"), ("goToPose/depth", "goToPose"),
+    ("personMonitoring", "personMonitoring"), ("", None), (None, None)])
+def test_the_task_of_a_task_fact(task: str | None, expected: str | None) -> None:
+    from pic4rl_metrics.contract import task_name
+
+    assert task_name(task) == expected
