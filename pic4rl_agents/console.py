@@ -9,12 +9,25 @@ from collections.abc import Iterator
 from typing import TextIO
 
 
+class _BarAwareHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """A stream handler that clears tqdm's bars on its stream, writes, and redraws them."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        from tqdm import tqdm
+
+        try:
+            tqdm.write(self.format(record), file=self.stream)
+        except Exception:  # noqa: BLE001 -- logging's own contract: report, never raise
+            self.handleError(record)
+
+
 @contextlib.contextmanager
 def console_logging(logger: str, fmt: str = "%(message)s", *,
                     stream: TextIO | None = None) -> Iterator[None]:
     """While the block runs, ``logger``'s records from INFO up are written to ``stream``
-    (``sys.stderr`` as it is then) in ``fmt``."""
-    handler = logging.StreamHandler(stream or sys.stderr)
+    (``sys.stderr`` as it is then) in ``fmt``, through ``tqdm.write``: a line never cuts
+    through a progress bar on that stream."""
+    handler = _BarAwareHandler(stream or sys.stderr)
     handler.setFormatter(logging.Formatter(fmt))
     target = logging.getLogger(logger)
     level = target.level

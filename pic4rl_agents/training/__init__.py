@@ -1,6 +1,6 @@
 """``pic4rl-train`` and what it trains with: the ``Trainer`` (``train``) and its command line
-(``args``), the vectorised envs (``envs``), the curriculum, the SB3 callbacks (progress,
-checkpoints, seeded evaluations, stops), imitation from an expert, the reward and
+(``args``), the vectorised envs (``envs``), the curriculum, the SB3 callbacks (checkpoints,
+seeded evaluations, stops), the progress bar, imitation from an expert, the reward and
 evaluation curves (``python -m pic4rl_agents.training.curves``), the run's ``summary.yaml``
 and the evaluations' videos.
 """
@@ -12,8 +12,9 @@ _HOMES = homes_of({
     "args": ("build_parser", "resolve"),
     "envs": ("env_namespace", "eval_env_config", "make_vec_env"),
     "curriculum": ("Curriculum",),
-    "callbacks": ("Checkpoints", "ProgressCallback", "RewardCurveCallback",
-                  "SeededEvalCallback", "StopWhenSet", "WallClockLimit"),
+    "callbacks": ("Checkpoints", "RewardCurveCallback", "SeededEvalCallback", "StopWhenSet",
+                  "WallClockLimit"),
+    "progress": ("ProgressCallback", "binding_budget"),
     "summary": ("session_summary",),
     "imitation": ("EXPERTS", "DecayingCloning", "Imitation", "make_expert"),
     "curves": ("episode_table", "eval_curves", "save_eval_curves", "save_reward_curve"),

@@ -46,6 +46,7 @@ from pic4rl_agents.config import NODES, ImitationConfig
 
 from .callbacks import WallClockLimit
 from .envs import set_driver
+from .progress import ProgressCallback
 
 log = logging.getLogger(__name__)
 
@@ -166,12 +167,16 @@ class Imitation:
         """Behaviour cloning, the DAgger rounds, then the critic's warm-up; False when a
         callback stopped it (the clock, an evaluation's target)."""
         c = self.config
-        rounds = [(EXPERT, c.bc_steps)] if c.bc_steps else []
-        rounds += [(STUDENT, c.dagger_steps)] * c.dagger_rounds
+        rounds = [(EXPERT, c.bc_steps, "cloning")] if c.bc_steps else []
+        rounds += [(STUDENT, c.dagger_steps, f"DAgger round {k + 1}/{c.dagger_rounds}")
+                   for k in range(c.dagger_rounds)]
+        if rounds:
+            self._show(rounds[0][2])  # before the bar opens
         self.callback.on_training_start(locals(), globals())
         try:
-            for number, (driver, steps) in enumerate(rounds):
+            for number, (driver, steps, phase) in enumerate(rounds):
                 set_driver(self.env, "expert" if driver == EXPERT else "student")
+                self._show(phase, log_it=True)
                 if not self.collect(steps, driver):
                     if self._out_of_steps():  # an imitation-only run: its last data counts
                         self.fit(c.gradient_steps)
@@ -180,10 +185,20 @@ class Imitation:
                 log.info("imitation round %d/%d (%s): %d labelled states, loss %.4f",
                          number + 1, len(rounds), "expert" if driver == EXPERT else "student",
                          len(self.data), self.losses[-1])
+            self._show("critic warm-up", log_it=True)
             return self.warm_up_critic(c.critic_warmup_steps)
         finally:
             set_driver(self.env, "rl")  # what drives after imitation
             self.callback.on_training_end()
+
+    def _show(self, phase: str, *, log_it: bool = False) -> None:
+        """Name the phase now running (``cloning``, ``DAgger round k/n``, ``critic
+        warm-up``) in the progress bar, and in the log when ``log_it``."""
+        for callback in self.callback.callbacks:
+            if isinstance(callback, ProgressCallback):
+                callback.set_phase(phase)
+        if log_it:
+            log.info("imitation: %s", phase)
 
     def collect(self, steps: int, driver: int) -> bool:
         """Drive ``steps`` env steps (the expert or the student), labelling every state;

@@ -215,8 +215,8 @@ class Trainer:
     def _callbacks(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
                    started: float) -> list[Any]:
         """The reward curve, checkpoints, evaluation, wall-clock limit and progress bar."""
-        from .callbacks import (Checkpoints, ProgressCallback, RewardCurveCallback,
-                                WallClockLimit)
+        from .callbacks import Checkpoints, RewardCurveCallback, WallClockLimit
+        from .progress import ProgressCallback
 
         cfg = self.config.train
         every = max(cfg.checkpoint.interval_steps // cfg.n_envs, 1)
@@ -241,7 +241,8 @@ class Trainer:
         if cfg.max_wall_s > 0:
             callbacks.append(WallClockLimit(cfg.max_wall_s, started))
         if self.progress:
-            callbacks.append(ProgressCallback(cfg.max_steps, desc=self.config.name))
+            callbacks.append(ProgressCallback(cfg.max_steps, desc=self.config.name,
+                                              max_wall_s=cfg.max_wall_s, started=started))
         return callbacks
 
     def _evaluation(self, stack: contextlib.ExitStack, env_cfg: EnvConfig,
@@ -272,6 +273,7 @@ class Trainer:
                 if model.num_timesteps >= cfg.max_steps:
                     return  # imitation used every step
                 fresh = self.resume is None and model.num_timesteps == 0
+                log.info("RL from %d steps (the agent drives)", model.num_timesteps)
                 model.learn(cfg.max_steps - model.num_timesteps, callback=callbacks,
                             reset_num_timesteps=fresh,
                             log_interval=10 if cfg.off_policy else 1)

@@ -1,9 +1,11 @@
 """What training reports: who drove each training episode (the expert, the student, RL), a
 ``summary.yaml`` that leads with the last evaluation and never gives the expert's success as
-the agent's, and a reward curve drawn per driver."""
+the agent's, a reward curve drawn per driver, a progress bar whose ETA follows the budget that
+ends the run first and that names the phase, and one printed line per evaluation."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import gymnasium as gym
@@ -15,8 +17,10 @@ from agents_helpers import LIDAR_TD3, TINY
 
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.training import train
+from pic4rl_agents.training.callbacks import evaluation_line
 from pic4rl_agents.training.curves import episode_table, reward_series
 from pic4rl_agents.training.envs import DRIVER_KEY, Driven
+from pic4rl_agents.training.progress import binding_budget
 from pic4rl_agents.training.summary import session_summary
 
 IMITATION = ["imitation.enabled:true", "imitation.gradient_steps:20",
@@ -25,11 +29,12 @@ SHORT_PAIRS = ["episode_max_steps:60", "min_linear_m_s:0.0", "episodes.min_dista
                "episodes.max_distance_m:1.2", "episodes.max_detour:1.2"]
 
 
-def _train(tmp_path: Path, name: str, steps: int, hyperparams: list[str]) -> Path:
+def _train(tmp_path: Path, name: str, steps: int, hyperparams: list[str],
+           progress: bool = False) -> Path:
     args = ["--run", name, "--hyperparams", f"runs_dir:{tmp_path}", *TINY, *IMITATION,
             *hyperparams, "checkpoint.interval_steps:0", "-n", str(steps),
             "--env-kwargs", *SHORT_PAIRS, "--ros-args", "--params-file", str(LIDAR_TD3)]
-    assert train.main(["--no-progress", *args]) == 0
+    assert train.main(args if progress else ["--no-progress", *args]) == 0
     return tmp_path / name
 
 
@@ -167,3 +172,80 @@ def test_the_reward_curve_averages_each_driver_apart() -> None:
     assert series["rl"]["episode"].tolist() == [4, 5, 6]
     assert series["rl"]["mean"].tolist() == [-150.0] * 3
     assert series["expert"]["mean"].tolist() == [1000.0] * 3
+
+
+# -- progress and the console ---------------------------------------------------------------
+
+
+def test_the_eta_follows_the_budget_that_ends_the_run_first() -> None:
+    # 1,000 steps, 60 s in, at 16 steps/s: 5 M steps would take 87 h; the 300 s clock binds,
+    # 240 s left, ending at 1,000 + 240 x 16 = 4,840 steps, a fifth of the clock spent
+    wall = binding_budget(1000, 5_000_000, 60.0, max_wall_s=300.0, steps_per_s=16.0)
+    assert wall.binding == "max_wall_s" and wall.total_steps == 4840
+    assert wall.fraction == pytest.approx(0.2) and wall.eta_s == pytest.approx(240.0)
+    # 1,000 more steps take 62.5 s: the step budget binds, half of it done
+    steps = binding_budget(1000, 2000, 60.0, max_wall_s=300.0, steps_per_s=16.0)
+    assert steps.binding == "max_steps" and steps.total_steps == 2000
+    assert steps.fraction == pytest.approx(0.5) and steps.eta_s == pytest.approx(62.5)
+    # no clock budget
+    only_steps = binding_budget(11_000, 20_000, 100.0, steps_per_s=10.0)
+    assert only_steps.binding == "max_steps" and only_steps.eta_s == pytest.approx(900.0)
+    assert only_steps.fraction == pytest.approx(0.55)
+    # before the speed is known: the clock's time left, the steps' total
+    start = binding_budget(0, 5_000_000, 2.0, max_wall_s=300.0)
+    assert start.binding == "max_wall_s" and start.eta_s == pytest.approx(298.0)
+    assert start.total_steps == 5_000_000
+    assert binding_budget(0, 1000, 0.0).eta_s is None
+    # the clock spent: nothing left, whatever the steps
+    over = binding_budget(7724, 5_000_000, 301.0, max_wall_s=300.0, steps_per_s=25.0)
+    assert over.fraction == 1.0 and over.eta_s == 0.0 and over.total_steps == 7724
+
+
+def test_an_evaluation_line_counts_the_outcomes_and_names_the_best() -> None:
+    row = {"steps": 6000, "wall_s": 182.5, "episodes": 5, "success_rate": 0.6,
+           "collision_rate": 0.2, "timeout_rate": 0.2, "diverged_rate": 0.0}
+    best = {"steps": 4000, "success_rate": 0.8}
+    assert evaluation_line(row, best) == (
+        "eval at 6,000 steps (3.0 min): success 3/5 (60%), collisions 1, timeouts 1; "
+        "best 80% at 4,000 steps")
+    diverged = {**row, "collision_rate": 0.0, "diverged_rate": 0.2}
+    assert "collisions 0, timeouts 1, diverged 1;" in evaluation_line(diverged, best)
+
+
+def test_the_bar_names_each_phase_and_each_evaluation_prints_a_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Cloning (40 steps), one DAgger round (40), the critic's warm-up, then RL to 160 steps,
+    an evaluation every 40: the bar's description names each phase, and each evaluation is
+    one line with the numbers of its evaluations.csv row."""
+    run = _train(tmp_path, "phases", 160, [
+        "imitation.bc_steps:40", "imitation.dagger_rounds:1", "imitation.dagger_steps:40",
+        "eval.interval_steps:40"], progress=True)
+    err = capsys.readouterr().err.replace("\r", "\n")  # the bar redraws after a carriage return
+    for phase in ("cloning", "DAgger round 1/1", "critic warm-up", "RL"):
+        assert f"phases [{phase}]:" in err, phase
+    lines = re.findall(r"^pic4rl-train: (eval at .*)$", err, re.MULTILINE)
+    rows = pd.read_csv(run / "eval" / "0" / "evaluations.csv")
+    assert rows["steps"].tolist() == [40, 80, 120, 160] and len(lines) == 4
+    best: dict = {}
+    for line, (_, row) in zip(lines, rows.iterrows()):
+        if not best or row["success_rate"] > best["success_rate"]:
+            best = row.to_dict()
+        assert line == evaluation_line(row.to_dict(), best)
+    drivers = episode_table(run / "monitor")[DRIVER_KEY]
+    assert set(drivers) <= {"expert", "student", "rl", "mixed"} and "rl" in set(drivers)
+
+
+def test_a_run_the_clock_ends_fills_its_bar_with_the_steps_it_drove(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """5 M steps and a 6 s clock: the bar's total is the steps the clock allows, not 5 M, and
+    the bar ends full, saying which budget ended the run."""
+    args = ["--run", "clock", "--hyperparams", f"runs_dir:{tmp_path}", *TINY, "max_wall_s:6",
+            "eval.interval_steps:0", "checkpoint.interval_steps:0", "-n", "5000000",
+            "--env-kwargs", "episode_max_steps:40", "--ros-args", "--params-file",
+            str(LIDAR_TD3)]
+    assert train.main(args) == 0
+    err = capsys.readouterr().err.replace("\r", "\n")
+    steps = yaml.safe_load((tmp_path / "clock" / "summary.yaml").read_text())["total_steps"]
+    last_bar = [line for line in err.splitlines() if line.startswith("clock [RL]:")][-1]
+    assert f"| {steps}/{steps} [" in last_bar and "ends=max_wall_s 6 s" in last_bar
+    assert "5000000" not in last_bar
