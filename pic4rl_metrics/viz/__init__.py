@@ -1,6 +1,7 @@
 """Pictures: figures (``plots``), drawing on arrays (``raster``), episode videos (``video``,
-``video_batch``) and the one-page HTML report (``html_report`` with ``html_page`` and
-``report_maps``). Matplotlib, Pillow and imageio load only here.
+``video_batch``) and the one-page HTML report (``html_report`` with ``html_page``,
+``report_maps``, ``report_logs``, ``report_inputs`` and ``report_export``). Matplotlib,
+Pillow and imageio load only here.
 """
 
 from __future__ import annotations

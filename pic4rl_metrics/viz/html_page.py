@@ -1,31 +1,40 @@
 """The HTML report's page: one self-contained file, its style, its plain JavaScript (tables
-sorted by a click on a column's header, filtered by the words typed above them) and the
-tables' markup. No server, no CDN, no network: what ``html_report`` writes opens offline and
-travels as an e-mail attachment.
+sorted by a click on a column's header, filtered by the words typed above them, each figure's
+save link pointed at its image) and the tables', figures' and downloads' markup. Tables wrap
+to fit a laptop's width (text at spaces, links and long cells anywhere, numbers never). No
+server, no CDN, no network: what ``html_report`` writes opens offline and travels as an e-mail
+attachment.
 """
 
 from __future__ import annotations
 
 import html
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from urllib.parse import quote
 
 _CSS = """
 body{font:14px/1.4 system-ui,-apple-system,'Segoe UI',sans-serif;margin:0 auto;max-width:1280px;
 padding:0 16px 40px;color:#222}
 h1{font-size:1.6em;margin:18px 0 4px}h2{margin-top:32px;border-bottom:1px solid #ddd}
 nav a{margin-right:12px}.note{color:#555;font-size:.92em;max-width:60em}
-table{border-collapse:collapse;margin:8px 0;font-size:.92em}
-th,td{border:1px solid #ddd;padding:3px 7px;text-align:left;white-space:nowrap}
-th{background:#f3f3f3;position:sticky;top:0}table.sortable th{cursor:pointer;user-select:none}
+table{border-collapse:collapse;margin:8px 0;font-size:.92em;max-width:100%}
+th,td{border:1px solid #ddd;padding:3px 6px;text-align:left;vertical-align:top;
+overflow-wrap:break-word}td.num{white-space:nowrap}
+th{background:#f3f3f3;position:sticky;top:0;font-weight:600;overflow-wrap:normal}
+table.sortable th{cursor:pointer;user-select:none}
 th[data-dir=asc]::after{content:' \\25B2'}th[data-dir=desc]::after{content:' \\25BC'}
 td.num{text-align:right;font-variant-numeric:tabular-nums}
 tr.error td{background:#fdecea}.maps{display:flex;flex-wrap:wrap;gap:12px}
 figure{margin:0;border:1px solid #ddd;padding:4px}figcaption{font-size:.85em;max-width:280px}
+a.save{margin-left:6px;font-size:.9em}.provenance{color:#555;margin:0 0 6px}
+details summary{cursor:pointer;color:#333}.exports a{margin-right:10px}
 .key span{display:inline-block;margin-right:12px}.sw{display:inline-block;width:11px;height:11px;
 margin-right:4px;vertical-align:middle}input.filter{width:28em;padding:3px}
-.scroll{max-height:70vh;overflow:auto}#inputs td,#errors td{white-space:normal;word-break:break-all}
+.scroll{max-height:70vh;overflow:auto}
+#inputs td,#errors td,#episodes td:last-child,td a{overflow-wrap:anywhere}
 """
 
 _JS = """
@@ -74,6 +83,10 @@ document.querySelectorAll('table.sortable th').forEach(function (th) {
 document.querySelectorAll('input.filter').forEach(function (input) {
   input.addEventListener('input', function () { filterRows(input); });
 });
+document.querySelectorAll('figure').forEach(function (fig) {
+  const img = fig.querySelector('img'), save = fig.querySelector('a.save');
+  if (img && save) save.href = img.src;  // the image's own data: URI, not a second copy
+});
 """
 
 
@@ -107,12 +120,14 @@ def shown_as(markup_text: str, sort: float | str | None) -> Cell:
     return Cell(html.escape(markup_text), "" if missing else str(sort), numeric=True)
 
 
-def link(label: str, href: str | None, cls: str = "") -> Cell:
-    """A relative link (no link when ``href`` is None)."""
+def link(label: str, href: str | None, cls: str = "", title: str | None = None) -> Cell:
+    """A relative link (no link when ``href`` is None); ``title``: shown on hover, sorted by
+    (default ``label``)."""
     if href is None:
         return Cell("–")
-    attr = f' class="{cls}"' if cls else ""
-    return Cell(f'<a{attr} href="{html.escape(href)}">{html.escape(label)}</a>', label)
+    attr = (f' class="{cls}"' if cls else "") + (
+        f' title="{html.escape(title)}"' if title else "")
+    return Cell(f'<a{attr} href="{html.escape(href)}">{html.escape(label)}</a>', title or label)
 
 
 def _td(c: Cell) -> str:
@@ -144,9 +159,19 @@ def table(table_id: str, header: Sequence[str], rows: Sequence[Sequence[Cell]], 
 
 
 def figure(uri: str, caption: str, alt: str) -> str:
-    """An inline image with its caption (``caption`` is markup, already escaped)."""
+    """An inline image with its caption (``caption`` is markup, already escaped) and a link
+    that saves it as ``<alt>.png`` (its address is the image's, set by the page's script)."""
+    name = re.sub(r"[^\w.-]+", "_", alt).strip("_") or "figure"
     return (f'<figure><img src="{uri}" alt="{html.escape(alt)}">'
-            f"<figcaption>{caption}</figcaption></figure>")
+            f'<figcaption>{caption} <a class="save" download="{html.escape(name)}.png" '
+            f'title="save this figure">PNG</a></figcaption></figure>')
+
+
+def download(label: str, name: str, mime: str, content: str) -> str:
+    """A link that saves ``content`` as the file ``name`` (a ``data:`` URI: no server)."""
+    href = f"data:{mime};charset=utf-8,{quote(content)}"
+    return (f'<a class="export" download="{html.escape(name)}" href="{html.escape(href)}">'
+            f"{html.escape(label)}</a>")
 
 
 def swatch(rgb: tuple[int, int, int], label: str) -> str:

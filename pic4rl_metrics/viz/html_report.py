@@ -12,14 +12,10 @@ markup, style and script are ``html_page``'s. ``pic4rl-bench`` writes one beside
 
 from __future__ import annotations
 
-import hashlib
 import html
-import json
 import math
 import os
 from collections.abc import Callable, Sequence
-from datetime import datetime, timezone
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from urllib.parse import quote
 
@@ -37,6 +33,8 @@ from ..tables.paired import grouped_paired, seed_spread
 from ..tables.results import ROW_COLUMNS
 from ..tables.text import plain_text, short_bag
 from . import html_page as hp
+from .report_export import leaderboard_downloads
+from .report_inputs import inputs_section, provenance
 from .report_logs import goal_less, logs_section
 from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
 
@@ -52,9 +50,6 @@ EPISODE_COLUMNS = ("clearance_time_s", "path_length_m", "spl", "collision_count"
 _NOT_FAILED = (Outcome.GOAL.value, Outcome.UNKNOWN.value)
 #: At most this many start–goal pairs get a map (the rest are counted).
 MAX_PAIR_MAPS = 200
-#: Episodes' facts that change from episode to episode: left out of a run's setup hash.
-_PER_EPISODE = {"episode", "seed", "start", "goal", "outcome", "shortest_path_m",
-                "straight_line_m", "row_centerline"}
 
 
 def _label(col: str) -> str:
@@ -245,46 +240,12 @@ def _episodes(frame: pd.DataFrame, names: pd.Series, pairs: pd.Series, out_dir: 
             hp.text(names[i]), hp.text(r.get("world")), hp.text(pairs[i]), hp.text(r.get("run")),
             hp.text(r.get("episode")), hp.text(r["outcome"]),
             *(hp.number(r.get(c), 0 if c == "collision_count" else 2) for c in EPISODE_COLUMNS),
-            hp.link(short_bag(bag), _href(bag, out_dir) if bag.exists() else None, "bag"),
+            hp.link(bag.name, _href(bag, out_dir) if bag.exists() else None, "bag",
+                    short_bag(bag)),  # the folder's name: the table fits a laptop's width
             hp.link(video.name, _href(video, out_dir), "video") if video else hp.text(None),
             hp.text(r["error"] or "")])
         classes.append("error" if r["error"] else "")
     return hp.table("episodes", header, rows, filterable=True, row_classes=classes, scroll=True)
-
-
-def _file_hash(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()[:12]
-
-
-def _inputs(result: MetricsResult, names: pd.Series, inputs: Sequence[str]) -> str:
-    folders = sorted({str(Path(r.bag).resolve().parent) for r in result.results})
-    configs = sorted({p for f in folders for d in (Path(f), Path(f).parent)
-                      for p in d.glob("config*.yaml")})
-    setups: dict[tuple[str, str], set[str]] = {}
-    for i, r in enumerate(result.results):
-        if r.episode is None:
-            continue
-        values = {k: v for k, v in r.episode.facts.values().items() if k not in _PER_EPISODE}
-        digest = hashlib.sha256(json.dumps(values, sort_keys=True, default=str).encode())
-        run = str(r.episode.facts.run or "?")
-        setups.setdefault((str(names.iloc[i]), run), set()).add(digest.hexdigest()[:12])
-    try:
-        tool = version("pic4rl")
-    except PackageNotFoundError:
-        tool = "unknown"
-    rows = [[hp.text("inputs"), hp.text(" ".join(inputs) or "–")],
-            [hp.text("bag folders"), hp.text("; ".join(folders))],
-            *([hp.text(f"config {c}"), hp.text(_file_hash(c))] for c in configs),
-            *([hp.text(f"setup of {a} / {run}"), hp.text(", ".join(sorted(h)))]
-              for (a, run), h in setups.items()),
-            [hp.text("pic4rl version"), hp.text(tool)],
-            [hp.text("written"), hp.text(datetime.now(timezone.utc).strftime(
-                "%Y-%m-%d %H:%M:%S UTC"))]]
-    note = ("<p class=note>config: sha256 (first 12 hex digits) of each config*.yaml in the "
-            "bags' folders and those above them; setup: of the facts an agent's run shares "
-            "across its episodes (robot, world, task, tolerances, footprint, budget); more "
-            "than one means the run mixed set-ups.</p>")
-    return note + hp.table("inputs", ["what", "value"], rows)
 
 
 def build_report(result: MetricsResult, out_dir: Path, *,
@@ -302,14 +263,14 @@ def build_report(result: MetricsResult, out_dir: Path, *,
     errors = ("<p>None: every bag was read.</p>" if not failed else hp.table(
         "errors", ["bag", "error"], [[hp.text(f.bag), hp.text(f.error)] for f in failed]))
     good = len(result.results) - len(failed)
-    intro = (f"<p class=note>{good} episodes from {len(result.results)} bags "
-             f"({len(failed)} unreadable), {names[~frame['error'].astype(bool)].nunique()} "
+    intro = (provenance(result) + f"<p class=note>{good} episodes from {len(result.results)} "
+             f"bags ({len(failed)} unreadable), {names[~frame['error'].astype(bool)].nunique()} "
              "agents; every figure from the bags alone.</p>")
     free = goal_less(frame)  # logs without a goal: their own section, not ranked nor failed
     logs = logs_section(frame, names, sketches, _label)
     ranked = ~free & (frame["error"].fillna("") == "")
-    board = _leaderboard(frame[~free]) if ranked.any() else (
-        "<p>No episode has a goal: nothing to rank (see Logs without a goal).</p>")
+    board = (_leaderboard(frame[~free]) + leaderboard_downloads(frame[~free]) if ranked.any()
+             else "<p>No episode has a goal: nothing to rank (see Logs without a goal).</p>")
     sections = [
         ("leaderboard", "Leaderboard", board),
         *([("logs", "Logs without a goal", logs)] if logs else []),
@@ -319,7 +280,7 @@ def build_report(result: MetricsResult, out_dir: Path, *,
         ("pairs", "Start–goal pairs", _pair_maps(frame, names, pairs, sketches)),
         ("episodes", "Episodes", _episodes(frame, names, pairs, out_dir)),
         ("errors", "Unreadable bags", errors),
-        ("inputs", "Inputs", _inputs(result, names, inputs)),
+        ("inputs", "Inputs", inputs_section(result, names, inputs)),
     ]
     return hp.page(title, sections, intro)
 

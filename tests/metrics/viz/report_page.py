@@ -22,6 +22,9 @@ class Page(HTMLParser):
         self.section = ""  # the id of the section being read
         self.section_images: dict[str, list[str]] = {}  # each section's images' alt texts
         self.text: list[str] = []  # every piece of text, in order
+        self.anchors: list[dict[str, str | None]] = []  # every link's attributes
+        self.folded: set[str] = set()  # ids of the tables inside a <details>
+        self._details = 0
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         a = dict(attrs)
@@ -35,17 +38,24 @@ class Page(HTMLParser):
             self.section_images.setdefault(self.section, []).append(str(a.get("alt")))
         elif tag == "a":
             self.links.append((str(a.get("class") or ""), str(a.get("href"))))
+            self.anchors.append(a)
+        elif tag == "details":
+            self._details += 1
         elif tag in ("script", "link", "iframe") and (a.get("src") or a.get("href")):
             self.external.append(f"{tag} {a}")
         elif tag == "table":
             self._table = str(a.get("id"))
             self.rows[self._table] = []
+            if self._details:
+                self.folded.add(self._table)
         elif tag == "tr" and self._table:
             self.rows[self._table].append([])
         elif tag in ("td", "th") and self._table:
             self._cell = []
 
     def handle_endtag(self, tag: str) -> None:
+        if tag == "details":
+            self._details -= 1
         if tag == "h2":
             self._in_h2 = False
         elif tag in ("td", "th") and self._cell is not None and self._table:

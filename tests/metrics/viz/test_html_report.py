@@ -164,3 +164,77 @@ def test_bags_without_a_pair_are_counted_and_drawn_in_no_pair(tmp_path: Path, ca
     assert row[:5] == ["a", "b", "0", "0", "1 + 1"] and row[-1] == "not distinguishable at this n"
     assert "Episodes without a start–goal pair in their facts: 2." in text
     assert "No episode records its start–goal pair" in text
+
+
+def test_the_page_states_version_commit_and_seeds(page: tuple[Path, _Page]) -> None:
+    """Under the title: the package's version, the git commit of the source it ran from (this
+    checkout's: HEAD when the page was built, so HEAD or an ancestor of it now) and the seeds
+    of the episodes (bench_bags: run r, pair k has seed 1000 r + k)."""
+    import subprocess
+    from importlib.metadata import version
+
+    _, p = page
+    line = next(t for t in p.text if t.startswith("pic4rl ") and "git commit" in t)
+    match = re.fullmatch(r"pic4rl (\S+) · git commit (\w+) · seeds 0–3, 1000–1003 "
+                         r"\(24 of 24 episodes record one\)", line)
+    assert match and match[1] == version("pic4rl"), line
+    here = Path(__file__).parent
+    ancestor = subprocess.run(["git", "merge-base", "--is-ancestor", match[2], "HEAD"],
+                              cwd=here, capture_output=True, check=False)
+    assert len(match[2]) == 12 and ancestor.returncode == 0
+
+
+def test_the_inputs_fold_behind_a_one_line_summary(page: tuple[Path, _Page]) -> None:
+    _, p = page
+    assert "inputs" in p.folded  # the detail: behind a <details>
+    summary = next(t for t in p.text if "bag(s) in" in t)
+    # 3 agents × 2 runs, each run's folder; every episode's time budget differs in its facts
+    assert summary.startswith("1 input(s), 24 bag(s) in 6 folder(s), 0 config file(s), 6 agent "
+                              "run(s) (6 with more than one set-up: see the detail)")
+    rows = {r[0]: r[1] for r in p.rows["inputs"][1:]}
+    assert rows["git commit"] and rows["pic4rl version"]
+
+
+def test_the_leaderboard_saves_as_compares_csv_and_latex(page: tuple[Path, _Page],
+                                                         bench_bags: Path, capsys) -> None:
+    from urllib.parse import unquote
+
+    _, p = page
+    exports = {a["download"]: a["href"] for a in p.anchors if a.get("class") == "export"}
+    assert sorted(exports) == ["leaderboard.csv", "leaderboard.tex"]
+    for name, fmt, mime in (("leaderboard.csv", "csv", "text/csv"),
+                            ("leaderboard.tex", "latex", "application/x-tex")):
+        head, _, body = str(exports[name]).partition(",")
+        assert head == f"data:{mime};charset=utf-8"
+        code, out, _ = _run(capsys, "compare", "--format", fmt, bench_bags)
+        assert code == 0 and unquote(body).rstrip("\n") == out.rstrip("\n")  # as compare
+
+
+def test_every_figure_can_be_saved_as_png(page: tuple[Path, _Page]) -> None:
+    _, p = page
+    saves = [a for a in p.anchors if a.get("class") == "save"]
+    assert len(saves) == len(p.images) > 0
+    names = [str(a["download"]) for a in saves]
+    assert all(re.fullmatch(r"[\w.-]+\.png", n) for n in names)
+    assert "td3_failures.png" in names
+
+
+def test_every_name_is_escaped(tmp_path: Path, capsys) -> None:
+    """Agent, world, run and episode names with markup, in the leaderboard, the logs, the
+    figures' captions and file names, the downloads and the inputs, stay text."""
+    from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+
+    evil = '<img src=x onerror="alert(1)">&amp;\'"'
+    facts = {"agent": evil, "world": f"w{evil}", "run": f"r{evil}", "episode": f"e{evil}"}
+    write_episode_bag(tmp_path / "bags" / "a", straight_line(0.5, 4.0),
+                      facts={**facts, "start": [0.0, 0.0, 0.0], "goal": [2.0, 0.0]},
+                      outcome="goal")
+    write_episode_bag(tmp_path / "bags" / "log", straight_line(0.5, 4.0), facts=facts)
+    out = tmp_path / "report.html"
+    assert _run(capsys, "report", tmp_path / "bags", "--out", out)[0] == 0
+    text = out.read_text()
+    assert "<img src=x" not in text and 'onerror="alert' not in text
+    p = _Page()
+    p.feed(text)
+    assert p.rows["leaderboard"][1][0] == evil and p.rows["logs"][1][0] == evil
+    assert any(evil in t for t in p.text if "·" not in t)

@@ -105,3 +105,55 @@ def test_the_report_works_in_chromium(browser, bench_bags: Path, tmp_path: Path)
     assert browser.save_screenshot(str(shot)) and shot.stat().st_size > 10_000
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []
+
+
+def test_the_report_fits_a_laptops_width(browser, tmp_path: Path) -> None:
+    """At a 1280 px window (issue 37, item 12): long agent names, a reference, a bag whose
+    error names a long path; no table is wider than its container, no cell's content spills
+    out of it, the page does not scroll sideways and the paired table's verdict is in view.
+    Each figure's save link holds its image; the leaderboard's downloads are data: URIs."""
+    from pic4rl_metrics.testing.synthetic_bench import write_benchmark
+
+    bags = tmp_path / "bags"
+    write_benchmark(bags, {"sac_lidar_explorer_dagger_v2": 0.8, "td3_depth_explorer_memory": 0.5,
+                           "planner_with_margin": 0.95}, pairs=4, runs=2)
+    bad = bags / "run0" / ("a_bag_folder_whose_name_is_long_and_has_no_space_to_break_a_line_at_"
+                           "anywhere_in_it")
+    bad.mkdir()
+    (bad / "metadata.yaml").write_text("rosbag2_bagfile_information: [")
+    out = tmp_path / "report.html"
+    assert cli.main(["report", str(bags), "--out", str(out), "--reference",
+                     "planner_with_margin", "--no-progress"]) == 1
+    browser.set_window_size(1280, 1000)
+    browser.get(out.as_uri())
+    inner, client, scroll = browser.execute_script(
+        "const d = document.documentElement;"
+        "return [window.innerWidth, d.clientWidth, d.scrollWidth]")
+    assert inner <= 1280 and scroll <= client, (inner, client, scroll)
+    tables = browser.execute_script(
+        "return Array.from(document.querySelectorAll('table')).map(t => {"
+        "  const box = t.parentElement, r = t.getBoundingClientRect();"
+        "  return [t.id, r.right, box.getBoundingClientRect().right, box.scrollWidth,"
+        "          box.clientWidth]; })")
+    ids = {t[0].split("-")[0] for t in tables}  # a table per task and world set: paired-2, ...
+    assert ids >= {"leaderboard", "paired", "episodes", "errors", "inputs"}
+    for name, right, box_right, box_scroll, box_client in tables:
+        assert right <= box_right + 0.5 and box_scroll <= box_client, (name, right, box_right)
+    spills = browser.execute_script(
+        "return Array.from(document.querySelectorAll('td, th'))"
+        ".filter(c => c.offsetParent !== null && c.scrollWidth > c.clientWidth + 1)"
+        ".map(c => c.textContent.slice(0, 40))")
+    assert spills == []
+    verdict = browser.execute_script(
+        "const th = document.querySelector('table[id^=paired] thead th:last-child');"
+        "const r = th.getBoundingClientRect(); return [th.textContent, r.left, r.right]")
+    assert verdict[0] == "verdict" and 0 <= verdict[1] < verdict[2] <= inner
+    saves = browser.execute_script(
+        "return Array.from(document.querySelectorAll('figure')).map(f =>"
+        " [f.querySelector('a.save').href === f.querySelector('img').src,"
+        "  f.querySelector('a.save').download])")
+    assert saves and all(same and name.endswith(".png") for same, name in saves)
+    exports = browser.execute_script(
+        "return Array.from(document.querySelectorAll('a.export')).map(a => a.href)")
+    assert [e.partition(",")[0] for e in exports] == [
+        "data:text/csv;charset=utf-8", "data:application/x-tex;charset=utf-8"]
