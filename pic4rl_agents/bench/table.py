@@ -23,6 +23,7 @@ from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.tables.paired import agent_names
 from pic4rl_metrics.viz.plots import save_figure
+from pic4rl_metrics.viz.report_maps import SKETCH_SCANS
 from pic4rl_metrics.core.registry import METRICS
 from pic4rl_metrics.tables.layouts import render_rows
 from pic4rl_metrics.tables.text import plain_text
@@ -75,8 +76,8 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
     folders = [f for f in folders if f.is_dir()]
     if not folders:
         return pd.DataFrame(columns=[*ROW_KEYS, "success"]), (), None
-    # one process per core (the pass runs on the driver); whole scans: the report draws returns
-    result = compute(folders, jobs=0, full_scans=True)
+    # one process per core (the pass runs on the driver); a few whole scans: the report's maps
+    result = compute(folders, jobs=0, scan_sample=SKETCH_SCANS)
     frame = result.frame
     by_name = {c.name: c for c in cells}
     rows = [by_name[Path(str(b)).resolve().relative_to(suite.root.resolve()).parts[0]].row
