@@ -81,14 +81,15 @@ def save_reward_curve(monitor_dir: Path, out: Path, *, window: int = 50,
     fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
     for driver, line in reward_series(df, window).items():
         colour, label = DRIVER_STYLE[driver]
-        ax.plot(line["episode"], line["r"], ".", color=colour, alpha=0.3, ms=3)
+        ax.plot(line["episode"], line["r"], ".", color=colour, alpha=0.45, ms=4)
         ax.plot(line["episode"], line["mean"], color=colour, lw=2,
+                marker="o" if len(line) == 1 else None,
                 label=f"{label}: moving average ({window} episodes)")
     ax.set_xlabel("episode")
     ax.set_ylabel("reward")
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize="small")
+    ax.legend(loc="best", fontsize="small")
     with atomic.replacing(out) as tmp:  # whole or not at all
         fig.savefig(tmp, dpi=120, format=out.suffix.lstrip(".") or "png")
     plt.close(fig)
