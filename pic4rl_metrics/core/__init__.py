@@ -1,7 +1,8 @@
 """The math: an episode as data and the metrics computed from it, with no file, plot or CLI.
 
 The ``Episode`` (``series``, its series' kinds in ``series_kinds``), the input roles that fill it
-(``roles``), the time base (``timebase``) and per-scan summary (``scan_summary``), crop-lane
+(``roles``), the time base (``timebase``), what no robot does (``plausibility``: implausible
+speeds, a pose stream of two tracks) and per-scan summary (``scan_summary``), crop-lane
 fits (``crop_rows``), math on series (``kinematics``), what metrics share (``derived``), the
 metric registry (``registry``) and the built-in metrics (``metrics``, ``person_metrics``).
 Imports nothing of ``bags``, ``tables``, ``viz`` or ``cli`` (``tests/test_architecture.py``).
