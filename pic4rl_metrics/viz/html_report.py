@@ -166,7 +166,8 @@ def _failures(frame: pd.DataFrame, names: pd.Series, sketches: dict[int, Sketch]
     parts = [_outcome_counts(frame, names), "<p class=note>Each agent's failed episodes end "
              "where the dot is (red: collision, orange: timeout, purple: diverged, grey: "
              "aborted), on the map the scans of every episode in that world build.</p>"]
-    worlds, agent_of = frame["world"].fillna("?").to_dict(), names.to_dict()
+    worlds = frame["world"].fillna("a world not recorded").to_dict()
+    agent_of = names.to_dict()
     by_world: dict[object, list[int]] = {}
     for i in sketches:
         by_world.setdefault(worlds[i], []).append(i)

@@ -164,6 +164,8 @@ def test_bags_without_a_pair_are_counted_and_drawn_in_no_pair(tmp_path: Path, ca
     assert row[:5] == ["a", "b", "0", "0", "1 + 1"] and row[-1] == "not distinguishable at this n"
     assert "Episodes without a start–goal pair in their facts: 2." in text
     assert "No episode records its start–goal pair" in text
+    # their failures' captions name the missing world in words, not "?"
+    assert "<b>a</b> in a world not recorded: 1 failed" in text and " in ?" not in text
 
 
 def test_the_page_states_version_commit_and_seeds(page: tuple[Path, _Page]) -> None:
