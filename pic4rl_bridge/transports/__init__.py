@@ -3,7 +3,8 @@
 ``transport`` (the ``Transport`` interface every transport implements, ``EpisodeRequest``,
 ``RawMessage``), ``inprocess`` (the engine in this process; loads MuJoCo), ``ros_transport``
 (ROS 2 topics, with ``ros_topics``: its subscriptions and their QoS, and ``ros_sim``: what it asks
-of a sim node; loads rclpy), ``decode`` (messages → numpy), ``sensor_table`` (the frame's
+of a sim node; loads rclpy), ``decode`` (messages → numpy), ``cdr`` (the per-step messages
+read straight from their CDR bytes), ``sensor_table`` (the frame's
 sensor table and ``build_frame``, which both transports call) and ``frame`` (``SensorFrame``:
 one step's decoded readings, what tasks and baselines read). Names are imported on first use,
 so importing one light module loads no MuJoCo or rclpy.

@@ -11,9 +11,10 @@ from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 
 from ..errors import SimConflict
-from . import decode
+from . import cdr, decode
 from .ros_topics import Topic
 from .transport import EpisodeRequest
 
@@ -66,19 +67,27 @@ def check_one_sim(node: Node, sim_node: str, goal_topic: str, pose_topic: str) -
 def subscribe_status(node: Node, faults: dict[int, str]) -> Topic:
     """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
     physics diverged and the robot was put back at its start; its reason goes to ``faults``
-    under the step's stamp (ns). The returned topic holds the last status's stamp."""
+    under the step's stamp (ns). The returned topic holds the last status's stamp. Read from
+    the CDR bytes (``cdr.statuses``: no message objects built each step)."""
     from pic4rl_sim.node.messages import PHYSICS_STATUS  # the engine's: only with our sim
 
     entry = Topic(DIAGNOSTICS.name, DIAGNOSTICS.type)
+    error = DiagnosticStatus.ERROR[0]
 
-    def on_status(msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if status.name == PHYSICS_STATUS:
-                entry.stamp_ns = decode.stamp_ns(msg.header)
-                if status.level == DiagnosticStatus.ERROR:
-                    faults[entry.stamp_ns] = status.message
+    def on_status(data: bytes) -> None:
+        read = cdr.statuses(data)
+        if read is None:  # not little-endian plain CDR: rclpy's deserialization
+            msg = deserialize_message(data, DiagnosticArray)
+            read = decode.stamp_ns(msg.header), [(s.level[0], s.name, s.message)
+                                                 for s in msg.status]
+        stamp_ns, statuses = read
+        for level, name, message in statuses:
+            if name == PHYSICS_STATUS:
+                entry.stamp_ns = stamp_ns
+                if level == error:
+                    faults[stamp_ns] = message
 
     sub = node.create_subscription(DiagnosticArray, DIAGNOSTICS.name, on_status,
-                                   profile(bridge_qos(QosKind.RELIABLE)))
+                                   profile(bridge_qos(QosKind.RELIABLE)), raw=True)
     entry.name = sub.topic_name
     return entry

@@ -72,11 +72,14 @@ def command_message(command: Twist2D, stamped: bool, stamp_ns: int) -> Twist | T
 
 
 class Topic:
-    """One raw subscription: the latest decoded message, its stamp and arrival time."""
+    """One raw subscription: the latest message's CDR bytes (``data``), its stamp and arrival
+    time; ``msg`` deserializes them when read (once per message)."""
 
     def __init__(self, name: str, type_name: str) -> None:
         self.name, self.type_name = name, type_name
-        self.msg: Any = None
+        self.data: bytes | None = None
+        self._msg: Any = None
+        self._msg_data: bytes | None = None  # the bytes ``_msg`` was deserialized from
         self.stamp_ns = -1
         self.received_s = -math.inf  # time.monotonic() of the latest message
         self.qos = QosSettings()  # the subscription's
@@ -84,21 +87,27 @@ class Topic:
         self.recorded = False
         self.episodic = False  # published once per episode (goal, plan), not every step
 
+    @property
+    def msg(self) -> Any:
+        """The latest message deserialized; ``None`` before the first. A step reads its
+        odometry and sensors from ``data`` (``cdr``): only what has no CDR reader, or what
+        is published once an episode, comes through here."""
+        if self.data is not None and self._msg_data is not self.data:
+            self._msg = deserialize_message(self.data, ros_type(self.type_name))
+            self._msg_data = self.data
+        return self._msg
 
-def receiver(entry: Topic, needed: bool,
+
+def receiver(entry: Topic,
              deliver: Callable[[Topic, bytes, int], None]) -> Callable[[bytes], None]:
-    """A raw subscription's callback: keeps ``entry``'s latest message (decoded when frames
-    need it or its stamp cannot be read from the CDR bytes), stamp and arrival time, and
-    hands a recorded one's bytes and stamp to ``deliver``."""
-    kind = ros_type(entry.type_name)
-    decode_all = needed or not starts_with_stamp(kind)
+    """A raw subscription's callback: keeps ``entry``'s latest bytes, stamp (read from the
+    CDR bytes; deserialized only for a type that does not start with one) and arrival time,
+    and hands a recorded one's bytes and stamp to ``deliver``."""
+    stamped = starts_with_stamp(ros_type(entry.type_name))
 
     def on_message(data: bytes) -> None:
-        if decode_all:
-            entry.msg = deserialize_message(data, kind)
-            stamp = stamp_of(entry.msg)
-        else:  # recorded only: the stamp straight from the CDR bytes, nothing decoded
-            stamp = cdr_stamp(data)
+        entry.data = data
+        stamp = cdr_stamp(data) if stamped else stamp_of(entry.msg)
         stamp = time.time_ns() if stamp is None else stamp
         entry.stamp_ns, entry.received_s = stamp, time.monotonic()
         entry.count += 1

@@ -48,7 +48,7 @@ from pic4rl_sim.node.ros_interfaces import (
 from ..config import EnvConfig, StepMode
 from ..errors import EpisodeRejected, StaleSensor, TransportError
 from ..scenario import Scenario
-from . import decode
+from . import cdr, decode
 from .frame import SensorFrame
 from .ros_sim import check_one_sim, episode_request, subscribe_status
 from .ros_topics import Topic, command_message, offered, receiver, silent, stale, wiring
@@ -64,10 +64,8 @@ class RosTransport(Transport):
 
     def __init__(self, config: EnvConfig, scenario: Scenario, sensors: frozenset[str], *,
                  node: Node | None = None) -> None:
-        self._config = config
-        self._ros = config.ros
-        self._mode = StepMode(config.ros.step_mode)
-        self._timeout_s = config.ros.timeout_s
+        self._config, self._ros = config, config.ros
+        self._mode, self._timeout_s = StepMode(config.ros.step_mode), config.ros.timeout_s
         self._dt_s = scenario.robot.control_dt_s
         self._max_age_s = config.ros.max_sensor_age_s or 5.0 * self._dt_s
         self._mounts = scenario.robot.mounts
@@ -99,8 +97,7 @@ class RosTransport(Transport):
         kind = TwistStamped if self._cmd_stamped else Twist
         self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel,
                                               profile(bridge_qos(QosKind.RELIABLE)))
-        self._cmd_name = self._cmd_pub.topic_name
-        self._cmd_type = type_name(kind)
+        self._cmd_name, self._cmd_type = self._cmd_pub.topic_name, type_name(kind)
         self._set_params = self._reset_client = None
         if config.ros.sim_node:
             self._set_params = node.create_client(
@@ -108,7 +105,7 @@ class RosTransport(Transport):
         if config.ros.reset_service:
             self._reset_client = node.create_client(Empty, config.ros.reset_service)
         self._used_goal_ns = -1  # the goal stamp of the last episode
-        self._decoded: dict[str, tuple[Any, Any]] = {}  # episodic sensor -> (message, value)
+        self._decoded: dict[str, tuple[Any, Any]] = {}  # goal, episodic sensor -> (data, value)
 
     # -- wiring ---------------------------------------------------------------------------
 
@@ -122,9 +119,8 @@ class RosTransport(Transport):
             entry.qos = qos
             entry.recorded = resolve(topic) in wired.recorded
             entry.episodic = topic in wired.episodic
-            needed = topic in self._roles.values()
             sub = self.node.create_subscription(ros_type(kind), topic,
-                                                receiver(entry, needed, self._deliver),
+                                                receiver(entry, self._deliver),
                                                 profile(qos), raw=True)
             entry.name = sub.topic_name
             self._topics[topic] = entry
@@ -288,34 +284,38 @@ class RosTransport(Transport):
                 return [t for t in (*needed, *([status] if status else [])) if t.stamp_ns < s]
         else:
             def late() -> list[Topic]:
-                return [t for t in needed if t.msg is None]
-        keys = {self._topics[t].name: role for role, t in self._roles.items()}
-        self._spin_until(lambda: not late(), self._timeout_s,
-                         lambda: silent(self.node, late(), keys))
+                return [t for t in needed if t.data is None]
+        self._spin_until(lambda: not late(), self._timeout_s, lambda: silent(
+            self.node, late(), {self._topics[t].name: r for r, t in self._roles.items()}))
         if self._mode is StepMode.RATE:
             self._check_fresh()
         return self._frame(sync.stamp_ns)
 
     def _frame(self, stamp_ns: int) -> SensorFrame:
         topics, roles = self._topics, self._roles
-        goal_msg = topics[roles["goal"]].msg
-        goal = None if goal_msg is None else decode.goal(goal_msg)
-        frame = build_frame(stamp_ns, decode.odometry(topics[roles["pose"]].msg), goal, roles,
-                            self._value)
+        goal = topics[roles["goal"]]
+        goal_value = self._once_per_message("goal", goal, lambda: decode.goal(goal.msg))
+        pose = topics[roles["pose"]]  # its odometry read from the CDR bytes where it can be
+        frame = build_frame(stamp_ns, cdr.odometry(pose.data) or decode.odometry(pose.msg),
+                            goal_value, roles, self._value)
         self._frame_stamp_ns = stamp_ns
         return frame
 
     def _value(self, sensor: FrameSensor) -> Any:
-        """The sensor's latest message decoded; an episodic one's once per message (not at
-        every step)."""
+        """The sensor's latest message decoded (``FrameSensor.reading``); an episodic one's
+        once per message (not at every step)."""
         topic = self._roles[sensor.name]
-        msg = self._topics[topic].msg
+        entry, mount = self._topics[topic], sensor.mount(self._mounts)
         if not sensor.episodic:
-            return sensor.decode(msg, sensor.mount(self._mounts), topic)
-        last = self._decoded.get(sensor.name)
-        if last is None or last[0] is not msg:
-            last = self._decoded[sensor.name] = (msg, sensor.decode(msg, sensor.mount(self._mounts),
-                                                                      topic))
+            return sensor.reading(entry, mount, topic)
+        return self._once_per_message(sensor.name, entry,
+                                      lambda: sensor.reading(entry, mount, topic))
+
+    def _once_per_message(self, key: str, entry: Topic, value: Callable[[], Any]) -> Any:
+        """``value()`` for ``entry``'s latest message, once per message (``None`` before)."""
+        last = self._decoded.get(key)
+        if last is None or last[0] is not entry.data:
+            last = self._decoded[key] = (entry.data, None if entry.data is None else value())
         return last[1]
 
     def offered_qos(self, topic: str) -> OfferedQos | None:

@@ -18,7 +18,7 @@ from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
 
-from . import decode
+from . import cdr, decode
 from .frame import ScanData, SensorFrame, as_published
 
 _ORIGIN = Pose2D(0.0, 0.0, 0.0)
@@ -43,10 +43,22 @@ class FrameSensor:
     episodic: bool = False
     #: What ``topics.<name>``'s doc adds to the message type.
     topic_note: str = ""
+    #: (CDR bytes, mount, topic name) → ``decode``'s value read straight from the bytes
+    #: (``cdr``: no message objects built), or ``None`` where they cannot be read so and
+    #: ``decode`` takes the deserialized message; ``None``: always ``decode``.
+    read_cdr: Callable[[bytes, Pose2D, str], Any] | None = None
 
     def mount(self, mounts: Mapping[str, Pose2D]) -> Pose2D:
         """The mount of this reading's sensor in ``mounts`` (the origin without one)."""
         return mounts.get(self.kind, _ORIGIN) if self.kind else _ORIGIN
+
+    def reading(self, entry: Any, mount: Pose2D, topic: str) -> Any:
+        """The value of ``entry``'s latest message (an object with its CDR bytes ``data`` and
+        the message they deserialize to, ``msg``): read from the bytes where ``read_cdr``
+        can, else decoded from the message."""
+        value = (self.read_cdr(entry.data, mount, topic)
+                 if self.read_cdr is not None and entry.data is not None else None)
+        return self.decode(entry.msg, mount, topic) if value is None else value
 
     @property
     def default_topic(self) -> str:
@@ -82,12 +94,17 @@ def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
     return None if seen is None else as_published(seen[0])
 
 
+def _depth_cdr(data: bytes, mount: Pose2D, topic: str) -> np.ndarray | None:
+    image = cdr.image(data)
+    return None if image is None else decode.depth_image(image, topic=topic)
+
+
 SENSORS = (
     FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan,
-                kind="lidar"),
+                kind="lidar", read_cdr=lambda data, mount, topic: cdr.scan(data, mount)),
     FrameSensor("depth", DEPTH_IMAGE,
                 lambda msg, mount, topic: decode.depth_image(msg, topic=topic), _read_depth,
-                topic_note=" (32FC1)"),
+                topic_note=" (32FC1)", read_cdr=_depth_cdr),
     FrameSensor("person", PERSON_POSE, lambda msg, mount, topic: decode.planar_pose(msg.pose),
                 _read_person, topic_note=" (personMonitoring)"),
     FrameSensor("plan", PLAN, lambda msg, mount, topic: decode.path(msg),

@@ -5,7 +5,8 @@ __ns:=/robot1`` runs several sims side by side; services with Gazebo's names).
 
 Sim time is an integer nanosecond counter owned by this node: it starts at 0 and each control
 step adds ``control_dt_s``. Every message of a step carries that stamp, published in the
-table's order: the scan (or, without a LiDAR, the depth image) is a step's last message. In
+table's order (each topic only while it has a subscriber: a volatile sample for nobody is
+lost anyway): the scan (or, without a LiDAR, the depth image) is a step's last message. In
 ``lockstep`` mode each ``cmd_vel`` advances one control period; in ``realtime`` mode a
 wall-clock timer steps with the latest command, or a stop once it is older than
 ``cmd_timeout_s`` of sim time. Each step first publishes ``diagnostics`` (the step's stamp):
@@ -69,15 +70,8 @@ from ..interfaces import (
 from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_message, world_markers
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
-from ..config import (
-    MAX_SEED,
-    ClockConfig,
-    ClockMode,
-    SimConfig,
-    WorldChoice,
-    build_clock,
-    build_config,
-)
+from ..config import (MAX_SEED, ClockConfig, ClockMode, SimConfig, WorldChoice, build_clock,
+                      build_config)
 from ..engine.sampling import check_free
 from ..engine.worlds.spec import WorldSpec
 from ..params_file import param_rules
@@ -243,9 +237,12 @@ class SimNode(Node):
     # -- stepping ------------------------------------------------------------------------
 
     def _publish_state(self) -> None:
+        """Fill the step's messages; publish each that has a subscriber (DDS sends a volatile
+        sample to matched readers only: serializing one for nobody is wasted)."""
         self._messages.fill(self._engine, self._stamp_ns)
         for publisher, msg in self._outputs:
-            publisher.publish(msg)
+            if publisher.get_subscription_count():
+                publisher.publish(msg)
 
     def _step(self, command: Twist2D) -> None:
         result = self._engine.step(command)  # a divergence is logged there, reset to the start
@@ -255,7 +252,10 @@ class SimNode(Node):
 
     def _publish_status(self, result: StepResult) -> None:
         """The step's physics status on ``diagnostics``, stamped like its sensor messages and
-        published before them: a bridge knows the step is void before it sees the step."""
+        published before them: a bridge knows the step is void before it sees the step; not
+        made at all without a subscriber (as the step's messages)."""
+        if not self._diagnostics_pub.get_subscription_count():
+            return
         status = self._status.status[0]
         status.level = DiagnosticStatus.ERROR if result.diverged else DiagnosticStatus.OK
         status.message = result.reason if result.diverged else "ok"
