@@ -36,7 +36,10 @@ EPISODE_VIEW: dict[str, str] = {
     "yaw_acc_max_radps2": "max yaw acc",
     "obstacle_dist_min_m": "min obst",
     "obstacle_dist_mean_m": "mean obst",
+    "footprint_clearance_min_m": "min clearance",
 }
+#: View columns shown only when some episode has them (clearance needs a footprint).
+_WHERE_DEFINED = frozenset({"footprint_clearance_min_m"})
 _TEXT_COLUMNS = frozenset({"bag", "outcome", "optimal_path_source", "success", ERROR_COLUMN})
 _SUPERSCRIPT = {"2": "²", "3": "³"}
 
@@ -96,7 +99,8 @@ def _episode_cell(col: str, value: object) -> str | None:
 def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None = None) -> str:
     """One line per episode. csv and json hold every column; table, markdown and latex show
     the bag (last two path components), the metrics ``columns`` (default: the EPISODE_VIEW
-    metrics) present, and the error."""
+    metrics) present — the footprint's clearance only where a footprint gave one — and the
+    error."""
     check_format(fmt)
     if fmt == "csv":
         return df.to_csv(index=False)
@@ -104,7 +108,8 @@ def render_episodes(df: pd.DataFrame, fmt: str, *, columns: Sequence[str] | None
         records = [{str(k): _json_value(v) for k, v in r.items()} for r in df.to_dict("records")]
         return json.dumps(records, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
     view = EPISODE_VIEW if columns is None else columns
-    cols = [c for c in ("bag", *view, ERROR_COLUMN) if c in df.columns]
+    cols = [c for c in ("bag", *view, ERROR_COLUMN) if c in df.columns
+            and not (c in _WHERE_DEFINED and df[c].isna().all())]
     rows = [[_episode_cell(c, v) for c, v in zip(cols, r)] for r in df[cols].itertuples(False)]
     right = [c not in _TEXT_COLUMNS for c in cols]
     units = [plain_text(METRICS[c].unit) if c in METRICS and c != "success" else "" for c in cols]

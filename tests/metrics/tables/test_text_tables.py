@@ -135,3 +135,15 @@ def test_bad_format_and_column_suggest(episodes: pd.DataFrame) -> None:
         render_episodes(episodes, "latx")
     with pytest.raises(ConfigError, match=r"'path_lenght_m'.*did you mean 'path_length_m'"):
         render_comparison(aggregate(episodes), "table", columns=["path_lenght_m"])
+
+
+def test_the_episode_view_shows_the_footprints_clearance_only_where_it_is_defined(
+        episodes: pd.DataFrame) -> None:
+    without = episodes.assign(footprint_clearance_min_m=math.nan)
+    assert "min clearance" not in render_episodes(without, "table")
+    with_footprint = episodes.assign(footprint_clearance_min_m=0.25)
+    header, _, first = render_episodes(with_footprint, "markdown").splitlines()[:3]
+    labels = [c.strip() for c in header.strip("|").split("|")]
+    assert "min obst [m]" in labels
+    column = labels.index("min clearance [m]")
+    assert first.strip("|").split("|")[column].strip() == "0.25"
