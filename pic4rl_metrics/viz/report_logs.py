@@ -19,7 +19,9 @@ from .report_maps import PALETTE, Sketch, pair_map, png_uri
 #: The logs table's metric columns (time and path over the whole log: there is no success).
 LOG_COLUMNS = ("clearance_time_s", "path_length_m", "net_displacement_m", "lin_vel_mean_mps",
                "lin_vel_std_mps", "ang_vel_mean_radps", "obstacle_dist_min_m",
-               "obstacle_dist_mean_m")
+               "footprint_clearance_min_m", "obstacle_dist_mean_m")
+#: Columns shown only where some log has a value: the clearance needs a footprint.
+WHERE_DEFINED = frozenset({"footprint_clearance_min_m"})
 #: At most this many logs get a trajectory map (the rest are counted).
 MAX_LOG_MAPS = 200
 
@@ -44,7 +46,8 @@ def logs_section(frame: pd.DataFrame, names: pd.Series, sketches: dict[int, Sket
     rows_of = frame.index[goal_less(frame)]
     if not len(rows_of):
         return None
-    columns = [c for c in LOG_COLUMNS if c in frame]
+    columns = [c for c in LOG_COLUMNS if c in frame and (
+        c not in WHERE_DEFINED or frame.loc[rows_of, c].notna().any())]
     header = ["agent", "bag", *(label(c) for c in columns)]
     rows = [[hp.text(names[i]), hp.text(short_bag(frame.at[i, "bag"])),
              *(hp.number(frame.at[i, c]) for c in columns)] for i in rows_of]

@@ -72,3 +72,22 @@ def test_a_log_without_a_goal_is_summarized_not_ranked(bench_bags: Path, tmp_pat
     episodes = page.rows["episodes"][1:]
     assert len(episodes) == 13  # 12 benchmark episodes and the log, each a row
     assert not any(cell == "nan" for r in episodes for cell in r)
+
+
+def test_the_footprints_clearance_is_a_column_only_where_a_footprint_gave_one() -> None:
+    import pandas as pd
+
+    from pic4rl_metrics.viz.report_logs import logs_section
+
+    frame = pd.DataFrame({"bag": ["/b/a", "/b/b"], "error": ["", ""],
+                          "outcome": ["unknown", "unknown"], "path_length_m": [1.0, 2.0],
+                          "footprint_clearance_min_m": [math.nan, math.nan]})
+    names = pd.Series(["x", "y"])
+    page = Page()
+    page.feed(logs_section(frame, names, {}, str) or "")
+    assert page.rows["logs"][0] == ["agent", "bag", "path_length_m"]
+    page = Page()
+    page.feed(logs_section(frame.assign(footprint_clearance_min_m=[0.25, math.nan]), names, {},
+                           str) or "")
+    header, first, second = page.rows["logs"]
+    assert header[-1] == "footprint_clearance_min_m" and first[-1] == "0.25" and second[-1] == "–"
