@@ -230,9 +230,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                                 redraw="start" not in given and "goal" not in given)
         finally:
             self.transport.tap = None
-        if recording is not None:
-            recording.open(self.transport, held)
         self._frame, self._context = frame, self.task.begin(frame)
+        if recording is not None:
+            recording.open(self.transport, held, goal=self._context.goal is not None)
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = self._steps = 0
         self._done = False

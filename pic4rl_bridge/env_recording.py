@@ -11,6 +11,7 @@ from typing import Any
 
 from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
 from pic4rl_metrics.geometry import Mount
+from pic4rl_sim.interfaces import GOAL_POSE, PLAN, find
 
 from .config import EnvConfig
 from .episodes import PairSampler
@@ -51,11 +52,15 @@ class EnvRecording:
         transport.tap = held.append
         return held
 
-    def open(self, transport: Transport, held: list[RawMessage]) -> None:
-        """The episode's bag, with the reset's ``held`` messages, then every message."""
+    def open(self, transport: Transport, held: list[RawMessage], *, goal: bool = True) -> None:
+        """The episode's bag, with the reset's ``held`` messages, then every message. An
+        episode without a goal (``goal`` false: person monitoring) leaves out the goal and the
+        plan to it that the simulator publishes at every reset: its bag, like a real robot's,
+        gives the metrics no goal to judge, so its tables head with full runs."""
         bag = self.bag = self.recorder.begin(qos=transport.offered_qos)
         for raw in held:
-            bag.write(raw)
+            if goal or find(raw.topic) not in (GOAL_POSE, PLAN):
+                bag.write(raw)
         transport.tap = bag.write
 
     def end(self, transport: Transport, outcome: Outcome | None, stamp_ns: int,
