@@ -2,8 +2,11 @@
 task × agent × world × robot × pair set, every repetition's episodes together) in the suite's
 layout (``LAYOUTS``): the paper's columns, SPL, the success rate's Wilson 95 % interval and n;
 or BARN's, success, collision and timeout rates with their Wilson intervals and the mean BARN
-time and score with bootstrap intervals. A leaderboard per task ranks by success, then SPL (the
-BARN score). A cell that failed makes its row read ``failed: <error>``.
+time and score with bootstrap intervals. A task without a goal (person monitoring; the metrics'
+rule, ``pic4rl_metrics.tables.groups.headline``) heads with its full runs instead of success: a
+``full runs`` column (k/n, its Wilson interval) after success, filled for that task's rows only.
+A leaderboard per task ranks by its headline, then SPL (the BARN score; left out for a task
+without a goal). A cell that failed makes its row read ``failed: <error>``.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
-from pic4rl_metrics.tables.aggregate import aggregate, bootstrap_interval, wilson_interval
+from pic4rl_metrics.tables.aggregate import (FULL_RUN, FULL_RUNS, aggregate, bootstrap_interval,
+                                              wilson_interval)
+from pic4rl_metrics.tables.groups import headline
 from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.tables.paired import agent_names
@@ -35,6 +40,8 @@ ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
 METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
 TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
 REPORT = "report.html"  # the suite's page, beside its tables
+#: The header of the full runs' column (``aggregate``'s ``full_runs``: a task without a goal).
+FULL_RUNS_LABEL = "full runs"
 
 
 @dataclass(frozen=True)
@@ -91,8 +98,16 @@ def _interval(low: float, high: float) -> str | None:
     return None if math.isnan(low) else f"[{low:.2f}, {high:.2f}]"
 
 
-def _header(layout: Layout) -> tuple[str, ...]:
-    rates = [c for r in layout.rates for c in (r, f"{r} 95% CI")]
+def _rates(layout: Layout, full_runs: bool) -> tuple[str, ...]:
+    """The layout's rates, with ``FULL_RUNS`` after success when some task heads with it."""
+    extra = (FULL_RUNS,) if full_runs else ()
+    return (*layout.rates[:1], *extra, *layout.rates[1:])
+
+
+def _header(layout: Layout, full_runs: bool = False) -> tuple[str, ...]:
+    """The table's columns; ``full_runs``: some task heads with its full runs."""
+    names = [FULL_RUNS_LABEL if r == FULL_RUNS else r for r in _rates(layout, full_runs)]
+    rates = [c for r in names for c in (r, f"{r} 95% CI")]
     means = []
     for m in layout.means:
         label = plain_text(METRICS[m].label)
@@ -102,20 +117,32 @@ def _header(layout: Layout) -> tuple[str, ...]:
 
 
 def _table_row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
-         episodes: pd.DataFrame) -> list[str | None]:
-    """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals)."""
+               episodes: pd.DataFrame, *, heads: str = "success",
+               full_runs: bool = False) -> list[str | None]:
+    """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals); ``heads``:
+    its task's headline (``success`` or ``FULL_RUNS``: its full runs' cells are filled, and
+    the quality columns' intervals are over its full runs, as ``aggregate``'s means);
+    ``full_runs``: the table has the full runs' column."""
     cells: list[str | None] = list(key.values())
-    width = 2 * len(layout.rates) + len(layout.means) * (1 + layout.intervals)
+    rates = _rates(layout, full_runs)
+    width = 2 * len(rates) + len(layout.means) * (1 + layout.intervals)
     if stats is None:
         return [*cells, "0", *[None] * width, f"failed: {error}"]
     n = int(stats["n_judged"])
-    for rate in layout.rates:
+    for rate in rates:
+        if rate == FULL_RUNS:
+            k, ran = (int(stats["n_full_runs"]), int(stats["n_ran"])) if heads == FULL_RUNS \
+                else (0, 0)
+            cells += [f"{k}/{ran}" if ran else None, _interval(*wilson_interval(k, ran))]
+            continue
         k = int(stats["n_success" if rate == "success" else f"n_{rate}"])
         cells += [f"{k}/{n}" if n else None, _interval(*wilson_interval(k, n))]
     for m in layout.means:
         cells.append(_num(stats.get(f"{m}_mean")))
         if layout.intervals:
-            over = episodes[episodes["success"] == 1.0] if METRICS[m].quality else episodes
+            best = (episodes["outcome"] == FULL_RUN) if heads == FULL_RUNS else (
+                episodes["success"] == 1.0)
+            over = episodes[best] if METRICS[m].quality else episodes
             values = over[m] if m in over else []
             cells.append(_interval(*bootstrap_interval(pd.to_numeric(values, errors="coerce"))))
     return [*cells[:len(key)], str(int(stats["n_episodes"])), *cells[len(key):],
@@ -133,7 +160,11 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
     agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
     good = frame[frame["error"].fillna("") == ""] if "error" in frame else frame
     groups = {k: g for k, g in good.groupby(list(ROW_KEYS), sort=False)} if len(good) else {}
-    header = _header(layout)
+    heads = {} if agg is None else {  # each task's headline, by the metrics' rule
+        task: headline(agg[agg.index.get_level_values("task") == task])
+        for task in dict.fromkeys(agg.index.get_level_values("task"))}
+    full_runs = FULL_RUNS in heads.values()
+    header = _header(layout, full_runs)
     rows: dict[tuple[str, ...], tuple[dict[str, str], list[str]]] = {}
     for cell in suite.cells:
         key = tuple(cell.row.values())
@@ -144,7 +175,8 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
     for key, (row, errs) in rows.items():
         stats = agg.loc[key] if agg is not None and key in agg.index else None
         out.append(_table_row(row, stats, "; ".join(errs), layout,
-                        groups.get(key, pd.DataFrame(columns=["success"]))))
+                              groups.get(key, pd.DataFrame(columns=["success", "outcome"])),
+                              heads=heads.get(key[0], "success"), full_runs=full_runs))
     return header, out, bad
 
 
@@ -158,32 +190,50 @@ def _rate(row: Sequence[str | None], col: int) -> float:
     return float(text)
 
 
+def headline_column(header: Sequence[str], rows: Sequence[Sequence[str | None]]) -> str:
+    """The column that heads ``rows`` (one task's): ``full runs`` where ``build_rows`` filled
+    it for them (their task has no goal: ``groups.headline``), else ``success``."""
+    if FULL_RUNS_LABEL in header:
+        col = header.index(FULL_RUNS_LABEL)
+        if any(r[col] is not None for r in rows):
+            return FULL_RUNS_LABEL
+    return "success"
+
+
 def leaderboards(header: Sequence[str], rows: Sequence[Sequence[str | None]],
                  layout: Layout = LAYOUTS["paper"]) -> dict[str, str]:
-    """Markdown per task: its rows by success rate, then the layout's rank metric (SPL, the
-    BARN score), best first; a row with a failed cell is never ranked (its episodes are not
-    all there): it is listed below the ranked rows, its rank ``failed``."""
+    """Markdown per task: its rows by their headline (success, or full runs for a task
+    without a goal: ``headline_column``), then the layout's rank metric (SPL, the BARN score;
+    left out where it needs a goal that the task has not), best first; a row with a failed
+    cell is never ranked (its episodes are not all there): it is listed below the ranked
+    rows, its rank ``failed``."""
     label = plain_text(METRICS[layout.rank].label)
-    success, spl = header.index("success"), header.index(
-        f"{label} [{plain_text(METRICS[layout.rank].unit)}]")
+    spl = header.index(f"{label} [{plain_text(METRICS[layout.rank].unit)}]")
     boards = {}
     for task in dict.fromkeys(r[0] for r in rows):
-        mine = sorted((r for r in rows if r[0] == task), key=lambda r: (
-            r[-1] == "ok", _rate(r, success), _rate(r, spl)), reverse=True)
+        mine = [r for r in rows if r[0] == task]
+        head = headline_column(header, mine)
+        first = header.index(head)
+        by = [spl] if head == "success" or "goal" not in METRICS[layout.rank].needs else []
+        mine.sort(key=lambda r: (r[-1] == "ok", _rate(r, first), *(_rate(r, c) for c in by)),
+                  reverse=True)
         ranked = sum(r[-1] == "ok" for r in mine)
-        cols = ["rank", *header[1:5], "n", "success", "success 95% CI", label, "status"]
-        body = [[str(i + 1) if i < ranked else "failed", *r[1:5], r[5], r[success],
-                 r[success + 1], r[spl], r[-1]] for i, r in enumerate(mine)]
+        cols = ["rank", *header[1:5], "n", head, f"{head} 95% CI", *[label] * len(by),
+                "status"]
+        body = [[str(i + 1) if i < ranked else "failed", *r[1:5], r[5], r[first],
+                 r[first + 1], *(r[c] for c in by), r[-1]] for i, r in enumerate(mine)]
         boards[str(task)] = render_rows(cols, body, "markdown")
     return boards
 
 
 def success_figure(task: str, header: Sequence[str],
                       rows: Sequence[Sequence[str | None]]) -> Figure:
-    """One task's rows as bars of their success rate with its Wilson 95 % interval (a failed
-    or unjudged row is an empty bar, labelled so)."""
-    success = header.index("success")
+    """One task's rows as bars of their success rate (their full-run rate for a task without
+    a goal: ``headline_column``) with its Wilson 95 % interval (a failed or unjudged row is an
+    empty bar, labelled so)."""
     mine = [r for r in rows if r[0] == task]
+    head = headline_column(header, mine)
+    success = header.index(head)
     labels, rates, lows, highs = [], [], [], []
     for r in mine:
         k, _, n = (r[success] or "0/0").partition("/")
@@ -199,7 +249,8 @@ def success_figure(task: str, header: Sequence[str],
     ax.barh(y, np.nan_to_num(rates), xerr=[lows, highs], color="tab:blue", capsize=3)
     ax.set_yticks(y, labels, fontsize=8)
     ax.set_xlim(0, 1)
-    ax.set_xlabel("success rate (bars: Wilson 95 % interval)")
+    rate_name = "success rate" if head == "success" else "full-run rate"
+    ax.set_xlabel(f"{rate_name} (bars: Wilson 95 % interval)")
     ax.set_title(f"{task}: agent · world · robot · pairs")
     return fig
 

@@ -137,35 +137,44 @@ def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) ->
 
 
 def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) -> str:
-    """The test's table: the episodes per outcome, the task's headline first (a task without
-    a goal shows no goals and no success rate), SPL where a row has it, then Table 1's."""
+    """The test's table: the episodes per outcome, the headline first, then its rate, SPL
+    where a row has it, then Table 1's. The headline is the metrics' (``groups.headline``):
+    goals and the success rate (named as ``task`` names its goals: ``row ends``), or for a
+    table without a goal (person monitoring) full runs, their k/n, and no goal's columns."""
+    from pic4rl_metrics.tables.groups import headline, headline_columns
     from pic4rl_metrics.tables.text import OUTCOME_COUNTS, render_comparison
     from pic4rl_metrics.tables.results import table_columns
 
-    headline, words = TASKS[task].headline
-    key = "n_success" if headline == "goal" else f"n_{headline}"
-    counts = {key: words, **{k: v for k, v in OUTCOME_COUNTS.items()
-                             if k != key and (headline == "goal" or k != "n_success")}}
-    columns = [c for c in table_columns(table) if headline == "goal" or c != "success"]
-    if headline == "goal" and "spl_mean" in table.columns and table["spl_mean"].notna().any():
+    if headline(table) != "success":
+        counts = {"n_full_runs": "full runs", **{k: v for k, v in OUTCOME_COUNTS.items()
+                                                 if k not in ("n_success", "n_timeout")}}
+        return render_comparison(table, fmt, columns=headline_columns(
+            table, table_columns(table)), with_std=with_std, counts=counts)
+    outcome, words = TASKS[task].headline
+    counts = {**OUTCOME_COUNTS, "n_success": words if outcome == "goal" else "goals"}
+    columns = list(table_columns(table))
+    if "spl_mean" in table.columns and table["spl_mean"].notna().any():
         columns.insert(1, "spl")
     return render_comparison(table, fmt, columns=columns, with_std=with_std, counts=counts)
 
 
 def judge(run_dir: Path, task: str, *,
           with_std: bool) -> tuple[pd.DataFrame, tuple[str, ...]]:
-    """The metrics table of every bag under ``run_dir`` (grouped by agent; ``task``: the
-    agents' task, whose trajectory columns average its successful episodes, or all of them
-    for a task without a goal) and the errors of the bags that could not be judged; the
-    per-episode CSV and the table (markdown) are written into ``run_dir``."""
+    """The metrics table of every bag under ``run_dir`` (grouped by agent; its trajectory
+    columns average the successful episodes, or every episode where the table has no goal:
+    ``groups.headline``; ``task``: the agents' task, naming its goals) and the errors of the
+    bags that could not be judged; the per-episode CSV and the table (markdown) are written
+    into ``run_dir``."""
     from pic4rl_metrics.tables.aggregate import aggregate
     from pic4rl_metrics.tables.batch import compute
+    from pic4rl_metrics.tables.groups import headline
     from pic4rl_metrics.tables.text import render_episodes
 
     result = compute([run_dir])
     atomic.write_text(run_dir / "episodes.csv", render_episodes(result.frame, "csv"))
-    table = aggregate(result.frame, by="agent",
-                      over="success" if TASKS[task].headline[0] == "goal" else "all")
+    table = aggregate(result.frame, by="agent")
+    if headline(table) != "success":  # no goal (person monitoring): over every episode
+        table = aggregate(result.frame, by="agent", over="all")
     atomic.write_text(run_dir / "table.md",
                       render_table(table, task, "markdown", with_std=with_std))
     return table, tuple(str(failed.error) for failed in result.failed)
