@@ -94,3 +94,34 @@ def test_a_topic_is_stale_past_the_bound_by_arrival_time() -> None:
     assert stale([odom, scan], 0.5, 9.7) is None
     never = Topic("/depth", DEPTH_IMAGE.type)  # no message at all: infinitely old
     assert stale([never], 0.5, 0.0).startswith("topic /depth: no message for inf s")
+
+
+def test_a_message_is_kept_as_bytes_and_deserialized_only_when_read(monkeypatch) -> None:
+    """A step's messages are read from their CDR bytes (``cdr``): the receiver keeps the bytes
+    and their stamp; rclpy's deserialization runs only when ``msg`` is read, once a message."""
+    from nav_msgs.msg import Odometry
+    from pic4rl_sim.interfaces import ODOM
+    from rclpy.serialization import serialize_message
+
+    from pic4rl_bridge.transports import cdr, ros_topics
+    from pic4rl_bridge.transports.ros_topics import receiver
+
+    made = []
+    real = ros_topics.deserialize_message
+    monkeypatch.setattr(ros_topics, "deserialize_message",
+                        lambda data, kind: made.append(kind) or real(data, kind))
+    entry, delivered = Topic("/odom", ODOM.type), []
+    entry.recorded = True
+    on_message = receiver(entry, lambda topic, data, stamp: delivered.append(stamp))
+    msg = Odometry()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = 2, 5
+    msg.pose.pose.position.x = 1.5
+    on_message(serialize_message(msg))
+    assert (made, entry.stamp_ns, entry.count, delivered) == ([], 2_000_000_005, 1,
+                                                                 [2_000_000_005])
+    assert cdr.odometry(entry.data)[0].x == 1.5 and made == []
+    assert entry.msg.pose.pose.position.x == 1.5 and entry.msg is entry.msg
+    assert made == [Odometry]  # once for this message
+    msg.pose.pose.position.x = 2.5
+    on_message(serialize_message(msg))
+    assert entry.msg.pose.pose.position.x == 2.5 and made == [Odometry, Odometry]
