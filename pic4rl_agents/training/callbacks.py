@@ -120,6 +120,29 @@ class SeededEvalCallback(EvalCallback):
         by_time = self.interval_s > 0 and train_s - self._last_due_s >= self.interval_s
         if not (by_steps or by_time):
             return True
+        return self._evaluate(now)
+
+    def evaluate_saved(self, *, refitted: bool = False) -> bool:
+        """At the end of training, evaluate the model once more unless this session's last
+        evaluation judged it as it is now: no evaluation yet, training after the last one, or
+        an actor ``refitted`` after it (imitation cut short by a budget). The last row of
+        ``evaluations.csv``, and so ``summary.yaml``, then judge the saved model.
+        ``callback_after_eval`` is not called (training is over). True when it evaluated."""
+        self.num_timesteps = self.model.num_timesteps
+        if self.last_row.get("steps") == self.num_timesteps and not refitted:
+            return False
+        log.info("evaluating the model as saved, at %d steps", self.num_timesteps)
+        after, self.callback = self.callback, None
+        try:
+            self._evaluate(time.perf_counter())
+        finally:
+            self.callback = after
+        return True
+
+    def _evaluate(self, now: float) -> bool:
+        """Evaluate now (``now``: ``time.perf_counter()``): one row, SB3's logs, the best
+        model; what ``callback_after_eval`` says (False: stop training)."""
+        train_s = self.train_wall_s(now)
         self._last_due_s = train_s
         assert self.clock_start is not None
         wall_s = now - self.clock_start
@@ -256,6 +279,22 @@ class StopAfterEval(BaseCallback):
                         and parent.last_success_rate >= self.success_rate)
         over = self.budget_s is not None and parent.last_row["train_wall_s"] >= self.budget_s
         return not (self.reached or over)
+
+
+def evaluate_saved(callbacks: list[BaseCallback], stop: threading.Event,
+                   refitted: bool = False) -> bool:
+    """At the end of training, ``SeededEvalCallback.evaluate_saved`` of the evaluation among
+    ``callbacks`` (none: nothing), under ``stop_on_signal`` as training is; False when a
+    signal stopped it (the row is then not written)."""
+    with stop_on_signal(stop):
+        try:
+            for evaluation in callbacks:
+                if isinstance(evaluation, SeededEvalCallback):
+                    evaluation.evaluate_saved(refitted=refitted)
+        except BaseException as err:
+            if not stopped_by_signal(err, stop):
+                raise
+    return not stop.is_set()
 
 
 def stopped_by_signal(err: BaseException, stop: threading.Event) -> bool:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import logging
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,6 +52,7 @@ from .progress import ProgressCallback
 log = logging.getLogger(__name__)
 
 EXPERT, STUDENT = 0, 1  # who drove a labelled state
+CUT_FIT_S = 30.0  # the longest fit of a round that a budget ended (``_fit_cut_round``)
 
 
 #: The experts that label states, and the task each drives (each task's ``experts``).
@@ -162,6 +164,8 @@ class Imitation:
         self.optimizer = torch.optim.Adam(model.actor.parameters(), lr=config.learning_rate)
         self._obs: Any = None
         self.losses: list[float] = []  # the mean regression loss of each round
+        self._fitted = 0  # labelled states at the last fit
+        self.refitted = False  # a budget ended a round, whose states were then fitted
 
     def run(self) -> bool:
         """Behaviour cloning, the DAgger rounds, then the critic's warm-up; False when a
@@ -178,8 +182,7 @@ class Imitation:
                 set_driver(self.env, "expert" if driver == EXPERT else "student")
                 self._show(phase, log_it=True)
                 if not self.collect(steps, driver):
-                    if self._out_of_steps():  # an imitation-only run: its last data counts
-                        self.fit(c.gradient_steps)
+                    self._fit_cut_round()
                     return False
                 self.fit(c.gradient_steps)
                 log.info("imitation round %d/%d (%s): %d labelled states, loss %.4f",
@@ -234,13 +237,28 @@ class Imitation:
     def _out_of_steps(self) -> bool:
         return self.max_steps is not None and self.model.num_timesteps >= self.max_steps
 
-    def fit(self, gradient_steps: int) -> None:
-        """Regress the actor on every labelled state so far (minibatches drawn uniformly)."""
+    def _fit_cut_round(self) -> None:
+        """When ``max_steps`` or ``max_wall_s`` ended a round, fit the actor on its labels (at
+        most ``imitation.gradient_steps`` steps, ``CUT_FIT_S`` s and a tenth of ``max_wall_s``):
+        the saved actor is the clone. Not after a signal or an evaluation's stop."""
+        clocks = [cb for cb in self.callback.callbacks if isinstance(cb, WallClockLimit)]
+        spent = self._out_of_steps() or any(c.over() for c in clocks)
+        if spent and len(self.data) > self._fitted:
+            done = self.fit(self.config.gradient_steps,
+                            max_s=min([CUT_FIT_S, *(0.1 * c.limit_s for c in clocks)]))
+            self.refitted = True
+            log.info("imitation cut short at %d steps: the actor fitted on %d labelled states "
+                     "(%d gradient steps)", self.model.num_timesteps, len(self.data), done)
+
+    def fit(self, gradient_steps: int, max_s: float = float("inf")) -> int:
+        """Regress the actor on every labelled state so far (minibatches drawn uniformly):
+        ``gradient_steps`` steps, fewer once ``max_s`` seconds have passed; the steps taken."""
         obs, actions, _ = self.data.arrays()
         policy, device = self.model.policy, self.model.device
         policy.set_training_mode(True)
-        total = 0.0
-        for _ in range(gradient_steps):
+        total, steps, until = 0.0, 0, time.perf_counter() + max_s
+        while steps < gradient_steps and (steps == 0 or time.perf_counter() < until):
+            steps += 1
             idx = self.rng.integers(0, len(actions), self.batch_size)
             batch = ({k: v[idx] for k, v in obs.items()} if isinstance(obs, dict) else obs[idx])
             loss = actor_loss(self.model, obs_as_tensor(batch, device),
@@ -253,7 +271,9 @@ class Imitation:
         target = getattr(self.model, "actor_target", None)
         if target is not None:  # TD3, DDPG: RL's targets start from the imitated actor
             target.load_state_dict(self.model.actor.state_dict())
-        self.losses.append(total / max(gradient_steps, 1))
+        self.losses.append(total / max(steps, 1))
+        self._fitted = len(self.data)
+        return steps
 
     def warm_up_critic(self, gradient_steps: int, chunk: int = 250) -> bool:
         """``gradient_steps`` of the algorithm's own updates with the actor frozen: a critic

@@ -1,7 +1,8 @@
 """``summary.yaml``: what a training session did (docs/agents.md, "The run directory").
 
 It leads with the session's last evaluation (the seeded evaluation episodes: success,
-collisions, timeouts, at which step and wall time) and which models were saved, because the
+collisions, timeouts, at which step and wall time; the trainer evaluates the saved model at the
+end of a session, ``SeededEvalCallback.evaluate_saved``) and which models were saved, because the
 training episodes do not judge the agent: during imitation the expert drives them. Those
 episodes are then counted per driver (``envs.DRIVERS``), and the agent's own success rate
 (the student's and RL's episodes) is never the expert's.

@@ -75,6 +75,7 @@ class Trainer:
         self.ros = ros or RosArgs()
         self.after_eval = after_eval
         self.interrupted = False  # Ctrl-C or SIGTERM ended the last run()
+        self._refitted = False  # a budget cut imitation short; the actor was fitted after it
         self._stop = threading.Event()  # set by that signal (``stop_on_signal``)
         self.layout = (rundir.RunDir.resume(resume.run_dir) if resume is not None
                        else rundir.RunDir.new(Path(run.train.runs_dir), run.name))
@@ -87,7 +88,7 @@ class Trainer:
         """Train this session (resumed where the run was), save, and close what it opened."""
         import torch
 
-        from .callbacks import StopWhenSet
+        from .callbacks import StopWhenSet, evaluate_saved
 
         cfg = self.config.train
         session = self._session_env()
@@ -108,9 +109,12 @@ class Trainer:
             # Only now: a session that fails to start (a checkpoint that does not fit the
             # env, no sim) leaves no config behind.
             self.layout.write_config(self.config.to_yaml())
-            stack.callback(self._save_if_trained, model, started, model.num_timesteps)
+            steps = model.num_timesteps
+            stack.callback(self._save_if_trained, model, started, steps)
             if self._imitate(model, env, env_cfg, callbacks):
                 self._learn(model, callbacks)
+            if not self.interrupted and model.num_timesteps > steps:  # judge the saved model
+                self.interrupted = not evaluate_saved(callbacks, self._stop, self._refitted)
         return self.run_dir
 
     def _imitate(self, model: Any, env: Any, env_cfg: EnvConfig, callbacks: list[Any]) -> bool:
@@ -132,6 +136,7 @@ class Trainer:
                                       batch_size=cfg.batch_size, seed=cfg.seed,
                                       max_steps=cfg.max_steps, sources=self.config.sources)
                 done = imitation.run()
+                self._refitted = imitation.refitted
                 if cfg.imitation.rl_gradient_steps > 0:
                     callbacks.insert(0, DecayingCloning(imitation))
             except BaseException as err:

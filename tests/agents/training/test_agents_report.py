@@ -13,13 +13,15 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from agents_helpers import LIDAR_TD3, TINY
+from agents_helpers import LIDAR_TD3, TINY, label_error
+from stable_baselines3.common.evaluation import evaluate_policy
 
 from pic4rl_agents.config import load_run_config
+from pic4rl_agents.models.algorithms import load_model, new_model
 from pic4rl_agents.training import train
 from pic4rl_agents.training.callbacks import evaluation_line
 from pic4rl_agents.training.curves import episode_table, reward_series
-from pic4rl_agents.training.envs import DRIVER_KEY, Driven
+from pic4rl_agents.training.envs import DRIVER_KEY, Driven, eval_env_config, make_vec_env
 from pic4rl_agents.training.progress import binding_budget
 from pic4rl_agents.training.summary import session_summary
 
@@ -144,7 +146,10 @@ def test_a_run_that_never_left_imitation_does_not_report_the_experts_success(
     episodes = episode_table(run / "monitor")
     assert len(episodes) >= 2 and set(episodes[DRIVER_KEY]) == {"expert"}
     assert list(summary)[0] == "evaluation"
-    last = pd.read_csv(run / "eval" / "0" / "evaluations.csv").iloc[-1]
+    evaluations = pd.read_csv(run / "eval" / "0" / "evaluations.csv")
+    # at 200 steps the budget's fit of the round's labels, then the saved model's evaluation
+    assert evaluations["steps"].tolist() == [100, 200, 200]
+    last = evaluations.iloc[-1]
     evaluation = summary["evaluation"]
     assert evaluation["steps"] == last["steps"] == 200 and evaluation["steps_before_saved"] == 0
     for key in ("success_rate", "collision_rate", "timeout_rate"):
@@ -158,6 +163,54 @@ def test_a_run_that_never_left_imitation_does_not_report_the_experts_success(
                                                             abs=1e-3)
     assert summary["agent_last_100_success_rate"] is None
     assert summary["agent_last_100_mean_reward"] is None
+
+
+def test_a_clock_that_ends_cloning_saves_the_clone_and_the_summary_judges_it(
+        tmp_path: Path) -> None:
+    """An 8 s clock ends behaviour cloning (100,000 expert steps) mid-round: the saved actor
+    is fitted on the states the expert drove (the replay buffer's, its actions the labels),
+    its error on them under half that of an unfitted actor (a new model of the same seed;
+    before the fix, the saved actor was that one). The summary's evaluation is of the saved
+    model: evaluations.csv's last row, at the saved steps after the periodic ones, and
+    model.zip driven again on the same seeded episode gives its reward and length."""
+    run = _train(tmp_path, "cut", 1_000_000, [
+        "max_wall_s:8", "imitation.bc_steps:100000", "imitation.gradient_steps:5000",
+        "imitation.learning_rate:0.003", "eval.interval_steps:400",
+        "checkpoint.replay_buffer:true"])
+    summary = yaml.safe_load((run / "summary.yaml").read_text())
+    steps = summary["total_steps"]
+    assert set(episode_table(run / "monitor")[DRIVER_KEY]) == {"expert"}
+    config = load_run_config([run / "config.yaml"])
+    model = load_model(run / "model.zip", "td3")
+    model.load_replay_buffer(run / "replay_buffer.pkl")
+    buffer = model.replay_buffer
+    obs = buffer.observations[:buffer.size(), 0]
+    labels = buffer.actions[:buffer.size(), 0]
+    env = make_vec_env(config.env, seed=0, vec_env="dummy")
+    try:
+        unfitted = new_model(config.train, env)
+    finally:
+        env.close()
+    fitted, random = label_error(model, obs, labels), label_error(unfitted, obs, labels)
+    assert fitted < 0.5 * random, (fitted, random)
+
+    evaluations = pd.read_csv(run / "eval" / "0" / "evaluations.csv")
+    periodic = list(range(400, steps + 1, 400))
+    assert evaluations["steps"].tolist() == [*periodic, steps]  # the last: the saved model
+    last = evaluations.iloc[-1]
+    evaluation = summary["evaluation"]
+    assert evaluation["steps"] == steps and evaluation["steps_before_saved"] == 0
+    assert evaluation["mean_reward"] == pytest.approx(last["mean_reward"], abs=0.06)
+    eval_env = make_vec_env(eval_env_config(config.env, config.train.eval),
+                            seed=config.train.eval.seed, vec_env="dummy")
+    try:
+        eval_env.seed(config.train.eval.seed)
+        rewards, lengths = evaluate_policy(model, eval_env, n_eval_episodes=1,
+                                           deterministic=True, return_episode_rewards=True)
+    finally:
+        eval_env.close()
+    assert lengths == [last["mean_length"]]
+    assert rewards[0] == pytest.approx(last["mean_reward"], abs=1e-3)
 
 
 # -- the reward curve -----------------------------------------------------------------------

@@ -176,8 +176,11 @@ def test_resume_continues_the_run_where_it_stopped(trained_run: TrainedRun,
     assert summary["session_steps"] == 500 - TRAINED_STEPS
     assert summary["episodes"] == len(monitor_rows(run))
     assert (run / "monitor" / "1_0.monitor.csv").is_file()
+    # the session's 150 steps' evaluation, then the saved model's at its end (500)
     assert np.load(run / "eval" / "1" / "evaluations.npz")["timesteps"].tolist() == [
-        TRAINED_STEPS + EVAL_STEPS]
+        TRAINED_STEPS + EVAL_STEPS, 500]
+    assert summary["evaluation"]["steps"] == 500
+    assert summary["evaluation"]["steps_before_saved"] == 0
     assert load_run_config([run / "config-2.yaml"]).train.max_steps == 500
 
     progress = pd.read_csv(run / "logs" / "1" / "progress.csv")

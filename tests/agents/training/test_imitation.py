@@ -5,6 +5,7 @@ any other, in process and through ROS 2 (``pic4rl-run``, a sim node in its own p
 
 from __future__ import annotations
 
+import copy
 import time
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import torch
 import yaml
 from agents_helpers import CONFIG, label_error, Launcher, LIDAR_TD3, ROS_ARGS, TINY
 from ros_helpers import next_domain
-from stable_baselines3.common.callbacks import CallbackList
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.utils import obs_as_tensor
 
@@ -33,10 +34,14 @@ IMITATION = ["imitation.enabled:true", "imitation.bc_steps:40", "imitation.dagge
              "imitation.critic_warmup_steps:10"]
 
 
+def _setup_run(algorithm: str = "td3"):
+    return load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
+                                               "algorithm": algorithm},
+                           env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+
+
 def _setup(algorithm: str = "td3", n_envs: int = 2):
-    run = load_run_config([LIDAR_TD3], train={**parse_overrides(TINY, flag="test"),
-                                              "algorithm": algorithm},
-                          env={"episode_max_steps": 30, "min_linear_m_s": 0.0})
+    run = _setup_run(algorithm)
     env = make_vec_env(run.env, n_envs=n_envs, seed=0, vec_env="dummy")
     model = new_model(run.train, env)
     model.set_logger(configure(None, []))
@@ -117,6 +122,76 @@ def test_the_critic_warm_up_stops_when_the_wall_clock_budget_is_spent() -> None:
         spent.start = time.perf_counter()  # a fresh budget: all of it runs
         assert imitation.warm_up_critic(10, chunk=5) is True
         assert not all(torch.equal(c, p) for c, p in zip(critic, model.critic.parameters()))
+    finally:
+        env.close()
+
+
+class _ClockAfter(WallClockLimit):
+    """A 10 s wall-clock budget that is spent after ``calls`` env steps (of every env)."""
+
+    def __init__(self, calls: int) -> None:
+        super().__init__(10.0, time.perf_counter())
+        self.calls = calls
+
+    def over(self) -> bool:
+        return self.n_calls >= self.calls
+
+
+class _StopAfter(BaseCallback):
+    """Not a budget: a stop (as a signal's or an evaluation's) after ``calls`` env steps."""
+
+    def __init__(self, calls: int) -> None:
+        super().__init__()
+        self.calls = calls
+
+    def _on_step(self) -> bool:
+        return self.n_calls < self.calls
+
+
+def _cut_short(stop: BaseCallback) -> tuple[float, float, Imitation, bool]:
+    """Cloning of 200 steps of 2 envs that ``stop`` ends after 30: the actor's error on the 60
+    states' labels after the run and before it (unfitted), the imitation, what it returned."""
+    _, env, model, _ = _setup()
+    callback = CallbackList([stop])
+    callback.init_callback(model)
+    config = ImitationConfig(enabled=True, bc_steps=400, dagger_rounds=0, gradient_steps=300,
+                             critic_warmup_steps=10)
+    imitation = Imitation(config, env, _setup_run().env, model, callback, batch_size=16)
+    unfitted = copy.deepcopy(model.actor.state_dict())
+    try:
+        done = imitation.run()
+    finally:
+        env.close()
+    obs, labels, drivers = imitation.data.arrays()
+    assert len(labels) == 60 and (drivers == EXPERT).all() and model.num_timesteps == 60
+    after = label_error(model, obs, labels)
+    model.actor.load_state_dict(unfitted)
+    return after, label_error(model, obs, labels), imitation, done
+
+
+def test_a_wall_clock_that_ends_a_round_leaves_the_actor_fitted_on_it() -> None:
+    """The clock ends cloning 30 of its 200 steps in: the actor is fitted on the 60 labelled
+    states gathered (one fit, at most 300 gradient steps and 1 s, a tenth of the 10 s budget),
+    so its error on their labels is under half the unfitted actor's (before the fix: equal,
+    the round's data thrown away and a random actor saved)."""
+    after, before, imitation, done = _cut_short(_ClockAfter(30))
+    assert done is False and imitation.refitted and len(imitation.losses) == 1
+    assert after < 0.5 * before
+
+
+def test_a_stop_that_is_no_budget_leaves_the_actor_as_it_was() -> None:
+    """A signal's or an evaluation's stop: that evaluation judged the actor, which stays."""
+    after, before, imitation, done = _cut_short(_StopAfter(30))
+    assert done is False and not imitation.refitted and imitation.losses == []
+    assert after == before
+
+
+def test_a_fit_stops_at_its_time_bound_after_one_step_at_least() -> None:
+    _, env, model, imitation = _setup(n_envs=1)
+    try:
+        imitation.collect(20, EXPERT)
+        assert imitation.fit(7) == 7 and imitation.fit(1000, max_s=0.0) == 1
+        assert imitation.fit(0) == 0
     finally:
         env.close()
 
