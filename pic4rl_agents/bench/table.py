@@ -2,9 +2,12 @@
 task × agent × world × robot × pair set, every repetition's episodes together) in the suite's
 layout (``LAYOUTS``): the paper's columns, SPL, the success rate's Wilson 95 % interval and n;
 or BARN's, success, collision and timeout rates with their Wilson intervals and the mean BARN
-time and score with bootstrap intervals. A task without a goal (person monitoring; the metrics'
-rule, ``pic4rl_metrics.tables.groups.headline``) heads with its full runs instead of success: a
-``full runs`` column (k/n, its Wilson interval) after success, filled for that task's rows only.
+time and score with bootstrap intervals. The cells are computed once, in the metrics
+(``pic4rl_metrics.tables.protocol``: ``pic4rl-metrics compare --table`` gives the same numbers
+from the same bags); this module adds the suite's row keys and each row's status. A task without
+a goal (person monitoring; the metrics' rule, ``pic4rl_metrics.tables.groups.headline``) heads
+with its full runs instead of success: a ``full runs`` column (k/n, its Wilson interval) after
+success, filled for that task's rows only.
 A leaderboard per task ranks by its headline, then SPL (the BARN score; left out for a task
 without a goal). A cell that failed makes its row read ``failed: <error>``.
 """
@@ -21,46 +24,24 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from pic4rl_metrics import atomic
-from pic4rl_metrics.tables.aggregate import (FULL_RUN, FULL_RUNS, aggregate, bootstrap_interval,
-                                              wilson_interval)
-from pic4rl_metrics.tables.groups import headline
+from pic4rl_metrics.tables.aggregate import wilson_interval
 from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.tables.paired import agent_names
+from pic4rl_metrics.tables.protocol import (FULL_RUNS_LABEL, LAYOUTS, Layout, empty_cells,
+                                            protocol_cells)
+from pic4rl_metrics.tables.protocol import header as layout_header
 from pic4rl_metrics.viz.plots import save_figure
 from pic4rl_metrics.viz.report_maps import SKETCH_SCANS
 from pic4rl_metrics.core.registry import METRICS
 from pic4rl_metrics.tables.layouts import render_rows
 from pic4rl_metrics.tables.text import plain_text
-from pic4rl_metrics.tables.results import TABLE1_COLUMNS
 
 from .suite import Cell, Suite
 
 ROW_KEYS = ("task", "agent", "world", "robot", "pairs")
-METRIC_COLUMNS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
 TABLE_FORMATS = {"csv": "results.csv", "markdown": "results.md", "latex": "results.tex"}
 REPORT = "report.html"  # the suite's page, beside its tables
-#: The header of the full runs' column (``aggregate``'s ``full_runs``: a task without a goal).
-FULL_RUNS_LABEL = "full runs"
-
-
-@dataclass(frozen=True)
-class Layout:
-    """A table's columns after the row keys and n: ``rates`` (outcomes as k/n over the judged
-    episodes, each with its Wilson 95 % interval; success first), ``means`` (metrics' means,
-    each with a bootstrap 95 % interval when ``intervals``), and the leaderboards' ``rank``
-    metric after success."""
-
-    rates: tuple[str, ...]
-    means: tuple[str, ...]
-    intervals: bool
-    rank: str
-
-
-#: The layouts a suite's ``table`` names (``suite.TABLES``).
-LAYOUTS = {"paper": Layout(("success",), METRIC_COLUMNS, False, "spl"),
-           "barn": Layout(("success", "collision", "timeout"), ("barn_time_s", "barn_score"),
-                          True, "barn_score")}
 
 
 @dataclass(frozen=True)
@@ -69,10 +50,6 @@ class SuiteTable:
     rows: tuple[tuple[str | None, ...], ...]
     files: tuple[Path, ...]  # the tables and leaderboards written
     bag_errors: tuple[str, ...]  # bags that could not be judged
-
-
-def _num(value: object) -> str | None:
-    return None if value is None or pd.isna(value) else f"{float(value):.2f}"
 
 
 def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[str, ...],
@@ -94,59 +71,10 @@ def _judged(suite: Suite, cells: Sequence[Cell]) -> tuple[pd.DataFrame, tuple[st
     return frame, tuple(str(f.error) for f in result.failed), result
 
 
-def _interval(low: float, high: float) -> str | None:
-    return None if math.isnan(low) else f"[{low:.2f}, {high:.2f}]"
-
-
-def _rates(layout: Layout, full_runs: bool) -> tuple[str, ...]:
-    """The layout's rates, with ``FULL_RUNS`` after success when some task heads with it."""
-    extra = (FULL_RUNS,) if full_runs else ()
-    return (*layout.rates[:1], *extra, *layout.rates[1:])
-
-
 def _header(layout: Layout, full_runs: bool = False) -> tuple[str, ...]:
-    """The table's columns; ``full_runs``: some task heads with its full runs."""
-    names = [FULL_RUNS_LABEL if r == FULL_RUNS else r for r in _rates(layout, full_runs)]
-    rates = [c for r in names for c in (r, f"{r} 95% CI")]
-    means = []
-    for m in layout.means:
-        label = plain_text(METRICS[m].label)
-        means += [f"{label} [{plain_text(METRICS[m].unit)}]"] + (
-            [f"{label} 95% CI"] if layout.intervals else [])
-    return (*ROW_KEYS, "n", *rates, *means, "status")
-
-
-def _table_row(key: Mapping[str, str], stats: pd.Series | None, error: str, layout: Layout,
-               episodes: pd.DataFrame, *, heads: str = "success",
-               full_runs: bool = False) -> list[str | None]:
-    """A row's cells; ``episodes``: its judged bags (for the bootstrap intervals); ``heads``:
-    its task's headline (``success`` or ``FULL_RUNS``: its full runs' cells are filled, and
-    the quality columns' intervals are over its full runs, as ``aggregate``'s means);
-    ``full_runs``: the table has the full runs' column."""
-    cells: list[str | None] = list(key.values())
-    rates = _rates(layout, full_runs)
-    width = 2 * len(rates) + len(layout.means) * (1 + layout.intervals)
-    if stats is None:
-        return [*cells, "0", *[None] * width, f"failed: {error}"]
-    n = int(stats["n_judged"])
-    for rate in rates:
-        if rate == FULL_RUNS:
-            k, ran = (int(stats["n_full_runs"]), int(stats["n_ran"])) if heads == FULL_RUNS \
-                else (0, 0)
-            cells += [f"{k}/{ran}" if ran else None, _interval(*wilson_interval(k, ran))]
-            continue
-        k = int(stats["n_success" if rate == "success" else f"n_{rate}"])
-        cells += [f"{k}/{n}" if n else None, _interval(*wilson_interval(k, n))]
-    for m in layout.means:
-        cells.append(_num(stats.get(f"{m}_mean")))
-        if layout.intervals:
-            best = (episodes["outcome"] == FULL_RUN) if heads == FULL_RUNS else (
-                episodes["success"] == 1.0)
-            over = episodes[best] if METRICS[m].quality else episodes
-            values = over[m] if m in over else []
-            cells.append(_interval(*bootstrap_interval(pd.to_numeric(values, errors="coerce"))))
-    return [*cells[:len(key)], str(int(stats["n_episodes"])), *cells[len(key):],
-            f"failed: {error}" if error else "ok"]
+    """The table's columns: the row keys, the layout's (``protocol.header``), the status;
+    ``full_runs``: some task heads with its full runs."""
+    return (*ROW_KEYS, *layout_header(layout, full_runs), "status")
 
 
 def build_rows(suite: Suite, errors: Mapping[str, str],
@@ -154,17 +82,11 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
         tuple[str, ...], list[list[str | None]], tuple[str, ...]]:
     """The table's header and rows (in the suite's order) and the unjudged bags' errors;
     ``errors``: the failed cells' errors by cell name; ``judged``: ``_judged``'s, when the
-    caller judged the bags already."""
+    caller judged the bags already. The cells are the metrics' (``protocol.protocol_cells``,
+    as ``pic4rl-metrics compare --table`` computes them)."""
     layout = LAYOUTS[suite.table]
     frame, bad, _ = judged if judged is not None else _judged(suite, suite.cells)
-    agg = aggregate(frame, by=list(ROW_KEYS)) if len(frame) else None
-    good = frame[frame["error"].fillna("") == ""] if "error" in frame else frame
-    groups = {k: g for k, g in good.groupby(list(ROW_KEYS), sort=False)} if len(good) else {}
-    heads = {} if agg is None else {  # each task's headline, by the metrics' rule
-        task: headline(agg[agg.index.get_level_values("task") == task])
-        for task in dict.fromkeys(agg.index.get_level_values("task"))}
-    full_runs = FULL_RUNS in heads.values()
-    header = _header(layout, full_runs)
+    columns, cells = protocol_cells(frame, ROW_KEYS, layout)
     rows: dict[tuple[str, ...], tuple[dict[str, str], list[str]]] = {}
     for cell in suite.cells:
         key = tuple(cell.row.values())
@@ -173,11 +95,11 @@ def build_rows(suite: Suite, errors: Mapping[str, str],
             rows[key][1].append(f"{cell.name}: {errors[cell.name]}")
     out = []
     for key, (row, errs) in rows.items():
-        stats = agg.loc[key] if agg is not None and key in agg.index else None
-        out.append(_table_row(row, stats, "; ".join(errs), layout,
-                              groups.get(key, pd.DataFrame(columns=["success", "outcome"])),
-                              heads=heads.get(key[0], "success"), full_runs=full_runs))
-    return header, out, bad
+        error = "; ".join(errs)
+        mine = cells.get(key)
+        status = "ok" if mine is not None and not error else f"failed: {error}"
+        out.append([*row.values(), *(empty_cells(columns) if mine is None else mine), status])
+    return (*ROW_KEYS, *columns, "status"), out, bad
 
 
 def _rate(row: Sequence[str | None], col: int) -> float:

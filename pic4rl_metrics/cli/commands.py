@@ -28,6 +28,7 @@ from ..tables.groups import BY_CHOICES, parse_by, render_groups
 from ..tables.batch import MetricsResult, compute
 from ..tables.layouts import FORMATS
 from ..tables.paired import render_paired
+from ..tables.protocol import LAYOUTS, protocol_table
 from ..tables.results import METRIC_COLUMNS, table_columns
 from ..tables.text import EPISODE_VIEW, render_episodes
 from .video import add_video_options, run_video_command
@@ -145,6 +146,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="instead of the table: every agent against REF on shared start-goal "
                         "pairs (success difference, bootstrap interval, McNemar's p); repeat "
                         "for several references")
+    p.add_argument("--table", choices=tuple(LAYOUTS), metavar="LAYOUT",
+                   help="instead of the table: a benchmark protocol's table, as pic4rl-bench's "
+                        "'table:' prints it (barn: success, collision and timeout with Wilson "
+                        "95%% intervals, BARN time and score with bootstrap intervals, of the "
+                        "episodes in BARN worlds; paper: success with its interval, the "
+                        "paper's columns and SPL)")
     p = sub.add_parser("report", help="one self-contained HTML page: leaderboard, paired "
                                       "comparisons, failures, maps, every episode")
     _add_input_options(p)
@@ -287,6 +294,19 @@ def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
         print(f"wrote {target}", file=sys.stderr)
 
 
+def _check_table_options(args: argparse.Namespace) -> None:
+    """``compare --table``: refuse the options of the other tables before any bag is read."""
+    if args.command != "compare" or not args.table:
+        return
+    clash = [o for o, on in (("--paired", args.paired), ("--with-std", args.with_std),
+                             ("--over all", args.over == "all")) if on]
+    if clash:
+        raise ConfigError(f"compare --table {args.table}: {clash[0]} is not an option of a "
+                          "protocol's table (its columns are fixed, as pic4rl-bench's)")
+    if args.metrics is not None:  # the layout's columns are always computed
+        args.metrics = tuple(dict.fromkeys((*args.metrics, *LAYOUTS[args.table].means)))
+
+
 @entry_point("pic4rl-metrics")
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``pic4rl-metrics``; returns the exit code."""
@@ -295,12 +315,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return run_video_command(args, *_inputs(args))
     if args.command == "report":
         _check_report_inputs(args)
+    _check_table_options(args)
     result = _run(args)
     if args.command == "compute":
         shown = _shown(result, list(EPISODE_VIEW), numeric=False)
         _emit(render_episodes(result.frame, args.format, columns=shown), args.out, args.force)
     elif args.command == "compare" and args.paired:
         _emit(render_paired(result, args.paired, args.format), args.out, args.force)
+    elif args.command == "compare" and args.table:
+        text, note = protocol_table(result, args.table, args.format, by=args.by,
+                                    count_aborted=args.count_aborted)
+        if note:
+            print(f"note: {note}", file=sys.stderr)
+        _emit(text, args.out, args.force)
     elif args.command == "report":
         from ..viz.html_report import write_report  # matplotlib and Pillow on demand
 
