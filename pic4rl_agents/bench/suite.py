@@ -21,7 +21,7 @@ drawn once from the seed, the same on every machine), ``{file: PATH}`` (a goals_
 file), ``{episodes: N}`` (N episodes as the env draws them, for tasks without goal pairs).
 A world group (``{world, variants, label}``) is a cell per variant and one table row,
 ``WORLD:LABEL``, for all of them (a benchmark's test worlds). ``table: barn`` gives the table
-BARN's columns (``benchtable.LAYOUTS``).
+BARN's columns (``pic4rl_metrics.tables.protocol.LAYOUTS``).
 """
 
 from __future__ import annotations
@@ -40,13 +40,15 @@ from pic4rl_bridge.errors import ConfigError, require, unknown_key
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 from pic4rl_sim.schema import read_yaml
+from pic4rl_metrics.tables.protocol import LAYOUTS
 
 from pic4rl_agents.config import SIM_NODE
 from pic4rl_agents.testing.plan import DEFAULT_PAIRS, TestPlan, resolve_agents
 
 SUITE_KEYS = ("suite", "bags", "transport", "retries", "table", "tasks")
-#: The results table's layouts (``benchtable.LAYOUTS``): the paper's columns, or BARN's.
-TABLES = ("paper", "barn")
+#: The results table's layouts (``pic4rl_metrics.tables.protocol.LAYOUTS``, which
+#: ``pic4rl-metrics compare --table`` names too): the paper's columns, or BARN's.
+TABLES = tuple(LAYOUTS)
 WORLD_GROUP_KEYS = ("world", "variants", "label")
 TASK_KEYS = ("name", "env", "agents", "baselines", "worlds", "robots", "pairs", "repetitions",
              "seed")
