@@ -166,3 +166,31 @@ def test_the_layouts_columns_are_computed_whatever_metrics_names(capsys, bags: P
     (row,) = json.loads(out)
     assert (row["success"], row["BARN score [-]"], row["BARN time [s]"]) == ("1/2", "0.25",
                                                                              "2.90")
+
+
+def test_a_reference_path_fact_makes_a_barn_episode_anywhere(capsys, tmp_path: Path) -> None:
+    """The metrics' own test (their ``barn_world`` input): a lab's BARN-like world with its
+    reference path is judged; a world without either is left out."""
+    for name, world, reference in (("lab", "lab:3", 3.0), ("office", "office:1", None)):
+        facts: dict[str, object] = {"agent": "stack", "task": GOTO, "world": world}
+        if reference is not None:
+            facts["reference_path_m"] = reference
+        write_episode_bag(tmp_path / name, straight_line(1.0, 3.0), goal=(3.0, 0.0),
+                          facts=facts, outcome="goal")
+    code, out, err = _run(capsys, "compare", "--table", "barn", "--format", "json", tmp_path)
+    assert code == 0
+    (row,) = json.loads(out)
+    assert (row["agent"], row["n"], row["BARN score [-]"]) == ("stack", "1", "0.50")
+    assert "left out 1 of 2 episode(s)" in err and err.rstrip().endswith("office")
+
+
+def test_the_paper_table_as_the_bench_prints_it(capsys, bags: Path) -> None:
+    code, out, _ = _run(capsys, "compare", "--table", "paper", "--format", "json",
+                        *sorted(bags.glob("dwa_*")))
+    assert code == 0  # the paper's table takes every world: one group per world set
+    rows = {r["worlds"]: r for r in json.loads(out)}
+    assert [rows["indoor"][c] for c in ("agent", "n", "success", "success 95% CI")] == [
+        "dwa", "1", "1/1", "[0.21, 1.00]"]
+    assert list(rows["barn"])[:6] == ["task", "worlds", "agent", "n", "success",
+                                      "success 95% CI"]
+    assert rows["barn"]["SPL [-]"] is not None and "BARN score [-]" not in rows["barn"]
