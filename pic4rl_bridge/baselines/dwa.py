@@ -13,7 +13,7 @@ from pic4rl_metrics.geometry import wrap_angle
 from ..errors import ConfigError
 from ..perception.collision import sensed_points
 from ..robot_info import RobotInfo
-from ..tasks.goto import normalized_action
+from ..control.actions import normalized_action
 from ..transports.frame import SensorFrame
 from .config import DwaConfig
 

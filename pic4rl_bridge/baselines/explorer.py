@@ -5,7 +5,7 @@ topic, never the world, so it runs in process, through the sim node over ROS 2 a
 robot. Its plan is ``pic4rl_bridge.perception.explorer_plan``'s (the shortest path on an
 occupancy grid of its own scans, unknown space free, kept until something newly seen blocks
 it), which a goToPose observation with ``goal_input: explorer`` points along too; it follows
-that plan with the privileged planner's pursuit law (``planner.pursuit_command``) within its
+that plan with the privileged planner's pursuit law (``pic4rl_bridge.control.pursuit``) within its
 own speed limit (``max_linear_m_s``). In a depth env (``for_env``: the baseline and a depth
 student's expert) it marks the depth image's pseudo-scan, as the student's memory does, even
 where a scan is there.
@@ -19,10 +19,10 @@ from ..config import EnvConfig
 from ..perception.explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid
 from ..robot_info import RobotInfo
-from ..tasks.goto import normalized_action
+from ..control.actions import normalized_action
 from ..transports.frame import SensorFrame
 from .config import ExplorerConfig
-from .planner import pursuit_command
+from ..control.pursuit import pursuit_command
 
 
 class ExplorerController:

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ..config import EnvConfig
+from ..control.following import heading_rate
 from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
 from ..robot_info import RobotInfo
@@ -104,9 +105,10 @@ class PersonFollower(DwaController):
 
 class HeadingController:
     """The classical yaw rate: ω = ``gain`` × the person's bearing (rad, left positive),
-    clipped to the robot's range. Its normalised action fits the env's control: [ω] when
-    hybrid (the env's DWA adds the translation), else [vx, vy, ω] with ``PersonFollower``'s
-    translation: DWA with a proportional heading controller."""
+    clipped to the robot's range (``pic4rl_bridge.control.following.heading_rate``). Its
+    normalised action fits the env's control: [ω] when hybrid (the env's DWA adds the
+    translation), else [vx, vy, ω] with ``PersonFollower``'s translation: DWA with a
+    proportional heading controller."""
 
     def __init__(self, config: EnvConfig, robot: RobotInfo, *, gain: float = 2.0) -> None:
         self.robot = robot
@@ -123,8 +125,7 @@ class HeadingController:
         if frame.person is None:
             raise ValueError("HeadingController: the frame has no person pose")
         r = self.robot
-        _, bearing = target_polar(frame.pose, frame.person.x, frame.person.y)
-        wz = float(np.clip(self.gain * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
+        wz = heading_rate(r, frame.pose, frame.person, self.gain)
         if self.follower is None:
             return np.array([wz / r.max_angular_rad_s], np.float32)
         vx, vy = self.follower.translation(frame, wz)

@@ -11,12 +11,9 @@ ways round an obstacle near the middle, and a student imitating those labels ave
 and stalls (in a DAgger probe, such students reached 5 of 50 goals after two rounds, with 35
 timeouts, against 10 and 22 for students of this planner).
 
-The controller steers toward the farthest point of the plan within ``lookahead_m`` beyond the
-robot's projection on it that the robot sees in a straight line with ``clearance_m`` to spare
-(pure pursuit's look-ahead, without its corner cutting): a yaw rate proportional to that
-point's bearing, and a speed that falls from the full speed, with the bearing within a third of
-``turn_in_place_rad``, to none (turning in place) beyond it, capped by pure pursuit's arc. Both
-are continuous in the bearing, so that a student can regress them. The commands stay within
+The controller is the pursuit law of ``pic4rl_bridge.control.pursuit``: it steers toward the
+farthest point of the plan within ``lookahead_m`` that the robot sees in a straight line with
+``clearance_m`` to spare. The commands stay within
 the env's speed ranges (and its own ``max_linear_m_s``, when set); the robot's acceleration
 limits are the simulator's (its actuators are force-capped at them). Its settings are the
 ``baselines:`` section's ``planner.*`` (``PlannerConfig``): BARN's dense fields want it slower
@@ -25,49 +22,15 @@ or wider (``plan_margin_m``: a plan that keeps more than the simulator's widest 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.geometry import Pose2D, point_along
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path, planner_for
-from pic4rl_sim.engine.taut_path import Visible
 from pic4rl_sim.engine.worlds.spec import WorldSpec
 
-from ..perception.observations import target_polar
+from ..control.actions import normalized_action
+from ..control.pursuit import pursuit_command
 from ..robot_info import RobotInfo
-from ..tasks.goto import normalized_action
 from ..transports.frame import SensorFrame
-
-
-_LOOKAHEAD_FRACTIONS = (1.0, 0.75, 0.5, 0.25)  # of lookahead_m, tried in turn
-_TURN_GAIN = 2.5  # yaw rate (rad/s) per radian of bearing, up to the robot's limit
-
-
-def pursuit_command(robot: RobotInfo, pose: Pose2D, path: np.ndarray, s: float,
-                    visible: Visible, *, lookahead_m: float = 0.4,
-                    turn_in_place_rad: float = 0.8,
-                    max_linear_m_s: float | None = None) -> tuple[float, float]:
-    """(v, ω) (m/s, rad/s) toward the farthest point of ``path`` within ``lookahead_m`` beyond
-    arc length ``s`` (the robot's projection) that ``visible`` says the robot reaches in a
-    straight line: the pursuit law of the module's docstring, which the mapless explorer
-    (``pic4rl_bridge.baselines.explorer``) follows its own plans with too. ``max_linear_m_s``: a
-    speed limit below the robot's (None: the robot's)."""
-    xy = np.array([pose.x, pose.y])
-    ahead = [point_along(path, s + f * lookahead_m) for f in _LOOKAHEAD_FRACTIONS]
-    seen = visible(xy, np.array(ahead))
-    target = ahead[int(np.argmax(seen))] if seen.any() else ahead[-1]
-    distance, bearing = target_polar(pose, float(target[0]), float(target[1]))
-    r = robot
-    v_max = r.max_linear_m_s if max_linear_m_s is None else max_linear_m_s
-    w = float(np.clip(_TURN_GAIN * bearing, -r.max_angular_rad_s, r.max_angular_rad_s))
-    facing = (turn_in_place_rad - abs(bearing)) / (2.0 * turn_in_place_rad / 3.0)
-    v = v_max * min(max(facing, 0.0), 1.0)
-    curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # pure pursuit's arc
-    if abs(curvature) * v > r.max_angular_rad_s:
-        v = r.max_angular_rad_s / abs(curvature)
-    return float(min(max(v, r.min_linear_m_s, 0.0), v_max)), w
-
 
 class PlannerController:
     """The privileged planner for goToPose on ``world`` (see the module's docstring)."""

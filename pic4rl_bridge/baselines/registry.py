@@ -37,7 +37,7 @@ from pic4rl_metrics.geometry import wrap_angle
 from ..config import EnvConfig
 from ..errors import ConfigError
 from ..robot_info import RobotInfo
-from ..tasks.goto import normalized_action
+from ..control.actions import normalized_action
 from ..tasks.registry import TASKS
 from ..transports.frame import SensorFrame
 from .config import BaselinesConfig

@@ -33,7 +33,7 @@ from ..errors import ConfigError
 from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
 from ..robot_info import RobotInfo
-from ..tasks.goto import normalized_action
+from ..control.actions import normalized_action
 from ..tasks.vineyard import centerlines, row_centerline
 from ..transports.frame import SensorFrame
 

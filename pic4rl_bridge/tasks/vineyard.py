@@ -27,7 +27,7 @@ from ..perception.observations import depth_observation, depth_space
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .goto import planar_action_space, planar_command
+from ..control.actions import planar_action_space, planar_command
 from .registry import VineyardReward
 
 if TYPE_CHECKING:

@@ -29,7 +29,7 @@ from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.transports.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.tasks.goto import planar_command
+from pic4rl_bridge.control.actions import planar_command
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"

@@ -17,7 +17,7 @@ from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 from pic4rl_bridge.transports.frame import SensorFrame
 from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.tasks.goto import planar_command
+from pic4rl_bridge.control.actions import planar_command
 
 GAP = (0.5, 2.0)  # the gap in the wall along x = 0 (y, m)
 WORLD = WorldSpec("gap", (-4.0, -4.0, 4.0, 4.0), boxes=(
