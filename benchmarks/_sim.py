@@ -19,6 +19,18 @@ def start_sim(domain: int, *ros_args: str) -> subprocess.Popen[bytes]:
                             stderr=subprocess.PIPE)
 
 
+def cpu_s(pid: int) -> float:
+    """CPU time (s, user + system) the process ``pid`` has used so far, from ``/proc`` (10 ms
+    ticks; 0 where there is no ``/proc``). Per-step CPU of both lockstep processes moves less
+    with a shared machine's load than their wall time does."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def stop_sim(proc: subprocess.Popen[bytes]) -> None:
     if proc.poll() is None:
         try:

@@ -11,7 +11,9 @@ episodes last ``--steps`` steps and nothing but stepping is timed):
 
 Loops run interleaved, best of ``--repeat``; recording writes sqlite3 bags to a temporary
 directory. Targets (docs/performance.md): ROS-bridged env >= 0.5 x the in-process env,
-recording overhead <= 10 %. The last lines are ``RESULT <name> <value>``.
+recording overhead <= 10 %. The last lines are ``RESULT <name> <value>``; among them the CPU
+per step of the env's process and of the sim node (least over the rounds), which a shared
+machine's load moves less than the rates.
 
     .venv/bin/python benchmarks/env_throughput.py
 """
@@ -29,7 +31,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from _sim import start_sim, stop_sim
+from _sim import cpu_s, start_sim, stop_sim
 
 import pic4rl_bridge  # noqa: F401 - registers the envs
 from pic4rl_sim.engine.core import Engine
@@ -41,13 +43,19 @@ TURN = np.array([-1.0, 0.5], dtype=np.float32)  # v = 0, w = 0.5 rad/s: never en
 SEED = 0
 
 
-def env_loop(env: gym.Env, steps: int) -> float:
-    """Seconds for one episode of ``steps`` steps (the reset not timed)."""
+def env_loop(env: gym.Env, steps: int, cpu: dict[str, float] | None = None) -> float:
+    """Seconds for one episode of ``steps`` steps (the reset not timed); ``cpu`` gets the
+    CPU seconds of this process (``env``) and of the sim (``sim``, pid ``cpu["pid"]``) over
+    the same steps."""
     env.reset(seed=SEED)
+    own, sim = time.process_time(), cpu_s(int(cpu["pid"])) if cpu else 0.0
     start = time.perf_counter()
     for _ in range(steps):
         env.step(TURN)
-    return time.perf_counter() - start
+    seconds = time.perf_counter() - start
+    if cpu is not None:
+        cpu["env"], cpu["sim"] = time.process_time() - own, cpu_s(int(cpu["pid"])) - sim
+    return seconds
 
 
 def bare_loop(engine: Engine, steps: int) -> float:
@@ -81,14 +89,20 @@ def main(argv: list[str] | None = None) -> int:
                             overrides={**common, **record, "record.run": "ros"}),
     }
     engine = envs["inprocess"].unwrapped.transport.engine
+    cpu = {name: {"pid": sim.pid} for name in envs}
     loops: dict[str, Callable[[], float]] = {
-        name: (lambda env=env: env_loop(env, args.steps)) for name, env in envs.items()}
+        name: (lambda env=env, name=name: env_loop(env, args.steps, cpu[name]))
+        for name, env in envs.items()}
     loops["bare"] = lambda: bare_loop(engine, args.steps)
     try:
         best = dict.fromkeys(loops, float("inf"))
+        least = {name: {"env": float("inf"), "sim": float("inf")} for name in envs}
         for round_ in range(args.repeat):
             for name, loop in loops.items():
                 best[name] = min(best[name], loop())
+                for side, seconds in cpu.get(name, {}).items():
+                    if side != "pid":
+                        least[name][side] = min(least[name][side], seconds)
             print(f"round {round_ + 1}/{args.repeat}: " + ", ".join(
                 f"{n} {args.steps / t:.0f}/s" for n, t in best.items()), file=sys.stderr)
     finally:
@@ -105,6 +119,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"RESULT env_recording_overhead_inprocess "
           f"{rate['inprocess'] / rate['inprocess_rec'] - 1:.3f}")
     print(f"RESULT env_recording_overhead_ros {rate['ros'] / rate['ros_rec'] - 1:.3f}")
+    # CPU per step (least over the rounds): the env's process and the sim node's.
+    for name in ("inprocess", "ros"):
+        print(f"RESULT env_{name}_cpu_us_per_step {1e6 * least[name]['env'] / args.steps:.0f}")
+    print(f"RESULT env_ros_sim_cpu_us_per_step {1e6 * least['ros']['sim'] / args.steps:.0f}")
     return 0
 
 

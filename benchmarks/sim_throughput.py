@@ -12,7 +12,8 @@ One run, one model (Jackal in the seeded ``indoor`` world, 360-beam LiDAR, 10 Hz
 
 Bare and engine run interleaved (best of ``--repeat``); the ROS loop runs after them. The
 real-time factor is simulated seconds per wall second. The last lines are
-``RESULT <name> <value>``, one per figure, for ``docs/performance.md``.
+``RESULT <name> <value>``, one per figure, for ``docs/performance.md``; the CPU per lockstep
+step of the node and of this client move less with a shared machine's load than the rates.
 
     .venv/bin/python benchmarks/sim_throughput.py
 """
@@ -28,7 +29,7 @@ from collections.abc import Callable
 
 import mujoco
 import numpy as np
-from _sim import start_sim, stop_sim
+from _sim import cpu_s, start_sim, stop_sim
 
 from pic4rl_sim.engine.core import Engine, EngineConfig
 from pic4rl_sim.engine.geometry import Twist2D
@@ -99,9 +100,10 @@ def best_of(repeat: int, loops: dict[str, Callable[[int], float]], steps: int) -
     return best
 
 
-def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int]:
-    """Seconds for ``steps`` lockstep steps through a ``sim`` node in another process, and
-    the number of steps whose scan or odometry never came (best-effort QoS may drop)."""
+def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int, float, float]:
+    """Seconds for ``steps`` lockstep steps through a ``sim`` node in another process, the
+    number of steps whose scan or odometry never came (best-effort QoS may drop), and the CPU
+    seconds of this client and of the node over those steps."""
     import rclpy
     from geometry_msgs.msg import Twist
     from nav_msgs.msg import Odometry
@@ -154,9 +156,11 @@ def ros_lockstep(steps: int, timeout_s: float) -> tuple[float, int]:
             return missed
 
         run(100)  # warm up both processes
+        own, node_cpu = time.process_time(), cpu_s(sim.pid)
         start = time.perf_counter()
         missed = run(steps)
-        return time.perf_counter() - start, missed
+        seconds = time.perf_counter() - start
+        return (seconds, missed, time.process_time() - own, cpu_s(sim.pid) - node_cpu)
     finally:
         rclpy.shutdown(context=context)
         stop_sim(sim)
@@ -170,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     best = best_of(args.repeat, {"bare": bare_loop, "engine": engine_loop}, args.steps)
-    ros_s, missed = ros_lockstep(args.steps, args.timeout)
+    ros_s, missed, client_cpu_s, node_cpu_s = ros_lockstep(args.steps, args.timeout)
     rate = {name: args.steps / seconds for name, seconds in best.items()}
     rate["ros"] = args.steps / ros_s
     print(f"model: jackal in {WORLD} (seed {SEED}), {BEAMS}-beam LiDAR, "
@@ -188,6 +192,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"RESULT sim_ros_vs_engine_ratio {rate['ros'] / rate['engine']:.2f}")
     print(f"RESULT sim_ros_real_time_factor {rate['ros'] * CONTROL_DT_S:.0f}")
     print(f"RESULT sim_ros_lost_steps {missed}")
+    print(f"RESULT sim_ros_node_cpu_us_per_step {1e6 * node_cpu_s / args.steps:.0f}")
+    print(f"RESULT sim_ros_client_cpu_us_per_step {1e6 * client_cpu_s / args.steps:.0f}")
     return 0
 
 
