@@ -1,6 +1,7 @@
 """``pic4rl-metrics compare --table barn``: BARN's protocol table (as ``pic4rl-bench``'s
 ``table: barn``) from bags alone, one row per agent whatever its name; episodes outside a BARN
-world left out with a note, refused when none is left; every format.
+world left out with a note, refused when none is left; every format; and the report's
+leaderboard shows the same agent, counts, interval and score.
 
 The bags (real rosbag2, in a temporary directory) are straight drives at 1 m/s sampled every
 0.1 s, so every number is known by hand. BARN's time AT starts 0.1 m off the start: a 3 m
@@ -18,6 +19,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
@@ -194,3 +196,45 @@ def test_the_paper_table_as_the_bench_prints_it(capsys, bags: Path) -> None:
     assert list(rows["barn"])[:6] == ["task", "worlds", "agent", "n", "success",
                                       "success 95% CI"]
     assert rows["barn"]["SPL [-]"] is not None and "BARN score [-]" not in rows["barn"]
+
+
+class _Leaderboards(HTMLParser):
+    """The cells of each leaderboard table's rows, in page order."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.boards: list[list[list[str]]] = []
+        self._in = False
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        if tag == "table":
+            self._in = str(dict(attrs).get("id")).startswith("leaderboard")
+            if self._in:
+                self.boards.append([])
+        elif tag == "tr" and self._in:
+            self.boards[-1].append([])
+        elif tag in ("td", "th") and self._in:
+            self.boards[-1][-1].append("")
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag == "table":
+            self._in = False
+
+    def handle_data(self, data: str) -> None:
+        if self._in and self.boards[-1] and self.boards[-1][-1]:
+            self.boards[-1][-1][-1] += data.strip()
+
+
+def test_the_report_shows_an_agent_never_seen_as_one_more_row(bags: Path,
+                                                               tmp_path: Path) -> None:
+    out = tmp_path / "report.html"
+    assert cli.main(["report", str(bags), "--out", str(out)]) == 0
+    page = _Leaderboards()
+    page.feed(out.read_text())
+    barn = page.boards[0]  # the BARN group's (the indoor episode has a table of its own)
+    rows = {r[0]: r for r in barn[1:]}
+    assert sorted(rows) == ["dwa", "my_gap_follower"]
+    # the same counts, interval and score as compare --table barn, in the report's own words
+    assert [rows["my_gap_follower"][c] for c in (1, 2, 3, 7)] == ["4", "2/4 (50%)", "[15, 85]%",
+                                                                "0.17"]
+    assert [rows["dwa"][c] for c in (1, 2, 3, 7)] == ["3", "2/3 (67%)", "[21, 94]%", "0.33"]
