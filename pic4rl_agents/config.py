@@ -15,7 +15,7 @@ from typing import Any
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError, require
-from pic4rl_bridge.tasks.registry import EXPERT_TASKS
+from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
@@ -161,7 +161,7 @@ class ImitationConfig:
 
     enabled: bool = param(False, doc=f"imitation before RL ({', '.join(OFF_POLICY)})")
     expert: str = param("planner", doc="the expert that labels states, one of its task's "
-                        "experts in the task table (pic4rl_bridge.tasks.registry; "
+                        "experts in the task table (pic4rl_bridge.settings.tasks; "
                         "docs/agents.md, imitation)", choices=tuple(EXPERT_TASKS))
     bc_steps: int = param(5_000, doc="env steps driven by the expert (behaviour cloning's "
                           "data)", range=NON_NEGATIVE)

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from .tasks.registry import env_ids
+from .settings.tasks import env_ids
 
 _ENTRY_POINT = "pic4rl_bridge.env:NavEnv"
 #: id → its task and sensor, and sim parameters for keys a config's sim section leaves unset
-#: (each task's entry in ``pic4rl_bridge.tasks.registry.TASKS``).
+#: (each task's entry in ``pic4rl_bridge.settings.tasks.TASKS``).
 ENV_IDS = env_ids()
 
 for _id, _kwargs in ENV_IDS.items():

@@ -41,10 +41,10 @@ from pic4rl_sim.schema import (
     to_params,
 )
 
-from .baselines.config import PREFIX as BASELINES_PREFIX, ExplorerConfig
+from .settings.baselines import PREFIX as BASELINES_PREFIX, ExplorerConfig
 from .errors import ConfigError, require
 from .transports.sensor_table import SENSORS
-from .tasks.registry import (
+from .settings.tasks import (
     TASKS,
     GoalInput,
     PersonConfig,

@@ -36,7 +36,7 @@ from .episodes import resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
 from .scenario import Scenario
 from .tasks.base import EpisodeContext, make_task
-from .tasks.registry import task_spec
+from .settings.tasks import task_spec
 from .transports.frame import SensorFrame
 from .transports.sensor_table import BY_NAME
 from .transports.transport import EpisodeRequest, Transport

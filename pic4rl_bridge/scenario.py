@@ -19,7 +19,7 @@ from pic4rl_sim.errors import SimError
 from .config import EnvConfig
 from .errors import ConfigError
 from .robot_info import RobotInfo
-from .tasks.registry import task_spec
+from .settings.tasks import task_spec
 
 if TYPE_CHECKING:  # pic4rl_sim.config imports mujoco: only when a sim section is used
     from pic4rl_sim.engine.worlds.spec import WorldSpec

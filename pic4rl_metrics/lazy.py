@@ -3,7 +3,7 @@
 A sub-package's ``__init__`` lists each public name's module and exports them through
 ``lazy_exports``, so that importing one module of a package does not pay for what its
 siblings load: the sim imports ``pic4rl_metrics.errors`` without pandas or rosbags, the bridge's
-``config`` reads ``tasks.registry`` without MuJoCo or rclpy (and before the tasks, which read
+``config`` reads ``settings.tasks`` without MuJoCo or rclpy (and before the tasks, which read
 ``config``, have run), and the agents' ``config`` reads the algorithm table without torch.
 Every package's sub-packages use this one module (the sim may import it: docs/architecture.md).
 """

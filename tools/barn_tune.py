@@ -25,7 +25,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pic4rl_bridge.baselines.config import baselines_config_from_params
+from pic4rl_bridge.settings.baselines import baselines_config_from_params
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.env import NavEnv
 from pic4rl_metrics.core.metrics import BARN_CLIP, BARN_MOVED_M, BARN_SPEED_MPS

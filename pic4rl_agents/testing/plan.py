@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from pic4rl_bridge.baselines.config import BASELINES_NODE, BaselinesConfig, baselines_config
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import EnvConfig, agent_conflicts
 from pic4rl_bridge.errors import ConfigError

@@ -40,11 +40,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pic4rl_bridge.baselines.config import PREFIX as BASELINES_PREFIX
-from pic4rl_bridge.baselines.config import baselines_config_from_params
+from pic4rl_bridge.settings.baselines import PREFIX as BASELINES_PREFIX
+from pic4rl_bridge.settings.baselines import baselines_config_from_params
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
-from pic4rl_bridge.tasks.registry import TASKS
+from pic4rl_bridge.settings.tasks import TASKS
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from pic4rl_metrics import atomic

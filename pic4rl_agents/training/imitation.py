@@ -32,7 +32,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
-from pic4rl_bridge.baselines.config import BASELINES_NODE, BaselinesConfig, baselines_config
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.baselines.explorer import ExplorerController
@@ -40,7 +40,7 @@ from pic4rl_bridge.baselines.follow import HeadingController
 from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.baselines.row_followers import CenterlineFollower, make_row_follower
 from pic4rl_bridge.scenario import Scenario
-from pic4rl_bridge.tasks.registry import EXPERT_TASKS
+from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 from pic4rl_sim import params_file
 
 from pic4rl_agents.config import NODES, ImitationConfig

@@ -1,12 +1,14 @@
 """Baselines: the classical controllers ``pic4rl-test --baseline NAME`` runs like an agent,
 and imitation's experts.
 
-``registry`` (``BASELINES``, which task each drives, ``make_baseline``; the proportional
-controller), ``config`` (the ``baselines:`` section: their settings), ``dwa`` (the Dynamic
-Window Approach), ``planner`` (the privileged planner and its pursuit law), ``explorer`` (the
-mapless explorer), ``follow`` (the person follower's heading law) and ``row_followers`` (the
-vineyard's ``centerline`` and ``row_follower``). Names are imported on first use: the env's
-``config`` reads ``config`` here before the controllers, which read the env's config, exist.
+``registry`` (``BASELINES``, which task each drives, ``make_baseline``, ``make_expert``; the
+proportional controller), ``dwa`` (the Dynamic Window Approach), ``planner`` (the privileged
+planner), ``explorer`` (the mapless explorer) with ``explorer_plan`` (its plan on the grid of
+its own scans, which ``goal_input: explorer`` points along too), ``follow`` (the person
+follower's DWA and heading controller) and ``row_followers`` (the vineyard's ``centerline``
+and ``row_follower``). Their settings (the ``baselines:`` section) are one room lower,
+``pic4rl_bridge.settings.baselines``; the laws they share with the tasks are in
+``pic4rl_bridge.control``. Names are imported on first use.
 """
 
 from __future__ import annotations
@@ -16,11 +18,9 @@ from pic4rl_metrics.lazy import lazy_exports
 _EXPORTS = {
     "Baseline": "registry", "BASELINES": "registry", "BASELINE_TASKS": "registry",
     "make_baseline": "registry", "check_fits": "registry",
-    "BaselinesConfig": "config", "DwaConfig": "config", "PlannerConfig": "config",
-    "ExplorerConfig": "config",
     "DwaController": "dwa", "PlannerController": "planner", "ExplorerController": "explorer",
-    "HeadingController": "follow", "CenterlineFollower": "row_followers",
-    "RowFollower": "row_followers",
+    "ExplorerPlan": "explorer_plan", "HeadingController": "follow",
+    "CenterlineFollower": "row_followers", "RowFollower": "row_followers",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

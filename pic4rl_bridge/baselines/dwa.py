@@ -15,7 +15,7 @@ from ..perception.collision import sensed_points
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
 from ..transports.frame import SensorFrame
-from .config import DwaConfig
+from ..settings.baselines import DwaConfig
 
 
 _LANES = 72  # directions (5° apart) checked for a free lane toward the goal
@@ -205,4 +205,4 @@ class DwaController:
 
 
 #: The baselines ``pic4rl-test --baseline`` knows, and the tasks each drives (each task's
-#: ``baselines`` in ``pic4rl_bridge.tasks.registry.TASKS``).
+#: ``baselines`` in ``pic4rl_bridge.settings.tasks.TASKS``).

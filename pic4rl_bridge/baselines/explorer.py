@@ -2,11 +2,11 @@
 
 It reads what a mapless agent reads, the scan (or the depth image's pseudo-scan) and the pose
 topic, never the world, so it runs in process, through the sim node over ROS 2 and on a real
-robot. Its plan is ``pic4rl_bridge.perception.explorer_plan``'s (the shortest path on an
+robot. Its plan is ``pic4rl_bridge.baselines.explorer_plan``'s (the shortest path on an
 occupancy grid of its own scans, unknown space free, kept until something newly seen blocks
 it), which a goToPose observation with ``goal_input: explorer`` points along too; it follows
-that plan with the privileged planner's pursuit law (``pic4rl_bridge.control.pursuit``) within its
-own speed limit (``max_linear_m_s``). In a depth env (``for_env``: the baseline and a depth
+that plan with the privileged planner's pursuit law (``pic4rl_bridge.control.pursuit``) within
+its own speed limit (``max_linear_m_s``). In a depth env (``for_env``: the baseline and a depth
 student's expert) it marks the depth image's pseudo-scan, as the student's memory does, even
 where a scan is there.
 """
@@ -16,12 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..config import EnvConfig
-from ..perception.explorer_plan import ExplorerPlan
+from .explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
 from ..transports.frame import SensorFrame
-from .config import ExplorerConfig
+from ..settings.baselines import ExplorerConfig
 from ..control.pursuit import pursuit_command
 
 

@@ -20,9 +20,9 @@ from ..control.following import heading_rate
 from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
 from ..robot_info import RobotInfo
-from ..tasks.registry import PersonControl
+from ..settings.tasks import PersonControl
 from ..transports.frame import SensorFrame
-from .config import DwaConfig
+from ..settings.baselines import DwaConfig
 from .dwa import DwaController
 
 

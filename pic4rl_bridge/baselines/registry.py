@@ -38,9 +38,9 @@ from ..config import EnvConfig
 from ..errors import ConfigError
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..tasks.registry import TASKS
+from ..settings.tasks import TASKS
 from ..transports.frame import SensorFrame
-from .config import BaselinesConfig
+from ..settings.baselines import BaselinesConfig
 from .dwa import DwaController
 
 if TYPE_CHECKING:

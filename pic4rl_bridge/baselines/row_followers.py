@@ -32,9 +32,9 @@ from ..config import EnvConfig
 from ..errors import ConfigError
 from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
+from ..perception.rows import centerlines, row_centerline
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..tasks.vineyard import centerlines, row_centerline
 from ..transports.frame import SensorFrame
 
 if TYPE_CHECKING:

@@ -3,9 +3,9 @@
 ``collision`` (scan and depth image → points, the footprint's clearance, the step's safety),
 ``observations`` (the encoders: LiDAR sectors, the depth image, the target in polar
 coordinates, and their spaces), ``occupancy`` (the rolling occupancy grid of the robot's
-own scans: the memory observation's and the explorer's) and ``explorer_plan`` (the mapless
-explorer's plan on that grid: the explorer baseline's and ``goal_input: explorer``'s). Pure
-numpy; names are imported on first use.
+own scans: the memory observation's and the explorer's, whose plan on it is a planner's:
+``pic4rl_bridge.baselines.explorer_plan``) and ``rows`` (the vineyard's centre lines, the
+row being driven). Pure numpy; names are imported on first use.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ _EXPORTS = {
     "lidar_sectors": "observations", "depth_observation": "observations",
     "depth_space": "observations", "target_polar": "observations",
     "clipped_action": "observations",
-    "OccupancyGrid": "occupancy", "sensed_scan": "occupancy", "ExplorerPlan": "explorer_plan",
+    "OccupancyGrid": "occupancy", "sensed_scan": "occupancy",
+    "centerlines": "rows", "row_centerline": "rows",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -1,10 +1,9 @@
 """Tasks: observation, reward and termination as pure functions of decoded sensor data.
 
-``registry`` (``TASKS``: each task's env ids, sensors, reward scales, section and baselines;
-``TaskName``, ``task_spec``), ``base`` (``Task``, ``EpisodeContext``, ``Judgement``,
-``make_task``) and one module per task: ``goto``, ``person``, ``vineyard``. Names are imported
-on first use: the env's ``config`` reads ``registry`` before the tasks, which read the config,
-exist.
+``base`` (``Task``, ``EpisodeContext``, ``Judgement``, ``make_task``) and one module per task:
+``goto``, ``person``, ``vineyard``. Their table (``TASKS``: each task's env ids, sensors,
+reward scales, section and experts) is a setting, one room lower:
+``pic4rl_bridge.settings.tasks``. Names are imported on first use.
 """
 
 from __future__ import annotations
@@ -12,8 +11,6 @@ from __future__ import annotations
 from pic4rl_metrics.lazy import lazy_exports
 
 _EXPORTS = {
-    "TASKS": "registry", "TaskSpec": "registry", "TaskName": "registry",
-    "task_spec": "registry", "env_ids": "registry",
     "Task": "base", "EpisodeContext": "base", "Judgement": "base", "make_task": "base",
 }
 __all__ = sorted(_EXPORTS)

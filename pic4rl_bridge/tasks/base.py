@@ -23,7 +23,7 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from ..config import EnvConfig
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
-from .registry import task_spec
+from ..settings.tasks import task_spec
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.worlds.spec import WorldSpec
@@ -116,7 +116,7 @@ class Task(ABC):
 
 
 def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:
-    """The task ``config.task`` names (``pic4rl_bridge.tasks.registry.TASKS``), built by its
+    """The task ``config.task`` names (``pic4rl_bridge.settings.tasks.TASKS``), built by its
     entry's ``build``; ``world``, when the task reads it (``uses_world``), is the simulated
     world."""
     task: Task = task_spec(config.task).make(config, robot, world)

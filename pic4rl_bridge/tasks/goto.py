@@ -7,7 +7,7 @@ sectors or the depth image. With ``goal_input: plan`` the polar target is instea
 ``plan_lookahead_m`` along the global plan (``topics.plan``) beyond the robot's projection on
 it, as DRL local planners are deployed beside a map (Arena-rosnav's subgoals); the reward and
 the outcome still judge the final goal. ``goal_input: explorer`` points along the plan of the
-mapless explorer instead (``pic4rl_bridge.perception.explorer_plan``, made from the episode's
+mapless explorer instead (``pic4rl_bridge.baselines.explorer_plan``, made from the episode's
 own scans and poses and kept in its context: mapless, a classical global planner beside a
 learned local one). With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
@@ -32,12 +32,12 @@ from pic4rl_sim.engine.geometry import Twist2D, point_along
 from ..config import EnvConfig
 from ..control.actions import planar_action_space, planar_command
 from ..perception.collision import assess
-from ..perception.explorer_plan import ExplorerPlan
+from ..baselines.explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid, sensed_scan
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .registry import GoalInput, GoToPoseReward
+from ..settings.tasks import GoalInput, GoToPoseReward
 from ..perception.observations import (
     MAX_TARGET_DISTANCE_M,
     NORMALIZED_GOAL_DISTANCE_M,

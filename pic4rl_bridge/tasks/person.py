@@ -27,7 +27,7 @@ from ..perception.observations import (MAX_TARGET_DISTANCE_M, clipped_action, li
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
-from .registry import PersonControl, PersonReward
+from ..settings.tasks import PersonControl, PersonReward
 
 
 class PersonMonitoringTask(Task):

@@ -24,11 +24,12 @@ from ..config import EnvConfig
 from ..errors import ConfigError
 from ..perception.collision import assess
 from ..perception.observations import depth_observation, depth_space
+from ..perception.rows import centerlines, row_centerline
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
 from ..control.actions import planar_action_space, planar_command
-from .registry import VineyardReward
+from ..settings.tasks import VineyardReward
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.worlds.spec import WorldSpec
@@ -96,33 +97,6 @@ def build(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None) -> Viney
                           "expected the row's centre line x0, y0, x1, y1, ... or a vineyard "
                           "world")
     return VineyardTask(config, robot, lanes)
-
-
-def centerlines(config: EnvConfig,
-                lanes: Sequence[Sequence[Sequence[float]]]) -> list[np.ndarray]:
-    """The centre lines a vineyard env judges by: ``vineyard.centerline`` when the config gives
-    one, else the world's ``lanes``; ``ConfigError`` when there are none or one is degenerate."""
-    flat = config.vineyard.centerline
-    chosen = [np.reshape(flat, (-1, 2))] if flat else list(lanes)
-    out = [np.asarray(lane, dtype=np.float64).reshape(-1, 2) for lane in chosen]
-    if not out:
-        raise ConfigError("vineyard.centerline: [] is invalid when the world has no lanes; "
-                          "expected x0, y0, x1, y1, ... or a vineyard world")
-    for lane in out:
-        if len(lane) < 2 or polyline_length(lane) <= 0:
-            raise ConfigError(f"vineyard lane: {lane.tolist()!r} is invalid; expected two "
-                              "or more points spanning a positive length")
-    return out
-
-
-def row_centerline(lanes: Sequence[np.ndarray], xy: Sequence[float]) -> np.ndarray:
-    """The row being driven from ``xy``: the lane nearest it (n × 2, m), oriented from its end
-    nearest ``xy``; the task's centre line and the centre-line follower's path."""
-    start = np.asarray(xy, dtype=np.float64)
-    lane = min(lanes, key=lambda line: abs(project(line, start)[1]))
-    if np.hypot(*(lane[-1] - start)) < np.hypot(*(lane[0] - start)):
-        lane = lane[::-1]
-    return np.ascontiguousarray(lane)
 
 
 def _centerline(context: EpisodeContext) -> np.ndarray:

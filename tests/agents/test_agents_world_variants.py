@@ -74,7 +74,7 @@ def test_the_experts_drive_with_the_params_files_baselines_section(tmp_path: Pat
     from pic4rl_agents.models.algorithms import new_model
     from pic4rl_agents.config import ImitationConfig, load_run_config
     from pic4rl_agents.training.imitation import Imitation
-    from pic4rl_bridge.baselines.config import ExplorerConfig
+    from pic4rl_bridge.settings.baselines import ExplorerConfig
 
     recipe = ROOT / "config" / "train_barn_td3_memory.yaml"
     run = load_run_config([recipe], train={"buffer_size": 100, "learning_starts": 10})

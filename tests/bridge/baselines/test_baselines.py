@@ -21,7 +21,7 @@ from pic4rl_sim import params_file
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
-from pic4rl_bridge.baselines.config import BASELINES_NODE, DwaConfig, baselines_config
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, DwaConfig, baselines_config
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.config import EnvConfig, load_env_config
@@ -162,7 +162,7 @@ def test_the_baselines_settings_are_their_own_section(tmp_path):
 
 def test_the_baseline_table_drives_every_registered_task_and_no_other() -> None:
     from pic4rl_bridge.baselines.registry import BASELINE_TABLE
-    from pic4rl_bridge.tasks.registry import TASKS
+    from pic4rl_bridge.settings.tasks import TASKS
 
     driven = {t for spec in BASELINE_TABLE.values() for t in spec.tasks}
     assert driven == set(TASKS)

@@ -14,7 +14,7 @@ from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 
-from pic4rl_bridge.baselines.config import baselines_config_from_params
+from pic4rl_bridge.settings.baselines import baselines_config_from_params
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.baselines.explorer import ExplorerController

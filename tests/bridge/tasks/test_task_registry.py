@@ -15,7 +15,7 @@ from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.tasks.registry import (
+from pic4rl_bridge.settings.tasks import (
     TASKS,
     EnvId,
     GoToPoseReward,

@@ -4,11 +4,11 @@ What the explorer baseline (``pic4rl_bridge.baselines.explorer``) follows and wh
 observation with ``goal_input: explorer`` points along: both read only the scan (or the depth
 image's pseudo-scan) and the pose, never the world, so the plan is the same in process,
 through the sim node over ROS 2 and on a real robot. Each frame's returns mark an occupancy
-grid (``occupancy``: unknown is free, as nav2's rolling costmap with ``track_unknown_space:
-false`` or D* Lite in unknown terrain plan optimistically). The plan is the shortest path on
-that grid with the obstacles inflated by the footprint's circumscribed radius plus
-``margin_m`` (``narrow_margin_m`` at a cost when nothing else passes: a narrow door), by
-``pic4rl_sim.engine.paths``' vectorised grid search and taut pull. It is kept until a newly
+grid (``pic4rl_bridge.perception.occupancy``: unknown is free, as nav2's rolling costmap
+with ``track_unknown_space: false`` or D* Lite in unknown terrain plan optimistically). The
+plan is the shortest path on that grid with the obstacles inflated by the footprint's
+circumscribed radius plus ``margin_m`` (``narrow_margin_m`` at a cost when nothing else
+passes: a narrow door), by ``pic4rl_sim.engine.paths``' vectorised grid search and taut pull. It is kept until a newly
 seen obstacle blocks it or the robot is ``replan_distance_m`` off it: a plan made anew at every
 step would flip between the two ways round an obstacle, and a plan that flips is one neither a
 follower nor a student can keep to.
@@ -27,10 +27,10 @@ from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.paths import grid_search, grid_steps, segment_samples
 from pic4rl_sim.engine.taut_path import pull_taut
 
-from ..baselines.config import ExplorerConfig
+from ..settings.baselines import ExplorerConfig
 from ..robot_info import RobotInfo
 from ..transports.frame import SensorFrame
-from .occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
+from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
 
 _PAD_CELLS = 60  # free cells round the window's content (3 m at 5 cm)
 #: A cell with less clearance than the full margin (but the narrow one) costs this many times

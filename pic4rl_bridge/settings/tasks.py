@@ -21,7 +21,7 @@ from typing import Any
 
 from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
-from ..baselines.config import DwaConfig
+from .baselines import DwaConfig
 from ..errors import ConfigError, require
 
 
