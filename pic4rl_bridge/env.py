@@ -196,11 +196,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     @property
     def frame(self) -> SensorFrame | None:
-        """The latest decoded sensor data (``None`` before the first reset): for scripted
-        controllers and baselines that need more than the observation."""
+        """The latest decoded sensor data (``None`` before any reset), for controllers."""
         return self._frame
-
-    # -- Gymnasium API ------------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
@@ -335,7 +332,10 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         if transport is not None:
             transport.close()
 
-    # -- recording ----------------------------------------------------------------------------
+    def abort(self, reason: str) -> None:
+        """End the episode now, ``aborted``: its bag closed with ``reason`` (a policy failed)."""
+        self._done = True
+        self._end_bag(Outcome.ABORTED, reason)
 
     def _episode_facts(self, frame: SensorFrame, ctx: EpisodeContext, seed: int) -> EpisodeFacts:
         return episode_facts(

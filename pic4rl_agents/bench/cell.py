@@ -30,6 +30,7 @@ from pic4rl_sim import params_file
 
 from .suite import Cell
 from pic4rl_agents.testing.plan import AgentSpec, TestPlan, resolve_agents
+from pic4rl_agents.testing.policies import is_plugin
 
 DONE = "cell.json"  # a finished cell's marker
 ERROR = "cell.error"  # the last attempt's error, in one line
@@ -146,7 +147,7 @@ def preload(cell: Cell) -> None:
 
     if cell.transport != "ros":
         import pic4rl_bridge.transports.inprocess  # noqa: F401
-    if cell.agent_path:
+    if cell.agent_path and not is_plugin(cell.agent_path):
         import pic4rl_agents.models.algorithms  # noqa: F401
 
 

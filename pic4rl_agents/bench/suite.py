@@ -7,7 +7,7 @@
     tasks:                       # one cross product each; a case study is one more entry
       - name: goto_lidar         # the leaderboard's task
         env: config/env_goto_lidar.yaml  # the test env (applied over each agent's config)
-        agents: {td3_lidar: checkpoints/td3_lidar}
+        agents: {td3_lidar: checkpoints/td3_lidar, gaps: examples/gap_follower.py:GapFollower}
         baselines: [dwa, proportional]
         worlds: ["indoor:0", {world: barn, variants: [0, 6], label: barn_test}]  # default: the env's
         robots: [jackal]         # default: the env's
@@ -77,7 +77,7 @@ class Cell:
     task: str
     agent: str  # the row's name: the agent's key or the baseline
     env: str  # the task's env params file
-    agent_path: str = ""  # a checkpoint; empty for a baseline
+    agent_path: str = ""  # a checkpoint or plugin reference; empty for a baseline
     world: str = ""  # empty: the env's
     variant: int | None = None
     world_label: str = ""  # a world group's row label: its variants share one row
@@ -143,6 +143,18 @@ def _path(value: Any, where: str, base: Path) -> str:
     return str(path.absolute())
 
 
+def _agent(value: Any, where: str, base: Path) -> str:
+    """An agent's location: a checkpoint (``_path``), a plugin ``FILE.py:NAME`` (its file
+    relative to the suite file, made absolute: a worker imports it by the same reference), or
+    ``package.module:NAME`` and an entry point as given (``pic4rl_agents.testing.policies``)."""
+    from pic4rl_agents.testing.policies import is_plugin
+
+    if not (isinstance(value, str) and is_plugin(value)):
+        return _path(value, where, base)
+    target, sep, attr = value.rpartition(":")
+    return f"{_path(target, where, base)}:{attr}" if target.endswith(".py") else value
+
+
 def _pair_set(item: Any, where: str, base: Path, seed: int) -> PairSet:
     """A ``pairs`` item, named after what sets its episodes: ``paper``, its file
     (``file_<stem>``), its draw (``random<N>_<kind>_s<seed>``) or, for the env's own
@@ -197,7 +209,7 @@ def _agents(data: Mapping[str, Any], where: str, base: Path, env: str,
     resolved on each of the task's ``robots`` as its cells will run it, before any runs."""
     agents = data.get("agents", {})
     require(isinstance(agents, Mapping), f"{where}.agents", agents, "a mapping NAME: PATH")
-    rows = [(_name(n, f"{where}.agents"), _path(p, f"{where}.agents.{n}", base))
+    rows = [(_name(n, f"{where}.agents"), _agent(p, f"{where}.agents.{n}", base))
             for n, p in agents.items()]
     for b in _list(data, "baselines", where, []):
         require(b in BASELINES, f"{where}.baselines", b, f"one of {', '.join(BASELINES)}")

@@ -23,6 +23,9 @@ from pic4rl_sim import params_file
 
 from pic4rl_agents import rundir
 from pic4rl_agents.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+
+from .policies import is_plugin, load_plugin, torchscript_env
 
 Sections = dict[str, dict[str, Any]]
 
@@ -35,7 +38,7 @@ DEFAULT_PAIRS_WORLD = ("indoor", 0)  # the world and variant those pairs are in
 class TestPlan:
     """What to test and how: the agents and baselines, the episodes, where the bags go."""
 
-    agents: tuple[str, ...] = ()  # [NAME=]PATH: a run/checkpoint directory or a model zip
+    agents: tuple[str, ...] = ()  # [NAME=]PATH: a run dir, model zip/.pt or plugin reference
     baselines: tuple[str, ...] = ()
     algorithm: str = ""  # of a bare model zip (its run's config names it otherwise)
     episodes: int = 5
@@ -64,7 +67,8 @@ class TestPlan:
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """One row of the table: a trained model (``model`` set) or a baseline (``baseline``)."""
+    """One row of the table: a trained model (``model``: an SB3 zip or TorchScript ``.pt``), a
+    policy plugin (``plugin``: its reference) or a baseline (``baseline``)."""
 
     name: str
     run: RunConfig
@@ -73,7 +77,9 @@ class AgentSpec:
     episode_set: str = ""  # its test episodes, in words
     trained: str = ""  # a model's training config, in words (``RunConfig.origin``)
     settings: BaselinesConfig | None = None  # a baseline's: the baselines: section
-    env_from: str = ""  # a baseline's env, in words
+    env_from: str = ""  # a baseline's or plugin's env, in words
+    plugin: str = ""  # FILE.py:NAME, package.module:NAME or an entry point (testing.policies)
+    algorithm: str = ""  # an SB3/sb3-contrib class beyond the table's (--algorithm RecurrentPPO)
 
     @property
     def env_line(self) -> str:
@@ -90,20 +96,26 @@ def _agent_files(path: Path) -> tuple[Path, Path | None]:
         if not model.is_file():
             raise ConfigError(f"--agent {path}: no {rundir.MODEL} in it")
         return model, rundir.run_config_file(path)
+    if path.is_file() and path.suffix == ".pt":  # TorchScript: its sidecar names its env
+        return path, torchscript_env(path)
     if path.is_file() and path.suffix == ".zip":
         run_dir = rundir.run_of(path)
         return path, rundir.run_config_file(run_dir) if run_dir is not None else None
     raise ConfigError(f"--agent {path}: no such model (expected a run directory with "
-                      f"{rundir.MODEL} and {rundir.CONFIG}, or a model .zip)")
+                      f"{rundir.MODEL} and {rundir.CONFIG}, a model .zip, a TorchScript .pt "
+                      "or a plugin FILE.py:NAME / package.module:NAME)")
 
 
 def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
     """The trained agents, each with its run's config and the plan's files (``files``, read
     once) and overrides."""
-    train_overrides = {"algorithm": plan.algorithm} if plan.algorithm else {}
+    table = plan.algorithm.lower() in ALGORITHM_TABLE
+    train_overrides = {"algorithm": plan.algorithm} if plan.algorithm and table else {}
     specs: list[AgentSpec] = []
     for item in plan.agents:
         name, sep, location = item.partition("=")
+        if is_plugin(location if sep else item):
+            continue
         path = Path(location if sep else item)
         model, config = _agent_files(path)
         if config is None and not plan.params_files:
@@ -114,15 +126,17 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         run = run_config(params_file.merge(own, files), sources, train=train_overrides,
                          env=plan.env_overrides, sim=plan.sim_overrides)
         if not sep:
-            name = path.stem if path.suffix == ".zip" and path.stem != "model" else (
-                path.parent.name if path.suffix == ".zip" else path.name)
+            model_file = path.suffix in (".zip", ".pt")
+            name = path.stem if model_file and path.stem != "model" else (
+                path.parent.name if model_file else path.name)
         trained = "no config beside it"
         if config:
             own_run = run_config(own, [str(config)])
             check_trained(f"--agent {path}", config, own_run.env, run.env,
                           plan.params_files, plan.env_overrides, plan.sim_overrides)
             trained = own_run.origin
-        specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}"))
+        specs.append(AgentSpec(name, run, model=model, trained=f"trained with {trained}",
+                               algorithm="" if table else plan.algorithm))
     return specs
 
 
@@ -203,12 +217,38 @@ def _drive(robot: RobotInfo) -> str:
             f"|ω| ≤ {robot.max_angular_rad_s:g} rad/s{lateral} every {robot.control_dt_s:g} s")
 
 
+def _plugins(plan: TestPlan, agents: list[AgentSpec], files: Sections) -> list[AgentSpec]:
+    """The plan's policy plugins, each loaded once (to check it and take its name) and run
+    in the env a baseline would run in."""
+    specs = []
+    for item in plan.agents:
+        name, sep, location = item.partition("=")
+        if is_plugin(location if sep else item):
+            ref = location if sep else item
+            own = load_plugin(ref)[1]
+            run, env_from = _free_env(plan, f"--agent {ref}", agents, files)
+            specs.append(AgentSpec(name if sep else own, run, plugin=ref, env_from=env_from))
+    return specs
+
+
 def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
               files: Sections) -> AgentSpec:
     """A baseline in the first agent's env (at the robot's full speed range), or in the
     plan's params files (``files``, read once)."""
     if baseline not in BASELINES:
         raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
+    run, env_from = _free_env(plan, f"--baseline {baseline}", agents, files)
+    check_fits(baseline, run.env)  # before any run directory or bag exists
+    settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
+                                where=" + ".join(plan.params_files))
+    return AgentSpec(baseline, run, baseline=baseline, settings=settings, env_from=env_from)
+
+
+def _free_env(plan: TestPlan, flag: str, agents: list[AgentSpec],
+              files: Sections) -> tuple[RunConfig, str]:
+    """The env of an agent not trained here (a baseline, a plugin: ``flag``) and where it came
+    from, in words: the first trained agent's (at the robot's full speed range), or the
+    plan's params files (``files``, read once)."""
     # The test env's one world, as the agents' (``_test_env``): never a world per episode.
     unset = {"episodes.world_variants": ""}
     if agents:
@@ -226,12 +266,9 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
         env_from = f"the params files' env ({run.origin})"
         run = run.replace(env=unset)
     else:
-        raise ConfigError(f"--baseline {baseline}: no env to run it in; give an --agent "
-                          "or --ros-args --params-file FILE")
-    check_fits(baseline, run.env)  # before any run directory or bag exists
-    settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
-                                where=" + ".join(plan.params_files))
-    return AgentSpec(baseline, run, baseline=baseline, settings=settings, env_from=env_from)
+        raise ConfigError(f"{flag}: no env to run it in; give a trained --agent or "
+                          "--ros-args --params-file FILE")
+    return run, env_from
 
 
 def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpec]:
@@ -242,7 +279,8 @@ def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpe
     # The pairs named at test time: the params files' (later files win), then the overrides.
     pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
     agents = _agents(plan, files)
-    specs = agents + [_baseline(plan, b, agents, files) for b in plan.baselines]
+    specs = agents + _plugins(plan, agents, files) + [
+        _baseline(plan, b, agents, files) for b in plan.baselines]
     if not specs:
         raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
                           f"{'|'.join(BASELINES)}")

@@ -36,9 +36,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from pic4rl_bridge.settings.baselines import PREFIX as BASELINES_PREFIX
 from pic4rl_bridge.settings.baselines import baselines_config_from_params
@@ -55,6 +53,7 @@ from pic4rl_agents.overrides import check_overrides, parse_overrides
 from pic4rl_agents.console import console_logging
 from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
 from .plan import AgentSpec, TestPlan, recorded, resolve_agents
+from .policies import Driver, PolicyFailure
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -74,42 +73,6 @@ class TestResult:
     videos: tuple[str, ...] = ()  # with --video: one per episode, beside its bag
 
 
-class Policy:
-    """What drives an episode: ``begin()`` at its start, then ``act(obs, env)`` → a
-    normalised action."""
-
-    def __init__(self, spec: AgentSpec, env: Any) -> None:
-        self.spec = spec
-        self.model = None
-        self.controller = None
-        if spec.model is not None:
-            import torch
-
-            from pic4rl_agents.models.algorithms import check_spaces, load_model
-
-            if spec.run.train.torch_threads > 0:  # as trained: a policy call is small
-                torch.set_num_threads(spec.run.train.torch_threads)
-            self.model = load_model(spec.model, spec.run.train.algorithm)
-            check_spaces(self.model.observation_space, self.model.action_space, env,
-                         model=f"--agent {spec.model} ({spec.trained})",
-                         env_from=f"its test env ({spec.run.origin})")
-        else:
-            from pic4rl_bridge.baselines import make_baseline
-
-            self.controller = make_baseline(spec.baseline, env.config, env.scenario.robot,
-                                            env.scenario.world, spec.settings)
-
-    def begin(self) -> None:
-        if self.controller is not None:
-            self.controller.reset()
-
-    def act(self, obs: Any, env: Any) -> np.ndarray:
-        if self.model is not None:
-            action, _ = self.model.predict(obs, deterministic=True)
-            return np.asarray(action)
-        return self.controller.action(env.frame)
-
-
 def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) -> list[str]:
     """Drive ``episodes`` episodes of ``spec``, recorded; their outcomes in order."""
     from tqdm import tqdm
@@ -120,15 +83,20 @@ def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) ->
     outcomes: list[str] = []
     headline, words = TASKS[spec.run.env.task].headline
     try:
-        policy = Policy(spec, env)
+        policy = Driver(spec, env)
         bar = tqdm(range(episodes), desc=spec.name, unit="episode", disable=not progress)
         for episode in bar:
             obs, _ = env.reset(seed=seed if episode == 0 else None)
-            policy.begin()
             done, info = False, {}
-            while not done:
-                obs, _, terminated, truncated, info = env.step(policy.act(obs, env))
-                done = terminated or truncated
+            try:
+                policy.begin(env)
+                while not done:
+                    obs, _, terminated, truncated, info = env.step(policy.act(obs, env))
+                    done = terminated or truncated
+            except PolicyFailure as err:  # that episode ends aborted; the next one runs
+                log.error("%s: episode %d aborted: %s", spec.name, episode, err)
+                env.abort(str(err))
+                info = {"outcome": "aborted"}
             outcomes.append(str(info.get("outcome")))
             bar.set_postfix({words: f"{outcomes.count(headline)}/{len(outcomes)}"})
     finally:
@@ -204,7 +172,7 @@ def drive_and_judge(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -
     episode_set = specs[-1].episode_set
     log.info("episodes: %s", episode_set)
     for spec in specs:
-        if spec.baseline:
+        if spec.baseline or spec.plugin:
             log.info("%s", spec.env_line)
     outcomes: dict[str, list[str]] = {}
     try:
@@ -238,10 +206,14 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="ROS arguments after --ros-args: --params-file FILE (applied over each agent's "
                "config), -p key:=value (env keys; baselines.* keys: the baselines: section's).")
     parser.add_argument("--agent", action="append", default=[], metavar="[NAME=]PATH",
-                        help="a run/checkpoint directory or model .zip (repeatable)")
+                        help="a run/checkpoint directory, a model .zip (any SB3/sb3-contrib "
+                             "algorithm), a TorchScript .pt with its sidecar, or a policy "
+                             "plugin FILE.py:NAME, package.module:NAME or entry point "
+                             "(repeatable; docs/your-agent.md)")
     parser.add_argument("--baseline", action="append", default=[], choices=BASELINES,
                         help="a classical controller through the same tester (repeatable)")
-    parser.add_argument("--algorithm", help="the algorithm of a bare model .zip")
+    parser.add_argument("--algorithm", help="the algorithm of a bare model .zip (any SB3 or "
+                        "sb3-contrib class: ppo, tqc, RecurrentPPO, ...)")
     parser.add_argument("--episodes", type=int, default=_DEFAULT.episodes,
                         help="episodes per agent (default %(default)s, the paper's)")
     parser.add_argument("--random", type=int, metavar="N",

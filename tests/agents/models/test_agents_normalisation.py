@@ -22,7 +22,7 @@ import torch as th
 from agents_helpers import DEPTH_TD3, LIDAR_TD3, SHORT_EPISODES, TINY
 from stable_baselines3.common.preprocessing import preprocess_obs
 
-from pic4rl_agents.testing import tester
+from pic4rl_agents.testing import policies, tester
 
 from pic4rl_agents.testing import plan as testplan
 
@@ -107,7 +107,7 @@ def test_the_tester_sees_and_does_what_the_trainer_did(normalised_run: Path,
                                curriculum=run.train.curriculum, vec_env=run.train.vec_env)
     test_env = NavEnv(spec.run.env)
     try:
-        policy = tester.Policy(spec, test_env)  # refuses another observation space
+        policy = policies.Driver(spec, test_env)  # refuses another observation space
         assert trainer_env.observation_space == test_env.observation_space
         obs, info = test_env.reset(seed=0)  # the first of the paper's test pairs
         # The trainer's env on that pair: reset through its wrappers (the monitor's episode
