@@ -35,10 +35,8 @@ from stable_baselines3.common.vec_env import VecEnv
 from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.baselines.explorer import ExplorerController
-from pic4rl_bridge.baselines.follow import HeadingController
-from pic4rl_bridge.baselines.planner import PlannerController
-from pic4rl_bridge.baselines.row_followers import CenterlineFollower, make_row_follower
+from pic4rl_bridge.baselines.registry import Baseline
+from pic4rl_bridge.baselines.registry import make_expert as baseline_expert
 from pic4rl_bridge.scenario import Scenario
 from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 from pic4rl_sim import params_file
@@ -60,14 +58,15 @@ EXPERTS = EXPERT_TASKS
 
 
 def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = None
-                ) -> PlannerController | ExplorerController | HeadingController | CenterlineFollower:
-    """The expert ``name`` for envs of ``env``: it labels with the env's action ranges
-    (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
+                ) -> Baseline:
+    """The expert ``name`` for envs of ``env``: the baseline the baseline table names for it
+    (``pic4rl_bridge.baselines.registry.EXPERT_BASELINES``), labelling with the env's action
+    ranges (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
     mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
-    ``heading``: DWA with a
-    proportional heading law, personMonitoring, either control; ``centerline``: the row's
-    centre-line follower, vineyard). The planner and the explorer drive with ``settings``, the
-    params files' ``baselines:`` section (defaults when ``None``), as their baselines do."""
+    ``heading``: ``dwa_heading``, DWA with a proportional heading law, personMonitoring, either
+    control; ``centerline``: the row's centre-line follower, vineyard). The planner and the
+    explorer drive with ``settings``, the params files' ``baselines:`` section (defaults when
+    ``None``), as their baselines do."""
     settings = settings or BaselinesConfig()
     if name not in EXPERTS:
         raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
@@ -85,17 +84,11 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
                                   f"explorer.* ({settings.explorer}), the env's goal_input explorer "
                                   f"with nav_env's explorer.* ({env.explorer}); expected the same "
                                   "plan settings (all but max_linear_m_s)")
-        return ExplorerController.for_env(scenario.robot, env, settings.explorer)
-    if name == "heading":
-        return HeadingController(env, scenario.robot)
-    if name == "centerline":
-        return make_row_follower(name, env, scenario.robot, scenario.world)  # type: ignore[return-value]
-    if scenario.world is None or scenario.variants:
+    elif name == "planner" and (scenario.world is None or scenario.variants):
         raise ConfigError("imitation.expert: planner plans on one simulated world's map, and "
                           "the env has none (no 'sim:' section) or draws one per episode "
                           "(episodes.world_variants)")
-    return PlannerController(scenario.robot, scenario.world,
-                             **dataclasses.asdict(settings.planner))
+    return baseline_expert(name, env, scenario.robot, scenario.world, settings)
 
 
 @dataclass

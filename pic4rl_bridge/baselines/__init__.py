@@ -17,7 +17,8 @@ from pic4rl_metrics.lazy import lazy_exports
 
 _EXPORTS = {
     "Baseline": "registry", "BASELINES": "registry", "BASELINE_TASKS": "registry",
-    "make_baseline": "registry", "check_fits": "registry",
+    "make_baseline": "registry", "check_fits": "registry", "make_expert": "registry",
+    "EXPERT_BASELINES": "registry",
     "DwaController": "dwa", "PlannerController": "planner", "ExplorerController": "explorer",
     "ExplorerPlan": "explorer_plan", "HeadingController": "follow",
     "CenterlineFollower": "row_followers", "RowFollower": "row_followers",

@@ -1,8 +1,8 @@
 """Classical references, run by ``pic4rl-test --baseline NAME`` like an agent; goToPose's
 here, the vineyard's row followers in ``row_followers`` and the person follower's heading law
 in ``follow``. ``BASELINE_TABLE`` is the one place a baseline is registered: the tasks it
-drives and how it is made (``BASELINES``, ``BASELINE_TASKS``, ``--baseline`` and the suites'
-checks follow).
+drives, how it is made and the imitation expert it is, if any (``BASELINES``,
+``BASELINE_TASKS``, ``--baseline``, the suites' checks and ``make_expert`` follow).
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -38,7 +38,7 @@ from ..config import EnvConfig
 from ..errors import ConfigError
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..settings.tasks import TASKS
+from ..settings.tasks import EXPERT_TASKS
 from ..transports.frame import SensorFrame
 from ..settings.baselines import BaselinesConfig
 from .dwa import DwaController
@@ -135,17 +135,23 @@ class BaselineSpec:
     tasks: tuple[str, ...]
     make: Callable[[EnvConfig, RobotInfo, WorldSpec | None, BaselinesConfig], Baseline]
     one_world: bool = False
+    #: The ``imitation.expert`` name (a ``TASKS`` entry's ``experts``) under which it labels
+    #: states for imitation; empty: no expert.
+    expert: str = ""
 
 
 BASELINE_TABLE: dict[str, BaselineSpec] = {
     "proportional": BaselineSpec(("goToPose",), lambda c, robot, w, s: GoToGoalController(robot)),
     "dwa": BaselineSpec(("goToPose",), _dwa),
-    "planner": BaselineSpec(("goToPose",), _planner, one_world=True),
-    "explorer": BaselineSpec(("goToPose",), _explorer),
-    "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True),
+    "planner": BaselineSpec(("goToPose",), _planner, one_world=True, expert="planner"),
+    "explorer": BaselineSpec(("goToPose",), _explorer, expert="explorer"),
+    "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True,
+                               expert="centerline"),
     "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),
-    "dwa_heading": BaselineSpec(("personMonitoring",), _heading),
+    "dwa_heading": BaselineSpec(("personMonitoring",), _heading, expert="heading"),
 }
+#: Each imitation expert (``EXPERT_TASKS``' names) → the baseline that labels under it.
+EXPERT_BASELINES = {spec.expert: name for name, spec in BASELINE_TABLE.items() if spec.expert}
 #: Each baseline → the tasks it drives.
 BASELINE_TASKS = {name: spec.tasks for name, spec in BASELINE_TABLE.items()}
 BASELINES = tuple(BASELINE_TABLE)
@@ -178,3 +184,15 @@ def check_fits(name: str, config: EnvConfig) -> None:
     if BASELINE_TABLE[name].one_world and config.episodes.world_variants:
         raise ConfigError(f"--baseline {name}: it drives on one world's map; this env draws "
                           "its world per episode (episodes.world_variants): unset it")
+
+
+def make_expert(name: str, config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+                settings: BaselinesConfig | None = None) -> Baseline:
+    """The baseline that labels states as imitation's expert ``name`` (``EXPERT_BASELINES``),
+    made as ``make_baseline`` makes it; ``ConfigError`` when no baseline labels under ``name``
+    or the task table and the baseline table disagree on its task."""
+    baseline = EXPERT_BASELINES.get(name)
+    if baseline is None or EXPERT_TASKS.get(name) not in BASELINE_TASKS[baseline]:
+        raise ConfigError(f"imitation.expert: {name!r} is no baseline's expert; expected one of "
+                          f"{', '.join(EXPERT_BASELINES)}")
+    return BASELINE_TABLE[baseline].make(config, robot, world, settings or BaselinesConfig())

@@ -166,3 +166,25 @@ def test_the_baseline_table_drives_every_registered_task_and_no_other() -> None:
 
     driven = {t for spec in BASELINE_TABLE.values() for t in spec.tasks}
     assert driven == set(TASKS)
+
+
+def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
+    """Imitation's experts come from the baseline table: each ``TASKS`` expert name is one
+    baseline's ``expert``, made by that baseline's own maker, and a name no baseline answers
+    to is refused in one line."""
+    from pic4rl_bridge.baselines.follow import HeadingController
+    from pic4rl_bridge.baselines.registry import (BASELINE_TASKS, EXPERT_BASELINES,
+                                                  make_expert)
+    from pic4rl_bridge.settings.tasks import EXPERT_TASKS
+
+    assert EXPERT_BASELINES == {"planner": "planner", "explorer": "explorer",
+                                "centerline": "centerline", "heading": "dwa_heading"}
+    assert set(EXPERT_BASELINES) == set(EXPERT_TASKS)
+    for expert, baseline in EXPERT_BASELINES.items():
+        assert EXPERT_TASKS[expert] in BASELINE_TASKS[baseline]
+    person = EnvConfig().replace(task="personMonitoring")
+    assert isinstance(make_expert("heading", person, JACKAL, None), HeadingController)
+    with pytest.raises(ConfigError, match="imitation.expert: 'dwa' is no baseline's expert; "
+                                          "expected one of planner, explorer, centerline, "
+                                          "heading"):
+        make_expert("dwa", EnvConfig(), JACKAL, None)
