@@ -127,7 +127,7 @@ def _sidecar(path: Path) -> Path:
 
 
 def _read_sidecar(sidecar: Path) -> dict[str, Any]:
-    data = read_yaml(sidecar)  # JSON is YAML
+    data = read_yaml(sidecar, "TorchScript sidecar")  # JSON is YAML
     if not isinstance(data, dict) or not isinstance(data.get("env"), str):
         raise ConfigError(f"{sidecar}: expected a mapping with env: FILE (and acts, "
                           "observation_shape)")
