@@ -235,3 +235,18 @@ def test_the_example_gap_follower_enters_barns_table(tmp_path: Path,
     assert {"gap_follower", "dwa"} <= set(rows)
     n = out.splitlines()[0].split(",").index("n")
     assert rows["gap_follower"].split(",")[n] == "2"
+
+
+def test_the_example_suite_puts_the_plugin_beside_the_agent_and_the_planner(
+        tmp_path: Path) -> None:
+    """``pic4rl-bench examples/suite_gap_follower.yaml``: BARN's 50 test worlds, one run each,
+    one row per agent in one BARN table; the plugin's file made absolute for the workers."""
+    from pic4rl_agents.bench.suite import load_suite
+
+    suite = load_suite(REPO / "examples" / "suite_gap_follower.yaml", bags_dir=tmp_path)
+    assert suite.table == "barn" and len(suite.cells) == 3 * 50
+    plugin = [c for c in suite.cells if c.agent == "gap_follower"]
+    assert [c.variant for c in plugin] == list(range(0, 300, 6))
+    assert {c.agent_path for c in plugin} == {
+        f"{REPO / 'examples' / 'gap_follower.py'}:GapFollower"}
+    assert {c.agent for c in suite.cells} == {"barn_td3_explorer", "gap_follower", "planner"}
