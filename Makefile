@@ -3,13 +3,16 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# Message packages PyPI lacks (ros/<pkg>/: tf2_msgs, for the sim's /tf and /tf_static), built
+# into the venv with PyPI's ament/rosidl generators by ros/build.sh (~20-30 s on 2 cores).
+ROS_MSGS := $(VENV)/.ros_msgs
 # DDS discovery stays on this machine (set ROS_DOMAIN_ID to keep parallel runs apart).
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export MPLBACKEND ?= Agg
 
 .PHONY: setup demo test bench clean
 
-setup: $(STAMP)
+setup: $(STAMP) $(ROS_MSGS)
 
 # torch is pinned and installed first: an unpinned torch pulls several GB of CUDA packages.
 $(STAMP): pyproject.toml
@@ -18,6 +21,10 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet torch==2.13.0
 	$(PY) -m pip install --quiet -e '.[all,test]'
 	touch $(STAMP)
+
+$(ROS_MSGS): $(STAMP) ros/build.sh $(wildcard ros/*/package.xml ros/*/CMakeLists.txt ros/*/msg/*.msg)
+	ros/build.sh $(VENV)
+	touch $(ROS_MSGS)
 
 # The full loop: the shipped TD3-LiDAR agent (checkpoints/td3_lidar, the paper's observation),
 # the best mapless agent (checkpoints/td3_lidar_explorer: TD3-LiDAR pointed along the mapless
