@@ -112,6 +112,10 @@ GROUND_TRUTH = Interface(
 ODOM = Interface(
     "odom", "nav_msgs/msg/Odometry", Direction.PUB, QosKind.RELIABLE,
     "wheel odometry, with the robot's odometry errors", Cadence.STEP, record_order=2)
+TF = Interface(
+    "tf", "tf2_msgs/msg/TFMessage", Direction.PUB, QosKind.RELIABLE,
+    "`odom` → `base_link` from the odometry (REP 105), one transform per `odom` message",
+    Cadence.STEP, record_order=10)
 IMU = Interface(
     "imu/data", "sensor_msgs/msg/Imu", Direction.PUB, QosKind.SENSOR_DATA,
     "the IMU: orientation, angular velocity, linear acceleration", Cadence.STEP)
@@ -135,6 +139,10 @@ PLAN = Interface(
     "plan", "nav_msgs/msg/Path", Direction.PUB, QosKind.LATCHED,
     "the episode's global plan from start to goal (the shortest path with a clearance margin, "
     "`pic4rl_sim.engine.paths.plan_path`)", Cadence.EPISODE, record_order=9)
+TF_STATIC = Interface(
+    "tf_static", "tf2_msgs/msg/TFMessage", Direction.PUB, QosKind.LATCHED,
+    "`base_link` → each sensor's frame, from the robot's mounts", Cadence.EPISODE,
+    record_order=11)
 WORLD_MARKERS = Interface(
     "world/markers", "visualization_msgs/msg/MarkerArray", Direction.PUB, QosKind.LATCHED,
     "the world's boxes and cylinders, and the goal", Cadence.EPISODE)
@@ -150,12 +158,14 @@ UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACES = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, IMU, PERSON_POSE, CAMERA_INFO, DEPTH_IMAGE,
-              SCAN, GOAL_POSE, PLAN, WORLD_MARKERS, DIAGNOSTICS, RESET_WORLD, PAUSE_PHYSICS,
-              UNPAUSE_PHYSICS)
+INTERFACES = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, CAMERA_INFO,
+              DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
+              RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
 _BY_NAME = {i.name: i for i in INTERFACES}
 #: A step's state topics, in publishing order.
 STEP_TOPICS = tuple(i for i in INTERFACES if i.cadence is Cadence.STEP)
+#: An episode's topics, in publishing order (at each reset, before the step topics).
+EPISODE_TOPICS = tuple(i for i in INTERFACES if i.cadence is Cadence.EPISODE)
 #: The topics recorded to each episode's bag by default (the bag contract), in ``record_order``.
 RECORDED = tuple(name for _, name in sorted((i.record_order, i.name) for i in INTERFACES
                                              if i.record_order is not None))

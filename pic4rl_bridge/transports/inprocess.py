@@ -20,9 +20,8 @@ from pic4rl_sim.errors import SimError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import (
     CMD_VEL,
-    GOAL_POSE,
+    EPISODE_TOPICS,
     INTERFACES,
-    PLAN,
     STEP_TOPICS,
     QosKind,
     bridge_qos,
@@ -127,17 +126,16 @@ class _MessageWriter:
 
     def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
         from geometry_msgs.msg import Twist
-        from pic4rl_sim.node.messages import StateMessages, goal_pose, plan_message
+        from pic4rl_sim.node.messages import StateMessages, episode_messages
         from rclpy.serialization import serialize_message
 
         self._engine = engine
         self._serialize = serialize_message
         self._twist_type = Twist
-        self._goal_pose = goal_pose
-        self._plan_message = plan_message
+        self._episode_messages = episode_messages
         self.state_messages = StateMessages(engine)
         self._names = {t.name: f"{namespace}/{t.name}"
-                       for t in (*STEP_TOPICS, GOAL_POSE, PLAN, CMD_VEL)}
+                       for t in (*STEP_TOPICS, *EPISODE_TOPICS, CMD_VEL)}
         self._outputs = [(t.name, msg) for t, msg in self.state_messages.published
                          if t.name in topics]
         #: The step messages by topic, refilled in place each step: a sensor's frame value
@@ -151,10 +149,10 @@ class _MessageWriter:
                            stamp_ns))
 
     def episode(self, engine: Engine, stamp_ns: int, tap: Tap) -> None:
-        """The episode's goal and, when recorded, its plan, as the node publishes them."""
-        self._emit(GOAL_POSE.name, self._goal_pose(engine.goal, stamp_ns), stamp_ns, tap)
-        if PLAN.name in self._topics:
-            self._emit(PLAN.name, self._plan_message(engine.plan(), stamp_ns), stamp_ns, tap)
+        """The episode's recorded messages (goal, plan, sensor frames), as the node publishes
+        them."""
+        for topic, msg in self._episode_messages(engine, stamp_ns, self._topics):
+            self._emit(topic.name, msg, stamp_ns, tap)
 
     def command(self, command: Twist2D, stamp_ns: int, tap: Tap) -> None:
         msg = self._twist_type()

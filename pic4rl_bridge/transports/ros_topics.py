@@ -53,10 +53,12 @@ def cdr_stamp(data: bytes) -> int:
 
 
 def stamp_of(msg: Any) -> int | None:
-    """A decoded message's stamp (ns): its header's, or a clock's; ``None`` if it has none."""
+    """A decoded message's stamp (ns): its header's, a clock's, or a ``TFMessage``'s first
+    transform's; ``None`` if it has none."""
     if isinstance(msg, Clock):
         return decode.stamp_ns(msg.clock)
-    header = getattr(msg, "header", None)
+    transforms = getattr(msg, "transforms", None)
+    header = getattr(transforms[0] if transforms else msg, "header", None)
     return decode.stamp_ns(header) if header is not None else None
 
 

@@ -7,14 +7,15 @@ LiDAR ranges and depth pixels are written into the messages' own buffers through
 Frames: ``world`` is the fixed frame of the world's geometry, goal, person and ground truth;
 ``odom`` is wheel odometry's frame, equal to ``world`` when an episode starts (the estimate
 starts at the true start pose, then drifts with the odometry's errors); sensors carry the
-frame ids of ``pic4rl_sim.engine.sensors``. No TF is published (tf2_msgs is not on PyPI).
+frame ids of ``pic4rl_sim.engine.sensors``, which ``tf_static`` places on ``base_link``, and ``tf``
+carries the odometry's ``odom → base_link`` (``pic4rl_sim.node.transforms``).
 """
 
 from __future__ import annotations
 
 import array
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Container
 from typing import Any
 
 import numpy as np
@@ -37,14 +38,21 @@ from ..interfaces import (
     CAMERA_INFO,
     CLOCK,
     DEPTH_IMAGE,
+    EPISODE_TOPICS,
+    GOAL_POSE,
     GROUND_TRUTH,
     IMU,
     ODOM,
     PERSON_POSE,
+    PLAN,
     SCAN,
     STEP_TOPICS,
+    TF,
+    TF_STATIC,
+    WORLD_MARKERS,
     Interface,
 )
+from .transforms import OdomTransform, static_transforms
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
@@ -178,9 +186,10 @@ class StateMessages:
         self.clock = Clock(clock=stamp)
         self.ground_truth = _odometry(stamp, WORLD_FRAME, exact=True)
         self.odom = _odometry(stamp, engine.odometry.frame_id, exact=False)
+        self._tf = OdomTransform(self.odom)
         self._sensors = [make(engine, stamp) for has, make in SENSOR_MESSAGES if has(engine)]
         held: dict[Interface, Any] = {CLOCK: self.clock, GROUND_TRUTH: self.ground_truth,
-                                      ODOM: self.odom}
+                                      ODOM: self.odom, TF: self._tf.msg}
         for sensor in self._sensors:
             held.update(sensor.held)
         #: (topic, message) of each step topic this engine has, in publishing order.
@@ -200,6 +209,7 @@ class StateMessages:
         _set_pose(odom.pose.pose, pose)
         lin, ang = odom.twist.twist.linear, odom.twist.twist.angular
         lin.x, lin.y, ang.z = twist.vx, twist.vy, twist.wz
+        self._tf.fill()
         for sensor in self._sensors:
             sensor.fill(engine)
 
@@ -266,3 +276,17 @@ def world_markers(world: WorldSpec, goal: Goal, stamp_ns: int) -> MarkerArray:
     m.scale = Vector3(x=0.3, y=0.3, z=_GOAL_MARKER_HEIGHT_M)
     markers.append(m)
     return MarkerArray(markers=markers)
+
+
+def episode_messages(engine: Engine, stamp_ns: int,
+                     topics: Container[str] | None = None) -> list[tuple[Interface, Any]]:
+    """The episode's messages (goal, plan, sensor frames, markers), stamped ``stamp_ns``, in
+    publishing order; of ``topics`` (relative names) only, when given (the rest not made)."""
+    makers: dict[Interface, Callable[[], Any]] = {
+        GOAL_POSE: lambda: goal_pose(engine.goal, stamp_ns),
+        PLAN: lambda: plan_message(engine.plan(), stamp_ns),
+        TF_STATIC: lambda: static_transforms(engine, stamp_ns),
+        WORLD_MARKERS: lambda: world_markers(engine.world, engine.goal, stamp_ns),
+    }
+    return [(topic, makers[topic]()) for topic in EPISODE_TOPICS
+            if topics is None or topic.name in topics]

@@ -18,7 +18,8 @@ Episodes: set ``seed``, ``world_variant``, ``start_pose``, ``goal`` (or any para
 parameter services, whose result is the acknowledgement, then call ``reset_world``. The reset
 rebuilds the engine if the robot, world, sensors or timing changed, starts the episode,
 advances sim time by one control period to t0, publishes ``goal_pose`` (stamp t0), ``plan``,
-``world/markers`` and one full set of sensor messages stamped t0, and only then returns.
+``tf_static`` (the sensors' frames), ``world/markers`` and one full set of sensor messages
+stamped t0 (``tf`` among them), and only then returns.
 Contract: after ``reset_world`` returns, messages stamped >= ``goal_pose.header.stamp`` belong
 to the new episode. A reset uses ``seed`` if it was set since the last reset, else the previous
 episode's seed + 1: plain repeated resets give new, reproducible episodes. Parameters take
@@ -56,18 +57,16 @@ from ..errors import ConfigError, WorldError
 from ..interfaces import (
     CMD_VEL,
     DIAGNOSTICS,
-    GOAL_POSE,
+    EPISODE_TOPICS,
     INTERFACES,
     PAUSE_PHYSICS,
-    PLAN,
     RESET_WORLD,
     STEP_TOPICS,
     UNPAUSE_PHYSICS,
-    WORLD_MARKERS,
     Direction,
     Interface,
 )
-from .messages import PHYSICS_STATUS, StateMessages, goal_pose, plan_message, world_markers
+from .messages import PHYSICS_STATUS, StateMessages, episode_messages
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
 from ..config import (MAX_SEED, ClockConfig, ClockMode, SimConfig, WorldChoice, build_clock,
@@ -107,9 +106,7 @@ class SimNode(Node):
                               seed=episode.seed)
         self._engine.reset(seed=episode.seed, start=episode.start, goal=episode.goal)
         self._messages = StateMessages(self._engine)
-        self._goal_pub = self._publisher(GOAL_POSE)
-        self._plan_pub = self._publisher(PLAN)
-        self._markers_pub = self._publisher(WORLD_MARKERS)
+        self._episode_pubs = {topic: self._publisher(topic) for topic in EPISODE_TOPICS}
         self._diagnostics_pub = self._publisher(DIAGNOSTICS)
         self._status = DiagnosticArray(status=[DiagnosticStatus(
             name=PHYSICS_STATUS, hardware_id=self._config.robot.name)])
@@ -190,12 +187,11 @@ class SimNode(Node):
         self._restart_clock()
 
     def _publish_episode(self) -> None:
-        """Goal, plan, markers and a full set of sensor messages, all with the current stamp."""
-        engine = self._engine
+        """Goal, plan, sensor frames (``tf_static``), markers and a full set of sensor messages,
+        all with the current stamp."""
         self._command = _STOP
-        self._goal_pub.publish(goal_pose(engine.goal, self._stamp_ns))
-        self._plan_pub.publish(plan_message(engine.plan(), self._stamp_ns))
-        self._markers_pub.publish(world_markers(engine.world, engine.goal, self._stamp_ns))
+        for topic, msg in episode_messages(self._engine, self._stamp_ns):
+            self._episode_pubs[topic].publish(msg)
         self._publish_state()
 
     def _publisher(self, topic: Interface) -> Publisher:

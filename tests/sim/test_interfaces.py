@@ -28,10 +28,8 @@ from pic4rl_sim.interfaces import (
 from pic4rl_sim.node.ros_interfaces import PROFILES, qos_profile, ros_type
 
 REPO = Path(__file__).resolve().parents[2]
-#: The contract's topics that the recorder writes itself (facts, outcome) or that only a real
-#: robot's bag holds (transforms): not the sim's.
-NOT_THE_SIMS = {contract.FACTS_TOPIC, contract.OUTCOME_TOPIC, contract.TF_TOPIC,
-                contract.TF_STATIC_TOPIC}
+#: The contract's topics that the recorder writes itself (facts, outcome): not the sim's.
+NOT_THE_SIMS = {contract.FACTS_TOPIC, contract.OUTCOME_TOPIC}
 #: Recorded topics no metric reads.
 UNREAD_BY_METRICS = {"/camera/depth/image_raw", "/camera/depth/camera_info", "/plan"}
 
@@ -44,7 +42,7 @@ def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts(
     assert sorted(orders) == list(range(len(orders)))
     assert RECORDED == ("clock", "ground_truth", "odom", "scan", "cmd_vel", "goal_pose",
                         "camera/depth/image_raw", "camera/depth/camera_info", "person/pose",
-                        "plan")
+                        "plan", "tf", "tf_static")
 
 
 def test_a_step_ends_with_the_scan_and_only_topics_have_a_qos() -> None:
