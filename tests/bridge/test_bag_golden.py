@@ -4,13 +4,17 @@ with the digest stored in ``data/golden_episodes.json``.
 
 The digest hashes each message's receive time and its CDR bytes as rosbags re-serializes the
 decoded message: rclpy leaves CDR alignment padding uninitialized, so the raw bytes of two
-identical recordings differ in their padding, never in their content. Regenerate the file
+identical recordings differ in their padding, never in their content. Every float64 is rounded
+to 1e-9 first: numpy's vectorised sin, cos and arctan2 (the plan's headings and points) differ
+in the last bits between CPUs with and without AVX-512, which is no change of content.
+Regenerate the file
 (only when a change of the recorded content is intended, and say so in the commit) with
 ``python tests/bridge/test_bag_golden.py``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import sys
@@ -37,6 +41,20 @@ def command(i: int, size: int) -> np.ndarray:
     return np.array(base[:size], np.float32)
 
 
+def rounded(msg: object) -> object:
+    """``msg`` (a rosbags message) with every float64 field and array rounded to 1e-9."""
+    if isinstance(msg, float):
+        return round(msg, 9) + 0.0  # -0.0 → 0.0
+    if isinstance(msg, np.ndarray):
+        return np.round(msg, 9) + 0.0 if msg.dtype == np.float64 else msg
+    if isinstance(msg, list):
+        return [rounded(item) for item in msg]
+    if dataclasses.is_dataclass(msg):
+        return dataclasses.replace(msg, **{f.name: rounded(getattr(msg, f.name))
+                                           for f in dataclasses.fields(msg)})
+    return msg
+
+
 def episode_digest(config: str, steps: int) -> dict[str, dict[str, object]]:
     """Per topic: message type, count and the SHA-256 of (receive time, canonical CDR)."""
     with tempfile.TemporaryDirectory() as bags:
@@ -59,7 +77,7 @@ def episode_digest(config: str, steps: int) -> dict[str, dict[str, object]]:
                 msg = TYPESTORE.deserialize_cdr(raw, conn.msgtype)
                 entry["count"] += 1
                 entry["sha"].update(stamp.to_bytes(8, "little"))
-                entry["sha"].update(bytes(TYPESTORE.serialize_cdr(msg, conn.msgtype)))
+                entry["sha"].update(bytes(TYPESTORE.serialize_cdr(rounded(msg), conn.msgtype)))
     return {topic: {"type": e["type"], "count": e["count"], "sha256": e["sha"].hexdigest()}
             for topic, e in sorted(topics.items())}
 
