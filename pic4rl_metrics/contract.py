@@ -46,11 +46,11 @@ FACTS_TOPIC = "/episode/facts"
 #: ``{"outcome": "goal"|"collision"|"timeout"|"diverged"|"aborted",
 #: "stamp_ns": <int, on the pose topic's header time base>}`` or just the outcome word.
 OUTCOME_TOPIC = "/episode/outcome"
-#: ``tf2_msgs/msg/TFMessage``: a real bag's moving transforms, where ``--pose-frames`` reads
-#: poses (``odom -> base_link``) when it has no pose topic.
+#: ``tf2_msgs/msg/TFMessage``: the moving transforms (the sim's ``odom -> base_link``, as its
+#: ``/odom``; a real robot's), where ``--pose-frames`` reads poses (``odom:base_link``).
 TF_TOPIC = "/tf"
-#: ``tf2_msgs/msg/TFMessage``: a real bag's static transforms, where the LiDAR's mount is read
-#: when the facts carry no ``scan_mount``.
+#: ``tf2_msgs/msg/TFMessage``: the static transforms (``base_link ->`` each sensor frame),
+#: where the LiDAR's mount is read when the facts carry no ``scan_mount``.
 TF_STATIC_TOPIC = "/tf_static"
 
 #: Storage plugins a bag may be written with (``.db3`` by default, ``.mcap`` as an option).

@@ -114,7 +114,7 @@ ODOM = Interface(
     "wheel odometry, with the robot's odometry errors", Cadence.STEP, record_order=2)
 TF = Interface(
     "tf", "tf2_msgs/msg/TFMessage", Direction.PUB, QosKind.RELIABLE,
-    "`odom` → `base_link` from the odometry (REP 105), one transform per `odom` message",
+    "the odometry's pose as a transform (REP 105): one per `odom` message, stamped alike",
     Cadence.STEP, record_order=10)
 IMU = Interface(
     "imu/data", "sensor_msgs/msg/Imu", Direction.PUB, QosKind.SENSOR_DATA,
@@ -141,7 +141,7 @@ PLAN = Interface(
     "`pic4rl_sim.engine.paths.plan_path`)", Cadence.EPISODE, record_order=9)
 TF_STATIC = Interface(
     "tf_static", "tf2_msgs/msg/TFMessage", Direction.PUB, QosKind.LATCHED,
-    "`base_link` → each sensor's frame, from the robot's mounts", Cadence.EPISODE,
+    "each sensor's frame on the base, from the robot's mounts", Cadence.EPISODE,
     record_order=11)
 WORLD_MARKERS = Interface(
     "world/markers", "visualization_msgs/msg/MarkerArray", Direction.PUB, QosKind.LATCHED,
