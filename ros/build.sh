@@ -34,9 +34,10 @@ fi
 # The wheels' CMake exports name the include paths of the machine that built them (manylinux);
 # CMake refuses a non-existent include path, so point them at this venv's (a no-op once done).
 numpy_include=$("$py" -c "import numpy; print(numpy.get_include())")
-for f in $(grep -l -e "/opt/python/cp311-cp311" "$venv"/share/*/cmake/*.cmake || true); do
-    sed -i -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include#$numpy_include#g" \
-           -e "s#/opt/python/cp311-cp311/include/python3.11#$py_include#g" "$f"
+built=/opt/python/cp311-cp311
+for f in $(grep -l -e "$built" "$venv"/share/*/cmake/*.cmake || true); do
+    sed -i -e "s#$built/lib/python3.11/site-packages/numpy/_core/include#$numpy_include#g" \
+           -e "s#$built/include/python3.11#$py_include#g" "$f"
 done
 
 export PATH="$venv/bin:$PATH" CMAKE_PREFIX_PATH="$venv" AMENT_PREFIX_PATH="$venv"

@@ -75,6 +75,20 @@ def test_static_transforms_place_each_sensor_at_its_mount() -> None:
     assert (imu.rotation.w, imu.translation.z) == (1.0, 0.0)
 
 
+def _bag_paths_agree(bag: Path) -> int:
+    """Assert that ``bag``'s pose from /tf equals its /odom's (every sample, to 1e-9, and the
+    metrics' path length); return the number of poses."""
+    by_odom = read_episode(bag, TopicMap(pose=("/odom",)))
+    by_tf = read_episode(bag, TopicMap(pose_frames=("odom", "base_link")))
+    np.testing.assert_array_equal(by_tf.pose.t_ns, by_odom.pose.t_ns)
+    for axis in ("x", "y", "yaw"):
+        np.testing.assert_allclose(getattr(by_tf.pose, axis), getattr(by_odom.pose, axis),
+                                   rtol=0, atol=1e-9)
+    length = compute_metrics(by_odom).path_length_m
+    assert compute_metrics(by_tf).path_length_m == pytest.approx(length, abs=1e-9)
+    return len(by_odom.pose)
+
+
 def test_a_recorded_bags_tf_gives_the_path_of_its_odom(tmp_path: Path) -> None:
     env = NavEnv(ROOT / "config" / "env_goto_lidar.yaml",
                  overrides={"transport": "inprocess", "record.enabled": True,
@@ -90,16 +104,8 @@ def test_a_recorded_bags_tf_gives_the_path_of_its_odom(tmp_path: Path) -> None:
     finally:
         env.close()
     bag = tmp_path / "r" / "episode_0000"
-    by_odom = read_episode(bag, TopicMap(pose=("/odom",)))
-    by_tf = read_episode(bag, TopicMap(pose_frames=("odom", "base_link")))
-    assert len(by_tf.pose) == len(by_odom.pose) > 10
-    np.testing.assert_array_equal(by_tf.pose.t_ns, by_odom.pose.t_ns)
-    for axis in ("x", "y", "yaw"):
-        np.testing.assert_allclose(getattr(by_tf.pose, axis), getattr(by_odom.pose, axis),
-                                   rtol=0, atol=1e-9)
-    length = compute_metrics(by_odom).path_length_m
-    assert length > 0.5  # it moved
-    assert compute_metrics(by_tf).path_length_m == pytest.approx(length, abs=1e-9)
+    assert _bag_paths_agree(bag) > 10
+    assert compute_metrics(read_episode(bag, TopicMap(pose=("/odom",)))).path_length_m > 0.5
     # The scan's frame resolves through the bag's /tf_static to the Jackal's LiDAR mount.
     with Reader(bag) as reader:
         first = {}
@@ -109,6 +115,37 @@ def test_a_recorded_bags_tf_gives_the_path_of_its_odom(tmp_path: Path) -> None:
     tree = tf.edges([], [tf.tf_rows(first["/tf_static"])])
     mount = tf.static_pose(tree, "base_link", first["/scan"].header.frame_id)
     assert mount == pytest.approx((0.12, 0.0, 0.0))
+
+
+@pytest.mark.integration
+def test_the_ros_transport_records_tf_per_step_and_tf_static_per_episode(
+        tmp_path: Path, start_sim) -> None:
+    config = ROOT / "config" / "env_goto_lidar.yaml"
+    domain = next_domain()
+    start_sim(sim_command("--params-file", str(config)), domain)
+    env = NavEnv(config, transport="ros", overrides={
+        "ros.domain_id": domain, "record.enabled": True, "record.bags_dir": str(tmp_path),
+        "record.run": "ros", "episode_max_steps": 12})
+    rng = np.random.default_rng(2)
+    try:
+        for episode in range(2):
+            env.reset(seed=7 if episode == 0 else None)
+            done = False
+            while not done:
+                out = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+                done = out[2] or out[3]
+    finally:
+        env.close()
+    bags = sorted((tmp_path / "ros").glob("episode_*"))
+    assert len(bags) == 2
+    for bag in bags:
+        with Reader(bag) as reader:
+            counts = {c.topic: c.msgcount for c in reader.connections}
+            first = min(t for _, t, _ in reader.messages())
+            static = [t for c, t, _ in reader.messages() if c.topic == "/tf_static"]
+        assert counts["/tf"] == counts["/odom"] > 1
+        assert static == [first]  # once, at the episode's first stamp
+        assert _bag_paths_agree(bag) == counts["/odom"]
 
 
 #: A user's node: plain rclpy and standard messages, nothing of this project. It drives the
@@ -126,7 +163,8 @@ LISTENER = textwrap.dedent("""
     def keep(msg):
         for tf in msg.transforms:
             t, q = tf.transform.translation, tf.transform.rotation
-            seen[tf.header.frame_id + "->" + tf.child_frame_id] = [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
+            name = tf.header.frame_id + "->" + tf.child_frame_id
+            seen[name] = [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
     node.create_subscription(TFMessage, "/tf", keep, 10)
     node.create_subscription(TFMessage, "/tf_static", keep, QoSProfile(
         depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
