@@ -53,8 +53,8 @@ def test_recorded_topics_join_by_their_sim_type_and_unknown_ones_are_refused() -
                                      QosSettings(True, False, BRIDGE_HISTORY))
     assert wired.wanted["world/markers"][1] == QosSettings(True, True, 1)
     assert wired.recorded == {"/clock", "/cmd_vel", "/world/markers"}
-    bad = EnvConfig().replace(**{"record.enabled": True, "record.topics": ["tf"]})
-    with pytest.raises(ConfigError, match="record.topics: 'tf' has no known message type"):
+    bad = EnvConfig().replace(**{"record.enabled": True, "record.topics": ["map"]})
+    with pytest.raises(ConfigError, match="record.topics: 'map' has no known message type"):
         wiring(bad, frozenset(), resolve)
 
 
@@ -65,12 +65,13 @@ def test_plan_is_waited_for_once_an_episode() -> None:
 
 def test_a_recorded_only_topic_stamp_is_read_from_its_cdr_bytes() -> None:
     """Every recordable type said to start with a stamp does, on the wire; the others
-    (markers) are the ones with no stamp first."""
+    (markers, transforms) are the ones with no stamp first: a transform's is its first
+    transform's, read from the message."""
     from builtin_interfaces.msg import Time
     from pic4rl_sim.node.ros_interfaces import ros_type, starts_with_stamp
     from rclpy.serialization import serialize_message
 
-    from pic4rl_bridge.transports.ros_topics import KNOWN_TOPICS, cdr_stamp
+    from pic4rl_bridge.transports.ros_topics import KNOWN_TOPICS, cdr_stamp, stamp_of
 
     without = set()
     for topic in KNOWN_TOPICS.values():
@@ -83,7 +84,12 @@ def test_a_recorded_only_topic_stamp_is_read_from_its_cdr_bytes() -> None:
         stamp.sec, stamp.nanosec = 12, 345
         assert isinstance(stamp, Time)
         assert cdr_stamp(serialize_message(msg)) == 12_000_000_345, topic.name
-    assert without == {"world/markers"}
+    assert without == {"world/markers", "tf", "tf_static"}
+    tf = ros_type("tf2_msgs/msg/TFMessage")()
+    tf.transforms = [ros_type("geometry_msgs/msg/TransformStamped")()] * 2
+    tf.transforms[0].header.stamp.sec, tf.transforms[0].header.stamp.nanosec = 3, 7
+    assert stamp_of(tf) == 3_000_000_007
+    assert stamp_of(ros_type("tf2_msgs/msg/TFMessage")()) is None
 
 
 def test_a_topic_is_stale_past_the_bound_by_arrival_time() -> None:

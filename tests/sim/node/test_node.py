@@ -83,6 +83,7 @@ def test_the_node_has_exactly_the_design_interfaces(shared_sim):
     publishers = {
         "/clock": "rosgraph_msgs/msg/Clock", "/ground_truth": "nav_msgs/msg/Odometry",
         "/odom": "nav_msgs/msg/Odometry", "/imu/data": "sensor_msgs/msg/Imu",
+        "/tf": "tf2_msgs/msg/TFMessage", "/tf_static": "tf2_msgs/msg/TFMessage",
         "/scan": "sensor_msgs/msg/LaserScan", "/goal_pose": "geometry_msgs/msg/PoseStamped",
         "/plan": "nav_msgs/msg/Path", "/world/markers": "visualization_msgs/msg/MarkerArray",
         "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
