@@ -4,7 +4,7 @@
         --ros-args --params-file config/env_goto_lidar.yaml
 
 Each step it measures, along every beam's direction, how far a body as wide as the robot
-(plus 0.1 m) is free; among the directions free for ``clear_m`` (or up to the goal) it turns
+(plus 0.05 m) is free; among the directions free for ``clear_m`` (or up to the goal) it turns
 toward the one closest to the goal, and drives at ``speed_gain`` × the free distance ahead,
 slower the more it must turn.
 """
@@ -24,12 +24,12 @@ class GapFollower(Policy):
     name = "gap_follower"  # its row in the tables
 
     def __init__(self, clear_m: float = 1.0, turn_gain: float = 2.0,
-                 speed_gain: float = 0.5) -> None:
+                 speed_gain: float = 1.0) -> None:
         self.clear_m, self.turn_gain, self.speed_gain = clear_m, turn_gain, speed_gain
 
     def reset(self, robot: RobotInfo, task: TaskInfo) -> None:
         self.robot = robot
-        self.radius_m = robot.footprint.bounding_radius_m + 0.1
+        self.radius_m = robot.footprint.bounding_radius_m + 0.05
 
     def act(self, frame: SensorFrame) -> tuple[float, float]:
         r, pose, scan = self.robot, frame.pose, frame.scan
