@@ -281,7 +281,7 @@ def test_a_start_inside_an_obstacle_is_rejected(arena: Path) -> None:
 
 # --- recording --------------------------------------------------------------------------------
 
-PER_STEP_TOPICS = ("/clock", "/ground_truth", "/odom", "/scan")
+PER_STEP_TOPICS = ("/clock", "/ground_truth", "/odom", "/tf", "/scan")
 
 
 def topic_counts(bag: Path) -> dict[str, int]:
@@ -295,7 +295,7 @@ def topic_counts(bag: Path) -> dict[str, int]:
 def expected_counts(steps: int) -> dict[str, int]:
     """The bag of an episode of ``steps`` steps with the default topics (LiDAR, no depth)."""
     return {**dict.fromkeys(PER_STEP_TOPICS, steps + 1), "/cmd_vel": steps, "/goal_pose": 1,
-            "/plan": 1, "/episode/facts": 1, "/episode/outcome": 1}
+            "/plan": 1, "/tf_static": 1, "/episode/facts": 1, "/episode/outcome": 1}
 
 
 def test_recorded_episodes_are_bags_the_metrics_judge(arena: Path, tmp_path: Path) -> None:
