@@ -7,8 +7,10 @@ episode recorded to a bag, then one metrics table from the bags (the paper's tes
         --ros-args --params-file my_test_pairs.yaml
 
 An agent is a run or checkpoint directory (``model.zip`` and ``config.yaml``) or a model zip
-(its run's ``config.yaml`` is found above it; else give ``--algorithm`` and a params file).
-Its env is its training config, then the given params files key by key, then
+(its run's ``config.yaml`` is found above it; else give ``--algorithm`` and a params file),
+a TorchScript ``.pt`` with its sidecar, or a policy plugin (``FILE.py:NAME``,
+``package.module:NAME``, an entry point: ``pic4rl_agents.testing.policies``), which runs in a
+baseline's env and whose failure ends that episode ``aborted``. Its env is its training config, then the given params files key by key, then
 ``--env-kwargs`` and ``-p``; a baseline uses the first agent's env, but with the robot's full
 speed range (``min_linear_m_s`` 0 unless given), or the params files alone. Every agent drives
 the same episodes: the start–goal pairs named at test time
