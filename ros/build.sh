@@ -4,7 +4,8 @@
 # Usage: ros/build.sh VENV. The venv is the ROS prefix of the pip wheels (include/, lib/,
 # share/ament_index), so `from tf2_msgs.msg import TFMessage` works in it afterwards.
 # Idempotent: rerunning rebuilds and reinstalls the same files. Needs cmake >= 3.20, a C/C++
-# compiler and the venv's Python.h.
+# compiler and the venv's Python.h. ros/COLCON_IGNORE keeps a colcon build of a workspace that
+# holds this repository from building a second tf2_msgs beside a real ROS 2's.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 venv=$(cd "${1:?usage: ros/build.sh VENV}" && pwd)
