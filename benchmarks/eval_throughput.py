@@ -35,7 +35,7 @@ from _sim import start_sim, stop_sim
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.env import NavEnv
-from pic4rl_bridge.transports.frame import SensorFrame
+from pic4rl_bridge.readings.frame import SensorFrame
 from pic4rl_sim.engine import paths
 
 CONFIG = Path(__file__).resolve().parents[1] / "config" / "env_goto_lidar.yaml"

@@ -43,7 +43,7 @@ from pic4rl_sim.schema import (
 
 from .settings.baselines import PREFIX as BASELINES_PREFIX, ExplorerConfig
 from .errors import ConfigError, require
-from .transports.sensor_table import SENSORS
+from .readings.sensor_table import SENSORS
 from .settings.tasks import (
     TASKS,
     GoalInput,

@@ -37,8 +37,8 @@ from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
 from .scenario import Scenario
 from .tasks.base import EpisodeContext, make_task
 from .settings.tasks import task_spec
-from .transports.frame import SensorFrame
-from .transports.sensor_table import BY_NAME
+from .readings.frame import SensorFrame
+from .readings.sensor_table import BY_NAME
 from .transports.transport import EpisodeRequest, Transport
 
 log = logging.getLogger(__name__)

@@ -19,7 +19,7 @@ from .recorder import EpisodeBag, RunRecorder
 from .robot_info import RobotInfo
 from .scenario import robot_of
 from .tasks.base import EpisodeContext
-from .transports.frame import SensorFrame
+from .readings.frame import SensorFrame
 from .transports.transport import RawMessage, Transport
 
 

@@ -23,7 +23,7 @@ from pic4rl_metrics.viz.raster import COLORS, View
 from .errors import ConfigError
 from .scenario import Scenario
 from .tasks.base import EpisodeContext
-from .transports.frame import SensorFrame
+from .readings.frame import SensorFrame
 
 #: ``render_view`` values: the drawn top-down view, or MuJoCo's camera.
 RENDER_VIEWS = ("top", "mujoco")

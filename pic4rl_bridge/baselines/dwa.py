@@ -14,7 +14,7 @@ from ..errors import ConfigError
 from ..perception.collision import sensed_points
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..settings.baselines import DwaConfig
 
 

@@ -20,7 +20,7 @@ from .explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..settings.baselines import ExplorerConfig
 from ..control.pursuit import pursuit_command
 

@@ -8,10 +8,10 @@ grid (``pic4rl_bridge.perception.occupancy``: unknown is free, as nav2's rolling
 with ``track_unknown_space: false`` or D* Lite in unknown terrain plan optimistically). The
 plan is the shortest path on that grid with the obstacles inflated by the footprint's
 circumscribed radius plus ``margin_m`` (``narrow_margin_m`` at a cost when nothing else
-passes: a narrow door), by ``pic4rl_sim.engine.paths``' vectorised grid search and taut pull. It is kept until a newly
-seen obstacle blocks it or the robot is ``replan_distance_m`` off it: a plan made anew at every
-step would flip between the two ways round an obstacle, and a plan that flips is one neither a
-follower nor a student can keep to.
+passes: a narrow door), by ``pic4rl_sim.engine.paths``' vectorised grid search and taut pull.
+It is kept until a newly seen obstacle blocks it or the robot is ``replan_distance_m`` off it:
+a plan made anew at every step would flip between the two ways round an obstacle, and a plan
+that flips is one neither a follower nor a student can keep to.
 
 The search runs on a window of the grid (what was seen, the robot and the goal, with
 ``_PAD_CELLS`` round them), on a clearance field (distance to the nearest occupied cell,
@@ -29,7 +29,7 @@ from pic4rl_sim.engine.taut_path import pull_taut
 
 from ..settings.baselines import ExplorerConfig
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
 
 _PAD_CELLS = 60  # free cells round the window's content (3 m at 5 cm)

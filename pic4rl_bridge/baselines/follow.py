@@ -21,7 +21,7 @@ from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
 from ..robot_info import RobotInfo
 from ..settings.tasks import PersonControl
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..settings.baselines import DwaConfig
 from .dwa import DwaController
 

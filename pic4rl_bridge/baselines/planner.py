@@ -30,7 +30,7 @@ from pic4rl_sim.engine.worlds.spec import WorldSpec
 from ..control.actions import normalized_action
 from ..control.pursuit import pursuit_command
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 
 class PlannerController:
     """The privileged planner for goToPose on ``world`` (see the module's docstring)."""

@@ -39,7 +39,7 @@ from ..errors import ConfigError
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
 from ..settings.tasks import EXPERT_TASKS
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..settings.baselines import BaselinesConfig
 from .dwa import DwaController
 

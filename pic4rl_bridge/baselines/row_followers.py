@@ -35,7 +35,7 @@ from ..perception.observations import target_polar
 from ..perception.rows import centerlines, row_centerline
 from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.worlds.spec import WorldSpec

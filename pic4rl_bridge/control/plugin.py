@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..robot_info import RobotInfo
-from ..transports.frame import ScanData, SensorFrame
+from ..readings.frame import ScanData, SensorFrame
 from .actions import normalized_action
 
 __all__ = ["ACTS", "OBSERVES", "Policy", "PolicyFailure", "RobotInfo", "ScanData",

@@ -21,8 +21,8 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
 from ..robot_info import RobotInfo
-from ..transports.frame import ScanData, SensorFrame
-from ..transports.sensor_table import SENSORS
+from ..readings.frame import ScanData, SensorFrame
+from ..readings.sensor_table import SENSORS
 
 
 #: Pixels whose point lies this high above the floor or lower are the floor, not an obstacle

@@ -21,7 +21,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import DepthObsConfig, LidarObsConfig
 from ..errors import ConfigError
-from ..transports.frame import ScanData
+from ..readings.frame import ScanData
 
 
 #: A beam this close (rad) below a sector's start counts in that sector: a LaserScan's float32

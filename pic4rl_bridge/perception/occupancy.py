@@ -22,7 +22,7 @@ import numpy as np
 from pic4rl_sim.engine.geometry import Pose2D
 
 from ..robot_info import RobotInfo
-from ..transports.frame import ScanData, SensorFrame
+from ..readings.frame import ScanData, SensorFrame
 from .collision import depth_scan
 
 #: Cell size (m) of the grids the explorer and the memory observation keep.

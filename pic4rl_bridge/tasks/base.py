@@ -22,7 +22,7 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from ..settings.tasks import task_spec
 
 if TYPE_CHECKING:

@@ -35,7 +35,7 @@ from ..perception.collision import assess
 from ..baselines.explorer_plan import ExplorerPlan
 from ..perception.occupancy import OccupancyGrid, sensed_scan
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
 from ..settings.tasks import GoalInput, GoToPoseReward
 from ..perception.observations import (

@@ -25,7 +25,7 @@ from ..perception.collision import assess
 from ..perception.observations import (MAX_TARGET_DISTANCE_M, clipped_action, lidar_sectors,
                                        target_polar)
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
 from ..settings.tasks import PersonControl, PersonReward
 

@@ -26,7 +26,7 @@ from ..perception.collision import assess
 from ..perception.observations import depth_observation, depth_space
 from ..perception.rows import centerlines, row_centerline
 from ..robot_info import RobotInfo
-from ..transports.frame import SensorFrame
+from ..readings.frame import SensorFrame
 from .base import EpisodeContext, Judgement, Task
 from ..control.actions import planar_action_space, planar_command
 from ..settings.tasks import VineyardReward

@@ -3,11 +3,9 @@
 ``transport`` (the ``Transport`` interface every transport implements, ``EpisodeRequest``,
 ``RawMessage``), ``inprocess`` (the engine in this process; loads MuJoCo), ``ros_transport``
 (ROS 2 topics, with ``ros_topics``: its subscriptions and their QoS, and ``ros_sim``: what it asks
-of a sim node; loads rclpy), ``decode`` (messages → numpy), ``cdr`` (the per-step messages
-read straight from their CDR bytes), ``sensor_table`` (the frame's
-sensor table and ``build_frame``, which both transports call) and ``frame`` (``SensorFrame``:
-one step's decoded readings, what tasks and baselines read). Names are imported on first use,
-so importing one light module loads no MuJoCo or rclpy.
+of a sim node; loads rclpy). Both make ``SensorFrame``s through the frame's sensor table and
+its decoders, which every room below reads too: ``pic4rl_bridge.readings``. Names are
+imported on first use, so importing one light module loads no MuJoCo or rclpy.
 """
 
 from __future__ import annotations
@@ -16,9 +14,6 @@ from pic4rl_metrics.lazy import lazy_exports
 
 _EXPORTS = {
     "Transport": "transport", "EpisodeRequest": "transport", "RawMessage": "transport",
-    "SensorFrame": "frame", "ScanData": "frame",
-    "SENSORS": "sensor_table", "BY_NAME": "sensor_table", "FrameSensor": "sensor_table",
-    "build_frame": "sensor_table",
     "InProcessTransport": "inprocess",
     "RosTransport": "ros_transport",
 }

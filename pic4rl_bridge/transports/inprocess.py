@@ -31,9 +31,9 @@ from pic4rl_sim.interfaces import (
 from ..config import EnvConfig
 from ..errors import ConfigError, EpisodeRejected
 from ..scenario import Scenario
-from . import decode
-from .frame import SensorFrame, as_published
-from .sensor_table import FrameSensor, build_frame
+from ..readings import decode
+from ..readings.frame import SensorFrame, as_published
+from ..readings.sensor_table import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")

@@ -14,7 +14,7 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 
 from ..errors import SimConflict
-from . import cdr, decode
+from ..readings import cdr, decode
 from .ros_topics import Topic
 from .transport import EpisodeRequest
 

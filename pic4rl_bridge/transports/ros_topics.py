@@ -1,5 +1,5 @@
 """What the ROS transport subscribes to, and with which type and QoS: the pose and goal, the
-frame's sensors a task needs (``pic4rl_bridge.transports.sensor_table``), and the topics only
+frame's sensors a task needs (``pic4rl_bridge.readings.sensor_table``), and the topics only
 recorded.
 
 Types and QoS come from the sim's interface table (``pic4rl_sim.interfaces``): a topic is
@@ -38,8 +38,8 @@ from rosgraph_msgs.msg import Clock
 
 from ..config import EnvConfig, SensorQos
 from ..errors import ConfigError
-from . import decode
-from .sensor_table import SENSORS
+from ..readings import decode
+from ..readings.sensor_table import SENSORS
 
 #: The sim node's state and episode topics by relative name, recordable by name alone.
 KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}

@@ -48,11 +48,11 @@ from pic4rl_sim.node.ros_interfaces import (
 from ..config import EnvConfig, StepMode
 from ..errors import EpisodeRejected, StaleSensor, TransportError
 from ..scenario import Scenario
-from . import cdr, decode
-from .frame import SensorFrame
+from ..readings import cdr, decode
+from ..readings.frame import SensorFrame
 from .ros_sim import check_one_sim, episode_request, subscribe_status
 from .ros_topics import Topic, command_message, offered, receiver, silent, stale, wiring
-from .sensor_table import FrameSensor, build_frame
+from ..readings.sensor_table import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
 
 log = logging.getLogger(__name__)

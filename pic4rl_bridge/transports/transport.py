@@ -13,7 +13,7 @@ from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import QosSettings
 
-from .frame import SensorFrame
+from ..readings.frame import SensorFrame
 
 
 class RawMessage(NamedTuple):

@@ -19,7 +19,7 @@ from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.baselines.follow import HeadingController, PersonFollower
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_metrics import compute

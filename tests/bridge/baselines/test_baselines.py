@@ -27,7 +27,7 @@ from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.config import EnvConfig, load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.control.actions import planar_command
 

@@ -18,7 +18,7 @@ from pic4rl_bridge.settings.baselines import baselines_config_from_params
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.baselines.explorer import ExplorerController
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 
 ROBOT = RobotInfo(name="disc", footprint=Footprint(radius_m=0.2), omni=False,

@@ -14,7 +14,7 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 
-from pic4rl_bridge.transports.frame import SensorFrame
+from pic4rl_bridge.readings.frame import SensorFrame
 from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.control.actions import planar_command

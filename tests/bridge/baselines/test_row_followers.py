@@ -18,7 +18,7 @@ from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits, make_ba
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.baselines.row_followers import RowFollower
 

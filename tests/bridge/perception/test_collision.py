@@ -11,7 +11,7 @@ from pic4rl_metrics.geometry import Footprint
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.perception.collision import assess, depth_points, obstacle_distance
 

@@ -11,7 +11,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.readings.frame import ScanData
 from pic4rl_bridge.perception.observations import (clipped_action, depth_observation, depth_space,
                                               lidar_sectors, target_polar)
 

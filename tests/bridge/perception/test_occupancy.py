@@ -15,7 +15,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.perception.collision import FLOOR_M, depth_scan
 from pic4rl_bridge.perception.occupancy import OccupancyGrid
-from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.readings.frame import ScanData
 
 
 def _scan(angle: float, r: float, mount: Pose2D = Pose2D(0.0, 0.0, 0.0)) -> ScanData:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar

@@ -109,7 +109,8 @@ def test_a_message_is_kept_as_bytes_and_deserialized_only_when_read(monkeypatch)
     from pic4rl_sim.interfaces import ODOM
     from rclpy.serialization import serialize_message
 
-    from pic4rl_bridge.transports import cdr, ros_topics
+    from pic4rl_bridge.readings import cdr
+    from pic4rl_bridge.transports import ros_topics
     from pic4rl_bridge.transports.ros_topics import receiver
 
     made = []

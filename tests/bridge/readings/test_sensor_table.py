@@ -1,4 +1,4 @@
-"""The frame's sensor table (``pic4rl_bridge.transports.sensor_table``): one entry per reading of
+"""The frame's sensor table (``pic4rl_bridge.readings.sensor_table``): one entry per reading of
 ``SensorFrame``, one place that builds frames, and for each sensor the in-process engine read
 bit-identical to decoding the sim node's message (what makes both transports' frames equal)."""
 
@@ -18,8 +18,8 @@ from pic4rl_sim.node.messages import StateMessages, plan_message
 
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_bridge.transports.frame import ScanData, SensorFrame
-from pic4rl_bridge.transports.sensor_table import SENSORS, FrameSensor, build_frame
+from pic4rl_bridge.readings.frame import ScanData, SensorFrame
+from pic4rl_bridge.readings.sensor_table import SENSORS, FrameSensor, build_frame
 
 BRIDGE = Path(__file__).resolve().parents[3] / "pic4rl_bridge"
 #: The fields every frame has; the sensors' are its ``readings``.
@@ -65,7 +65,7 @@ def test_only_build_frame_constructs_a_sensor_frame() -> None:
             if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
                     and node.func.id == "SensorFrame"):
                 builders.append(path.relative_to(BRIDGE).as_posix())
-    assert builders == ["transports/sensor_table.py"]
+    assert builders == ["readings/sensor_table.py"]
 
 
 def test_build_frame_fills_only_the_wanted_sensors() -> None:

@@ -1,4 +1,4 @@
-"""The CDR readers (``pic4rl_bridge.transports.cdr``) give bit for bit what rclpy's
+"""The CDR readers (``pic4rl_bridge.readings.cdr``) give bit for bit what rclpy's
 deserialization and ``decode`` give, for every alignment the strings before the fields make;
 bytes that are not plain little-endian CDR are left to rclpy."""
 
@@ -13,8 +13,8 @@ from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Image, LaserScan
 
-from pic4rl_bridge.transports import cdr, decode
-from pic4rl_bridge.transports.frame import ScanData
+from pic4rl_bridge.readings import cdr, decode
+from pic4rl_bridge.readings.frame import ScanData
 from pic4rl_sim.engine.geometry import Pose2D
 
 FRAME_IDS = ["", "o", "od", "odo", "odom", "base_link_x"]  # every string length mod 8

@@ -62,7 +62,7 @@ class ScanData:
 @dataclass(frozen=True, init=False)
 class SensorFrame:
     """Everything a task may read at one step: pose, twist and goal, and each sensor's reading
-    by its ``pic4rl_bridge.transports.sensor_table.SENSORS`` name (given as keywords too,
+    by its ``pic4rl_bridge.readings.sensor_table.SENSORS`` name (given as keywords too,
     ``scan=...``); a sensor the robot lacks, or the task did not ask for, is absent (its accessor:
     ``None``).
 

@@ -1,4 +1,4 @@
-"""``pic4rl_bridge.transports.decode`` on real ROS 2 message objects (rclpy's message packages, no
+"""``pic4rl_bridge.readings.decode`` on real ROS 2 message objects (rclpy's message packages, no
 ROS graph): poses and yaw from quaternions, odometry twists, scans, depth images in both encodings
 and byte orders, and ``frame.as_published`` agreeing with a decoded message."""
 
@@ -16,9 +16,9 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Image, LaserScan
 
-from pic4rl_bridge.transports import decode
+from pic4rl_bridge.readings import decode
 from pic4rl_bridge.errors import TransportError
-from pic4rl_bridge.transports.frame import ScanData, as_published, yaw_from_quaternion
+from pic4rl_bridge.readings.frame import ScanData, as_published, yaw_from_quaternion
 
 YAWS = [0.0, 0.3, -0.3, 1.0, math.pi / 2, -math.pi / 2, 2.5, -2.5, 3.1, -3.1,
         math.pi, -math.pi, math.nextafter(math.pi, 0.0)]
