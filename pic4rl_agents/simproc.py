@@ -47,12 +47,17 @@ def _die_with(parent: int) -> Callable[[], None]:
     return set_death_signal
 
 
+def start_child(argv: Sequence[str], env: Mapping[str, str]) -> subprocess.Popen[bytes]:
+    """``argv`` in its own session (``stop_group`` stops its whole group), killed when this
+    process dies: a sim node, or a user's ROS 2 stack (``pic4rl_agents.stack``)."""
+    return subprocess.Popen(list(argv), env=dict(env), start_new_session=True,
+                            preexec_fn=_die_with(os.getpid()))
+
+
 def start_sim(ros_args: Sequence[str], env: Mapping[str, str]) -> subprocess.Popen[bytes]:
     """``python -m pic4rl_sim.node --ros-args *ros_args`` in its own session, killed when
     this process dies."""
-    return subprocess.Popen([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
-                             *ros_args], env=dict(env), start_new_session=True,
-                            preexec_fn=_die_with(os.getpid()))
+    return start_child([sys.executable, "-m", "pic4rl_sim.node", "--ros-args", *ros_args], env)
 
 
 def stop_group(proc: subprocess.Popen[bytes], timeout_s: float) -> int:
