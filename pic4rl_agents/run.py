@@ -54,7 +54,8 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
 
 def _usage() -> str:
     return ("usage: pic4rl-run {train,test} [pic4rl-train or pic4rl-test arguments] "
-            "--ros-args --params-file FILE ...")
+            "--ros-args --params-file FILE ...\n       pic4rl-run stack --command CMD "
+            "--params-file FILE ... (a ROS 2 stack as the agent: pic4rl-run stack --help)")
 
 
 @entry_point("pic4rl-run", BridgeError)
@@ -65,6 +66,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(_usage() + "\n\n" + __doc__)
         return 0 if argv else 2
     command, rest = argv[0], argv[1:]
+    if command == "stack":  # a ROS 2 stack as the agent (docs/your-agent.md)
+        from .stack.cli import main as stack_main
+
+        return stack_main(rest)
     if command not in COMMANDS:
         print(f"pic4rl-run: unknown command {command!r}\n{_usage()}", file=sys.stderr)
         return 2

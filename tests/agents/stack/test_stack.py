@@ -143,3 +143,29 @@ def test_stack_key_defaults() -> None:
     spec = stack_spec({"command": "python my_node.py --fast"}, "s")
     assert spec == StackSpec(("python", "my_node.py", "--fast"), "stack", "lockstep", "episode",
                              "", 10.0, 30.0, 5.0)
+
+
+@pytest.mark.integration
+def test_pic4rl_run_stack_drives_the_example_node(tmp_path: Path, domain: int,
+                                                  monkeypatch: pytest.MonkeyPatch,
+                                                  capfd: pytest.CaptureFixture[str]) -> None:
+    from pic4rl_agents import run
+
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))  # the lease takes one after it
+    code = run.main(["stack", "--command", f"{sys.executable} {NODE}", "--name", "cli_node",
+                     "--params-file", str(_env(tmp_path)), "--pairs", str(PAIRS),
+                     "--episodes", "1", "--bags", str(tmp_path / "bags")])
+    assert code == 0
+    assert capfd.readouterr().out.strip().splitlines()[-1] == "cli_node episode 0: goal"
+    bag = tmp_path / "bags" / "cli_node" / "episode_0000"
+    assert read_episode(bag).facts.agent == "cli_node"
+
+
+def test_pic4rl_run_stack_refuses_a_bad_key_in_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from pic4rl_agents import run
+
+    code = run.main(["stack", "--command", "x 'y", "--params-file", "env.yaml"])
+    assert code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "pic4rl-run: pic4rl-run stack.command: \"x 'y\": No closing quotation"]
