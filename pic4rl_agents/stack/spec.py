@@ -1,9 +1,9 @@
-"""``StackSpec``: what a suite cell's (or ``pic4rl-run stack``'s) ``stack:`` key says.
+"""``StackSpec``: what a ``stack:`` key says (``pic4rl-run stack``'s options make one).
 
     stack: {command: "python my_node.py", name: my_stack, clock: lockstep, restart: episode}
 
 ``command`` (required): the command line, split as a shell would (no shell features), run
-from the suite file's folder. ``name``: the agent's name in bags and tables (default
+from the current folder. ``name``: the agent's name in bags and tables (default
 ``stack``). ``clock``: ``lockstep`` (the sim steps on each ``cmd_vel``: stacks that answer
 each scan) or ``realtime`` (the sim steps on a wall-clock timer at ``real_time_factor``
 and publishes ``/clock``: timer-driven stacks with ``use_sim_time``). ``restart``:

@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -169,3 +170,17 @@ def test_pic4rl_run_stack_refuses_a_bad_key_in_one_line(
     assert code == 2
     assert capsys.readouterr().err.strip().splitlines() == [
         "pic4rl-run: pic4rl-run stack.command: \"x 'y\": No closing quotation"]
+
+
+@pytest.mark.integration
+def test_the_example_node_reaches_the_first_pair_in_realtime(tmp_path: Path,
+                                                             domain: int) -> None:
+    stack = stack_spec({"command": f"{sys.executable} {NODE}", "name": "rt_node",
+                        "clock": "realtime", "real_time_factor": 10}, "test")
+    assert _drive(tmp_path, stack, domain, episodes=1) == ["goal"]
+    bag = next((tmp_path / "bags" / "rt_node").glob("episode_*"))
+    episode = read_episode(bag)
+    assert episode.facts.agent == "rt_node"
+    steps = np.diff(episode.inputs["cmd"].t_ns[1:])  # in sim time: whole control periods
+    assert (steps > 0).all() and (steps % 100_000_000 == 0).all()  # (the sim's timer may
+    # step twice while the env waits for the machine)
