@@ -1,9 +1,10 @@
 """Driving episodes with a ROS 2 stack as the agent: ``drive_stack``.
 
-The env is ``NavEnv`` over the ROS transport, with ``StackTransport`` in place of its own
-commands: a step sends nothing, it waits for the frame that the stack's ``cmd_vel`` causes
-(lockstep) or for one real-time control period (realtime), and records the stack's
-``cmd_vel`` in the bag. The env judges the episode as any agent's (goal, collision, timeout).
+The env is ``NavEnv`` over the ROS transport, with ``StackTransport`` relaying the stack's
+commands in place of its own: the sim node listens on ``sim/cmd_vel``; a lockstep step waits
+for the stack's answer to the last frame on ``cmd_vel`` and forwards it (so the env sees and
+judges every step, as for any agent), a realtime step forwards the latest command each
+control period of wall time; the bag records the stack's commands as ``/cmd_vel``.
 A stack that sends nothing for ``silence_s``, exits, or sends a non-finite command ends the
 episode ``aborted`` with that reason (``StaleSensor``, which the env turns into ``aborted``);
 one that does not start within ``start_timeout_s`` raises ``StackError`` (the cell fails).
