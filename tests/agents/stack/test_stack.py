@@ -184,3 +184,32 @@ def test_the_example_node_reaches_the_first_pair_in_realtime(tmp_path: Path,
     steps = np.diff(episode.inputs["cmd"].t_ns[1:])  # in sim time: whole control periods
     assert (steps > 0).all() and (steps % 100_000_000 == 0).all()  # (the sim's timer may
     # step twice while the env waits for the machine)
+
+
+RESETTABLE = """import rclpy, sys
+from geometry_msgs.msg import Twist
+from sensor_msgs.msg import LaserScan
+from std_srvs.srv import Empty
+rclpy.init()
+n = rclpy.create_node('kept')
+p = n.create_publisher(Twist, 'cmd_vel', 10)
+n.create_subscription(LaserScan, 'scan', lambda m: p.publish(Twist()),
+                      rclpy.qos.qos_profile_sensor_data)
+def reset(request, response):
+    with open('resets.txt', 'a') as f:
+        f.write('reset\\n')
+    return response
+n.create_service(Empty, 'my_stack/reset', reset)
+rclpy.spin(n)
+"""
+
+
+@pytest.mark.integration
+def test_a_kept_stack_is_reset_through_its_service_each_episode(tmp_path: Path,
+                                                                domain: int) -> None:
+    (tmp_path / "kept.py").write_text(RESETTABLE)
+    stack = stack_spec({"command": f"{sys.executable} kept.py", "name": "kept",
+                        "restart": "never", "reset_service": "my_stack/reset"}, "test")
+    assert _drive(tmp_path, stack, domain, episodes=3, steps=5) == ["timeout"] * 3
+    # the first episode starts the process; the next two call its reset service first
+    assert (tmp_path / "resets.txt").read_text() == "reset\n" * 2
