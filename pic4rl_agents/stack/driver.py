@@ -59,7 +59,8 @@ class StackTransport(RosTransport):
         self._stack, self._failure = stack, failure
         self._commands, self._bad = 0, None  # commands heard; the first non-finite one
         self._mark = 0  # commands heard when the last frame was asked for
-        self._first = True
+        self._first = True  # no answer from the stack yet this episode
+        self._since = time.monotonic()
         self._latest = Twist2D()
         self._last_command_s = time.monotonic()
         sub = self.node.create_subscription(Twist, STACK_CMD_VEL, self._on_command,
@@ -88,7 +89,7 @@ class StackTransport(RosTransport):
     def reset(self, request: Any) -> Any:
         self._mark = self._commands  # the stack may answer the reset's frame before it returns
         frame = super().reset(request)
-        self._bad, self._first = None, True
+        self._bad, self._first, self._since = None, True, time.monotonic()
         self._last_command_s = time.monotonic()
         return frame
 
@@ -101,12 +102,13 @@ class StackTransport(RosTransport):
                                   f"{self._stack.silence_s:g} s")
             return super().step(self._latest)
         answered = lambda: self._commands > self._mark or self.problem() is not None  # noqa: E731
-        if self._first:  # a stack started just now may have missed the reset's frame:
-            self._first = False  # a stop step brings it another one
-            with contextlib.suppress(TransportError):
+        if self._first and time.monotonic() - self._since < self._stack.silence_s:
+            # a stack started just now may have missed the reset's frame: a stop step
+            with contextlib.suppress(TransportError):  # brings it another one
                 self._spin_until(answered, _NUDGE_S, "cmd_vel")
             if not answered():
                 return super().step(Twist2D())
+        self._first = False
         try:  # the stack's answer to the last frame
             self._spin_until(answered, self._stack.silence_s, "cmd_vel")
         except TransportError as err:
@@ -183,6 +185,16 @@ def _wait_ready(env: StackEnv, stack: StackProcess) -> None:
                      f"{sync} besides the sim's and the env's)")
 
 
+def _wait_gone(env: StackEnv, timeout_s: float = 5.0) -> None:
+    """Until the graph forgets the stopped stack's ``cmd_vel`` publisher (else the next
+    process would look started before it is)."""
+    transport: StackTransport = env.transport  # type: ignore[assignment]
+    deadline = time.monotonic() + timeout_s
+    while (transport.node.count_publishers(transport.stack_topic) > 0
+           and time.monotonic() < deadline):
+        transport._executor.spin_once(timeout_sec=0.05)
+
+
 def _call(env: StackEnv, service: str, what: str) -> None:
     """Call the ``std_srvs/Empty`` service ``service`` (relative: in the env's namespace)."""
     transport: StackTransport = env.transport  # type: ignore[assignment]
@@ -232,6 +244,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
             outcomes.append(str(info.get("outcome")))
             if stack.restart == "episode" or process.failure() is not None:
                 process.stop()
+                _wait_gone(env)
     finally:
         process.stop()
         env.close()
