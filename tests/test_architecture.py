@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from import_helpers import imports, module_name
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "architecture.md"
@@ -171,31 +172,15 @@ def test_no_package_folder_holds_more_than_12_modules() -> None:
     assert len(folders) > 20 and not crowded, f"folders over 12 modules: {crowded}"
 
 
-def _module_name(path: Path) -> str:
-    parts = path.relative_to(ROOT).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
 def _imports(path: Path, name: str) -> set[str]:
     """Every package module ``path`` imports, wherever the import stands (in a function, under
     ``TYPE_CHECKING``): a circle that only types or late imports keep apart is still one."""
-    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            found |= {a.name for a in node.names}
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                parts = package.split(".")
-                base = ".".join(parts[: len(parts) - node.level + 1]
-                                + ([node.module] if node.module else []))
-            found |= {base} | {f"{base}.{a.name}" for a in node.names}
-    return found
+    return {m for base, names, _ in imports(path, name)
+            for m in (base, *(f"{base}.{n}" for n in names))}
 
 
 def test_no_two_package_modules_import_each_other_in_a_circle() -> None:
-    modules = {_module_name(p): p for p in _package_modules()}
+    modules = {module_name(p): p for p in _package_modules()}
     graph = {name: {m for m in _imports(path, name) if m in modules and m != name}
              for name, path in modules.items()}
     # a package's __init__ re-exporting its own modules is no circle of theirs
@@ -224,7 +209,7 @@ CORE_NEVER = tuple(f"pic4rl_metrics.{room}" for room in ("bags", "tables", "viz"
 
 
 def test_the_metrics_core_reaches_no_reading_table_picture_or_cli_module() -> None:
-    modules = {_module_name(p): p for p in _package_modules()}
+    modules = {module_name(p): p for p in _package_modules()}
     core = sorted(m for m in modules if m.startswith("pic4rl_metrics.core"))
     assert len(core) > 5
     reached, todo = set(core), list(core)
@@ -241,7 +226,7 @@ def test_the_metrics_core_reaches_no_reading_table_picture_or_cli_module() -> No
 # -- sub-package exports --------------------------------------------------------------------------
 
 #: Sub-packages whose ``__init__`` lists its public names (``pic4rl_metrics.lazy.lazy_exports``).
-LAZY = sorted(_module_name(p) for package in PACKAGES for p in (ROOT / package).rglob("__init__.py")
+LAZY = sorted(module_name(p) for package in PACKAGES for p in (ROOT / package).rglob("__init__.py")
               if "lazy_exports(" in p.read_text(encoding="utf-8"))
 
 

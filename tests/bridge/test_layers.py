@@ -9,10 +9,10 @@ wrong way. With no import up, nothing reaches up through another module either.
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
 
 import pytest
+from import_helpers import imports, module_name
 
 ROOT = Path(__file__).resolve().parents[2]
 BRIDGE = ROOT / "pic4rl_bridge"
@@ -33,12 +33,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 
 
-def _module_name(path: Path) -> str:
-    parts = path.relative_to(ROOT).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-MODULES = {_module_name(p): p for p in sorted(BRIDGE.rglob("*.py"))}
+MODULES = {module_name(p): p for p in sorted(BRIDGE.rglob("*.py"))}
 
 
 def layer_of(module: str) -> int | None:
@@ -56,20 +51,10 @@ def bridge_imports(path: Path, name: str) -> list[tuple[str, int]]:
     """(bridge module, line) for each import of ``path`` (module ``name``), wherever it
     stands; ``from package import name`` counts as the module ``package.name`` when there is
     one, else as ``package``."""
-    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
     found = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            found += [(a.name, node.lineno) for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                parts = package.split(".")
-                base = ".".join(parts[: len(parts) - node.level + 1]
-                                + ([node.module] if node.module else []))
-            for alias in node.names:
-                full = f"{base}.{alias.name}"
-                found.append((full if full in MODULES else base, node.lineno))
+    for base, names, line in imports(path, name):
+        found += [(f"{base}.{n}" if f"{base}.{n}" in MODULES else base, line) for n in names]
+        found += [(base, line)] if not names else []
     return [(m, line) for m, line in found if m.split(".")[0] == "pic4rl_bridge"]
 
 
