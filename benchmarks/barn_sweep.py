@@ -36,10 +36,10 @@ from pathlib import Path
 
 import yaml
 
-from pic4rl_agents.bench import runner as bench
+from pic4rl_agents.suites import runner as bench
 
-from pic4rl_agents.bench import table as benchtable
-from pic4rl_agents.bench.suite import PairSet, load_suite
+from pic4rl_agents.suites import table as benchtable
+from pic4rl_agents.suites.suite import PairSet, load_suite
 
 SUITE = Path(__file__).resolve().parents[1] / "config" / "suite_barn.yaml"
 

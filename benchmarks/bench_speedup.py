@@ -20,8 +20,8 @@ from pathlib import Path
 
 import yaml
 
-from pic4rl_agents.bench.runner import bench_suite
-from pic4rl_agents.bench.suite import load_suite
+from pic4rl_agents.suites.runner import bench_suite
+from pic4rl_agents.suites.suite import load_suite
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"

@@ -5,7 +5,8 @@ the paper's ε-greedy exploration; PPO explores through its own policy. docs/age
 guide.
 
 One room a sub-package: ``models`` (the algorithms and networks), ``training``, ``testing``,
-``tune`` and ``bench``; what they share stands here: the trainer's configuration
-(``config``), command-line overrides and ``--ros-args``, a run directory's layout
-(``rundir``), sim processes (``simproc``) and ``pic4rl-run`` (``run``), joining Ray.
+``tune``, ``suites`` (``pic4rl-bench``) and ``stack`` (``pic4rl-run stack``); what they share
+stands here: the trainer's configuration (``config``), command-line overrides and
+``--ros-args``, a run directory's layout (``rundir``), sim processes (``simproc``) and
+``pic4rl-run`` (``run``), joining Ray.
 """

@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-ROOMS = ("models", "training", "testing", "tune", "bench")
+ROOMS = ("models", "training", "testing", "tune", "suites")
 HEAVY = ("torch", "stable_baselines3", "optuna", "ray")
 
 

@@ -90,7 +90,7 @@ def test_a_users_file_without_a_world_is_warned_about_and_used(
 
 @pytest.mark.bad_input
 def test_a_suite_runs_a_pairs_file_only_in_its_world(tmp_path: Path) -> None:
-    from pic4rl_agents.bench.suite import load_suite
+    from pic4rl_agents.suites.suite import load_suite
 
     (tmp_path / "suite.yaml").write_text(yaml.safe_dump({
         "suite": "s", "tasks": [{"name": "goto", "env": str(LIDAR_CONFIG),

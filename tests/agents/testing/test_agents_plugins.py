@@ -189,8 +189,8 @@ def test_an_observation_plugin_acting_normalised(tmp_path: Path) -> None:
 
 
 def test_a_bench_suite_naming_a_plugin_runs_its_cell(tmp_path: Path) -> None:
-    from pic4rl_agents.bench import runner as bench
-    from pic4rl_agents.bench.suite import load_suite
+    from pic4rl_agents.suites import runner as bench
+    from pic4rl_agents.suites.suite import load_suite
 
     (tmp_path / "lab").mkdir()
     _plugin(tmp_path / "lab")
@@ -241,7 +241,7 @@ def test_the_example_suite_puts_the_plugin_beside_the_agent_and_the_planner(
         tmp_path: Path) -> None:
     """``pic4rl-bench examples/suite_gap_follower.yaml``: BARN's 50 test worlds, one run each,
     one row per agent in one BARN table; the plugin's file made absolute for the workers."""
-    from pic4rl_agents.bench.suite import load_suite
+    from pic4rl_agents.suites.suite import load_suite
 
     suite = load_suite(REPO / "examples" / "suite_gap_follower.yaml", bags_dir=tmp_path)
     assert suite.table == "barn" and len(suite.cells) == 3 * 50

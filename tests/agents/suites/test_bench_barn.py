@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from pic4rl_agents.bench import runner as bench
-from pic4rl_agents.bench.suite import load_suite
+from pic4rl_agents.suites import runner as bench
+from pic4rl_agents.suites.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import compute
 from pic4rl_metrics.tables.aggregate import bootstrap_interval, wilson_interval

@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from pic4rl_agents.bench import table as benchtable
-from pic4rl_agents.bench.suite import Suite, load_suite
+from pic4rl_agents.suites import table as benchtable
+from pic4rl_agents.suites.suite import Suite, load_suite
 from pic4rl_metrics.tables.aggregate import wilson_interval
 
 REPO = Path(__file__).resolve().parents[3]

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents.bench import runner as bench
+from pic4rl_agents.suites import runner as bench
 
 REPO = Path(__file__).resolve().parents[3]
 PAIRS = REPO / "pic4rl_agents" / "data" / "goals_indoor_test.json"
@@ -73,7 +73,7 @@ def test_a_wrong_address_or_bags_folder_is_one_line_and_exit_2(
 
     # A port that takes the connection and never answers: Ray would retry for minutes.
     code = ("import sys; from pic4rl_agents import raycluster; "
-            "from pic4rl_agents.bench import runner as bench; raycluster.JOIN_S = 3; "
+            "from pic4rl_agents.suites import runner as bench; raycluster.JOIN_S = 3; "
             f"sys.exit(bench.main([{str(suite)!r}, '--address', '127.0.0.1:{silent_port}']))")
     start = time.monotonic()
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -16,12 +16,12 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents.bench import runner as bench
+from pic4rl_agents.suites import runner as bench
 
-from pic4rl_agents.bench import cell as benchcell
+from pic4rl_agents.suites import cell as benchcell
 
-from pic4rl_agents.bench import table as benchtable
-from pic4rl_agents.bench.suite import load_suite
+from pic4rl_agents.suites import table as benchtable
+from pic4rl_agents.suites.suite import load_suite
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics.tables.aggregate import wilson_interval
 
@@ -138,7 +138,7 @@ def test_the_pool_imports_torch_before_forking_only_for_a_learned_agent(
     suite = load_suite(_files(tmp_path, baselines=["dwa"],
                               agents={"td3": str(REPO / "checkpoints" / "td3_lidar")}))
     script = ("import pickle, sys\n"
-              "from pic4rl_agents.bench import cell\n"
+              "from pic4rl_agents.suites import cell\n"
               "cell.preload(pickle.loads(bytes.fromhex(sys.argv[1])))\n"
               "print(*(m in sys.modules for m in ('pic4rl_bridge.transports.inprocess', "
               "'torch', 'stable_baselines3')))\n")
@@ -172,7 +172,7 @@ def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> No
         {"file": str(PAIRS), "episodes": 4}, {"random": 3, "kind": "paper", "seed": 2}])
     suite = load_suite(suite_file)
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.bench.runner", str(suite_file),
+    proc = subprocess.Popen([sys.executable, "-m", "pic4rl_agents.suites.runner", str(suite_file),
                              "--local", "--workers", "1", "--no-progress"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = suite.root / suite.cells[0].name / "dwa"

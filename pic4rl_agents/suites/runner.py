@@ -1,5 +1,5 @@
 """``pic4rl-bench``: a benchmark suite (agents and baselines × worlds × robots × pair sets ×
-repetitions, see ``pic4rl_agents.bench.suite``) run as cells, each one ``pic4rl-test`` run, then one
+repetitions, see ``pic4rl_agents.suites.suite``) run as cells, each one ``pic4rl-test`` run, then one
 results table and a leaderboard per task from the bags.
 
     pic4rl-bench config/suite_table1.yaml                 # a local Ray, or a process pool

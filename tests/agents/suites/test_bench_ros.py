@@ -59,7 +59,7 @@ def test_two_ros_suites_hold_their_own_domains_and_a_killed_worker_takes_its_sim
     (tmp_path / "tmp").mkdir()
     env = {**os.environ, "PYTHONPATH": str(REPO), "ROS_DOMAIN_ID": str(domain),
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "TMPDIR": str(tmp_path / "tmp")}
-    procs = [subprocess.Popen([sys.executable, "-m", "pic4rl_agents.bench.runner",
+    procs = [subprocess.Popen([sys.executable, "-m", "pic4rl_agents.suites.runner",
                                str(_suite(tmp_path / name, name)), "--local", "--workers", "1",
                                "--no-progress"], env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for name in ("a", "b")]

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from pic4rl_agents.bench import table as benchtable
-from pic4rl_agents.bench.suite import Cell, PairSet, Suite
+from pic4rl_agents.suites import table as benchtable
+from pic4rl_agents.suites.suite import Cell, PairSet, Suite
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents.bench import runner as bench
-from pic4rl_agents.bench import table as benchtable
-from pic4rl_agents.bench.suite import load_suite
+from pic4rl_agents.suites import runner as bench
+from pic4rl_agents.suites import table as benchtable
+from pic4rl_agents.suites.suite import load_suite
 
 REPO = Path(__file__).resolve().parents[3]
 

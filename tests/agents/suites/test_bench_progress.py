@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents.bench import cell as benchcell
-from pic4rl_agents.bench import runner as bench
-from pic4rl_agents.bench.suite import Cell, load_suite
+from pic4rl_agents.suites import cell as benchcell
+from pic4rl_agents.suites import runner as bench
+from pic4rl_agents.suites.suite import Cell, load_suite
 from pic4rl_metrics.bags.inputs import METADATA
 
 REPO = Path(__file__).resolve().parents[3]
