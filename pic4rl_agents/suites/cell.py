@@ -8,7 +8,8 @@ drives the cell's episodes from that index on: the same pairs in the same order 
 drives pair k of the cell's pairs file), so no bag is duplicated or lost. A finished cell gets
 ``cell.json`` (written atomically); a rerun skips it. A ``transport: ros`` cell holds a ROS
 domain of its own for its life (``simproc.domain_lease``) and starts its sim with the sim's
-params file ``<cell>/sim.yaml``.
+params file ``<cell>/sim.yaml``. A stack's cell is such a cell, driven by ``pic4rl-run
+stack``'s driver (``pic4rl_agents.stack.driver.drive_stack``) in the env a plugin gets.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from pic4rl_metrics.bags.inputs import METADATA
 from pic4rl_sim import params_file
 
 from .suite import Cell
-from pic4rl_agents.testing.plan import AgentSpec, TestPlan, resolve_agents
+from pic4rl_agents.testing.plan import AgentSpec, TestPlan, recorded, resolve_agents
 from pic4rl_agents.testing.policies import is_plugin
 
 DONE = "cell.json"  # a finished cell's marker
@@ -124,6 +125,12 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
     from pic4rl_agents.simproc import start_sim, stop_group
     from pic4rl_agents.testing.tester import drive_agent
 
+    if cell.stack is not None:  # the stack's driver starts the sim and the stack
+        from pic4rl_agents.stack.driver import drive_stack
+
+        drive_stack(cell.stack, spec.run.env, overrides={}, episodes=episodes, seed=seed,
+                    domain=domain, cwd=Path(cell.stack_cwd), sim_file=folder / SIM_PARAMS)
+        return
     if cell.transport != "ros":
         drive_agent(spec, episodes=episodes, seed=seed, progress=False)
         return
@@ -149,6 +156,8 @@ def preload(cell: Cell) -> None:
         import pic4rl_bridge.transports.inprocess  # noqa: F401
     if cell.agent_path and not is_plugin(cell.agent_path):
         import pic4rl_agents.models.algorithms  # noqa: F401
+    if cell.stack is not None:
+        import pic4rl_agents.stack.driver  # noqa: F401
 
 
 def drive_cell(cell: Cell, root: Path) -> str:
@@ -178,12 +187,25 @@ def _drive_from(cell: Cell, root: Path, folder: Path, *, first: int, total: int,
     own_pairs = bool(cell.pairs.file or cell.pairs.random)
     file = str(_pairs_file(first, folder)) if own_pairs else ""
     # A resumed cell's episodes draw their simulator seeds from seed + first.
-    spec = resolve_agents(_plan(cell, root, episodes=total - first, pairs=file,
-                                domain=domain), folder)[0]  # its files, read once
+    plan = _plan(cell, root, episodes=total - first, pairs=file, domain=domain)
+    spec = (recorded(_stack_agent(cell, plan), folder) if cell.stack is not None
+            else resolve_agents(plan, folder)[0])  # its files, read once
     pairs = _cell_pairs(cell, root, spec.run.env)
     if pairs is not None:
         _pairs_from(pairs, first, folder)
     _drive(spec, cell, folder, episodes=total - first, seed=cell.seed + first, domain=domain)
+
+
+def _stack_agent(cell: Cell, plan: TestPlan) -> AgentSpec:
+    """A stack's row in the env a plugin gets (``plan``'s params files alone, the cell's
+    world, variant and robot), set up for testing as the tester sets up every agent's."""
+    from pic4rl_agents.config import ENV_NODE, NODES
+    from pic4rl_agents.testing.plan import _free_env, _test_env
+
+    files = params_file.load(plan.params_files, NODES)
+    pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
+    run, _ = _free_env(plan, f"stack {cell.agent}", [], files)
+    return _test_env(AgentSpec(cell.agent, run), plan, pairs)
 
 
 def expected_episodes(cell: Cell) -> int:

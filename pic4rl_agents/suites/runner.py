@@ -1,6 +1,6 @@
 """``pic4rl-bench``: a benchmark suite (agents and baselines × worlds × robots × pair sets ×
-repetitions, see ``pic4rl_agents.suites.suite``) run as cells, each one ``pic4rl-test`` run, then one
-results table and a leaderboard per task from the bags.
+repetitions, see ``pic4rl_agents.suites.suite``) run as cells, each one ``pic4rl-test`` run,
+then one results table and a leaderboard per task from the bags.
 
     pic4rl-bench config/suite_table1.yaml                 # a local Ray, or a process pool
     pic4rl-bench config/suite_table1.yaml --address auto  # join a running Ray cluster
