@@ -37,7 +37,6 @@ from pathlib import Path
 import yaml
 
 from pic4rl_agents.suites import runner as bench
-
 from pic4rl_agents.suites import table as benchtable
 from pic4rl_agents.suites.suite import PairSet, load_suite
 

@@ -1,7 +1,7 @@
 """The trainer's configuration: typed, frozen, from the ``trainer:`` section of a params file.
 
-A training file holds the three nodes' sections side by side (``pic4rl_sim.params_file``).
-Each field carries its description, unit and range (``pic4rl_sim.schema``); names are dotted
+A training file holds the three nodes' sections side by side (``pic4rl_base.params_file``).
+Each field carries its description, unit and range (``pic4rl_base.schema``); names are dotted
 as in ROS (``epsilon.decay``); every key is checked with a "did you mean". Command-line
 overrides (``pic4rl_agents.overrides``) are applied over the files by ``load_run_config``.
 """
@@ -13,26 +13,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_base import params_file
+from pic4rl_base.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
+from pic4rl_base.schema import (NON_NEGATIVE, POSITIVE, PROBABILITY, ParamEnum, Range, check,
+                                from_params, param, section, to_params)
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError, require
 from pic4rl_bridge.settings.tasks import EXPERT_TASKS
-from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
-from pic4rl_sim.params_file import ENV_NODE, SIM_NODE, TRAINER_NODE
-from pic4rl_sim.schema import (
-    NON_NEGATIVE,
-    POSITIVE,
-    PROBABILITY,
-    ParamEnum,
-    Range,
-    check,
-    from_params,
-    param,
-    section,
-    to_params,
-)
-
-from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 
 #: ``trainer.algorithm``'s choices: the algorithm table's names.
 Algorithm = ParamEnum("Algorithm", [(name.upper(), name) for name in ALGORITHM_TABLE],

@@ -10,12 +10,11 @@ from typing import Any
 
 import yaml
 
+from pic4rl_base.schema import ParamSpec, specs
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError, require, unknown_key
-from pic4rl_sim.schema import ParamSpec, specs
 
 from .config import ENV_NODE, TRAINER_NODE, TrainConfig
-
 
 _FLOAT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
 
@@ -50,8 +49,8 @@ def _table(node: str) -> dict[str, ParamSpec]:
         return {spec.name: spec for spec in specs(TrainConfig)}
     if node == ENV_NODE:
         return {spec.name: spec for spec in specs(EnvConfig)}
-    from pic4rl_sim.engine.robot_specs import load_robot
     from pic4rl_sim.config import ROBOT, parameter_table
+    from pic4rl_sim.engine.robot_specs import load_robot
 
     return {spec.name: spec for spec in parameter_table(load_robot(ROBOT.default))}
 

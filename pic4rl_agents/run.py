@@ -24,12 +24,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from types import FrameType
 
+from pic4rl_agents.training.envs import env_namespace
+from pic4rl_base import params_file
+from pic4rl_base.entry import entry_point
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError
-from pic4rl_metrics.entry import entry_point
-from pic4rl_sim import params_file
 
-from pic4rl_agents.training.envs import env_namespace
 from .rosargs import RosArgs, split_ros_args
 from .simproc import start_sim, stop_group
 
@@ -45,9 +45,9 @@ def _resolve(command: str, plain: list[str], ros: RosArgs) -> tuple[EnvConfig, i
 
         run, _ = resolve(build_parser().parse_args(plain), ros)
         return run.env, run.train.n_envs
+    from pic4rl_agents.testing.plan import first_env
     from pic4rl_agents.testing.tester import build_parser as test_parser
     from pic4rl_agents.testing.tester import build_plan
-    from pic4rl_agents.testing.plan import first_env
 
     return first_env(build_plan(test_parser().parse_args(plain), ros)), 1
 

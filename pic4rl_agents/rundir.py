@@ -11,7 +11,7 @@
 A session is one ``pic4rl-train`` process on the run: 0, then one more per resume. Files that
 every session writes anew (``config``, ``summary``) are named after it (``session_file``):
 session 1 writes ``config-2.yaml`` and ``summary-2.yaml``, and nothing is overwritten.
-Every file is written whole or not at all (``pic4rl_metrics.atomic``).
+Every file is written whole or not at all (``pic4rl_base.atomic``).
 """
 
 from __future__ import annotations
@@ -23,9 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pic4rl_base import atomic
 from pic4rl_bridge.errors import ConfigError
-
-from pic4rl_metrics import atomic
 
 CONFIG = "config.yaml"
 MODEL = "model.zip"

@@ -8,8 +8,8 @@ A config file holds one section per node, as ``--params-file`` expects::
       ros__parameters: {task: goToPose, sensor: lidar, reward: {goal: 1000.0}, ...}
 
 Nested mappings are dotted names, as in ROS (``reward.goal``). Each field carries its
-description, unit and range (``pic4rl_sim.schema``), from which come the checks, the docs'
-table and the ``--help`` text; ``pic4rl_sim.params_file`` reads the sections. The in-process
+description, unit and range (``pic4rl_base.schema``), from which come the checks, the docs'
+table and the ``--help`` text; ``pic4rl_base.params_file`` reads the sections. The in-process
 transport builds its engine from the ``sim`` section, so one file configures both transports
 identically.
 """
@@ -23,36 +23,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from pic4rl_base import params_file
+from pic4rl_base.params_file import ENV_NODE, SIM_NODE
+from pic4rl_base.schema import (NON_NEGATIVE, POSITIVE, ParamEnum, Range, check, flatten,
+                                from_params, param, section, to_params)
 from pic4rl_metrics.contract import STORAGES
-from pic4rl_sim import params_file
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, ODOM, RECORDED
-from pic4rl_sim.params_file import ENV_NODE, SIM_NODE
-from pic4rl_sim.schema import (
-    NON_NEGATIVE,
-    POSITIVE,
-    ParamEnum,
-    Range,
-    check,
-    flatten,
-    from_params,
-    param,
-    section,
-    to_params,
-)
 
-from .settings.baselines import PREFIX as BASELINES_PREFIX, ExplorerConfig
 from .errors import ConfigError, require
 from .readings.sensor_table import SENSORS
-from .settings.tasks import (
-    TASKS,
-    GoalInput,
-    PersonConfig,
-    RewardConfig,
-    SensorName,
-    TaskName,
-    VineyardConfig,
-)
+from .settings.baselines import PREFIX as BASELINES_PREFIX
+from .settings.baselines import ExplorerConfig
+from .settings.tasks import (TASKS, GoalInput, PersonConfig, RewardConfig, SensorName, TaskName,
+                             VineyardConfig)
 
 
 class TransportName(ParamEnum):

@@ -9,17 +9,17 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from pic4rl_base.geometry import Mount
 from pic4rl_metrics.contract import EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.geometry import Mount
 from pic4rl_sim.interfaces import GOAL_POSE, PLAN, find
 
 from .config import EnvConfig
 from .episodes import PairSampler
+from .readings.frame import SensorFrame
 from .recorder import EpisodeBag, RunRecorder
 from .robot_info import RobotInfo
 from .scenario import robot_of
 from .tasks.base import EpisodeContext
-from .readings.frame import SensorFrame
 from .transports.transport import RawMessage, Transport
 
 

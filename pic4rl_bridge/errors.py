@@ -3,14 +3,13 @@
 Messages name the key, file or topic first, then the offending value and what was expected.
 A bad parameter is every package's one ``ConfigError`` (defined in ``pic4rl_metrics.errors``,
 re-exported here and by ``pic4rl_sim.errors``): every node's parameters are checked by one
-schema (``pic4rl_sim.schema``), and the bag contract's by the metrics, so one class names them
+schema (``pic4rl_base.schema``), and the bag contract's by the metrics, so one class names them
 all.
 """
 
 from __future__ import annotations
 
-from pic4rl_metrics.errors import ConfigError
-from pic4rl_sim.errors import require, unknown_key
+from pic4rl_base.errors import ConfigError, require, unknown_key
 
 __all__ = ["BridgeError", "ConfigError", "EpisodeRejected", "RecorderError", "SimConflict",
            "StaleSensor", "TransportError", "require", "unknown_key"]

@@ -24,10 +24,10 @@ from typing import Any
 import yaml
 from rosbags.interfaces import Qos
 
-from pic4rl_metrics import atomic
+from pic4rl_base import atomic
+from pic4rl_base.errors import OutputError
 from pic4rl_metrics.bags.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
 from pic4rl_metrics.contract import STORAGES, EpisodeFacts, Outcome, plain
-from pic4rl_metrics.errors import OutputError
 from pic4rl_sim.interfaces import QosKind, find
 
 from .errors import RecorderError

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from .lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
-#: Public name → the module that defines it, imported on first use (PEP 562): the sim imports
-#: ``pic4rl_metrics.errors`` and ``pic4rl_metrics.geometry`` alone and must not pay for pandas
-#: and rosbags.
+#: Public name → the module that defines (or, for the base's ``Footprint``, carries) it,
+#: imported on first use (PEP 562): ``import pic4rl_metrics`` for its errors alone must not pay
+#: for pandas and rosbags.
 _HOMES = {
     "BagResult": "tables.batch", "MetricsResult": "tables.batch", "compute": "tables.batch",
     "judge_bag": "tables.batch",
@@ -23,7 +23,7 @@ _HOMES = {
     "BagError": "errors", "ConfigError": "errors", "CorruptBagError": "errors",
     "EpisodeError": "errors",
     "MetricsError": "errors", "TopicError": "errors",
-    "Footprint": "geometry", "Derived": "core.derived", "compute_metrics": "core.metrics",
+    "Footprint": "contract", "Derived": "core.derived", "compute_metrics": "core.metrics",
     "read_episode": "bags.reader",
     "METRICS": "core.registry", "REGISTRY": "core.registry", "Metric": "core.registry",
     "metric": "core.registry",

@@ -26,10 +26,11 @@ from rosbags.rosbag2 import StoragePlugin
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.goal import Goal
+
 from . import fact_values as decode
-from .errors import ConfigError
-from .geometry import Footprint, Mount
-from .goal import Goal
 
 #: Default topics, as recorded by pic4rl's recorder (the sim node's names).
 GROUND_TRUTH_TOPIC = "/ground_truth"

@@ -1,4 +1,5 @@
-"""Errors of pic4rl_metrics, one class per boundary.
+"""Errors of pic4rl_metrics, one class per boundary; ``ConfigError`` and ``OutputError`` are
+every package's (``pic4rl_base.errors``), re-exported here.
 
 Messages are built first with the offending value (``{x!r}``) and name the file, topic or
 key, and what was expected; lower errors are translated with ``raise ... from err``.
@@ -6,9 +7,14 @@ key, and what was expected; lower errors are translated with ``raise ... from er
 
 from __future__ import annotations
 
+from pic4rl_base.errors import ConfigError, OutputError, Pic4rlError
 
-class MetricsError(Exception):
-    """Base class of every error this package raises on purpose."""
+__all__ = ["BagError", "ConfigError", "CorruptBagError", "EpisodeError", "MetricsError",
+           "OutputError", "TopicError"]
+
+
+class MetricsError(Pic4rlError):
+    """Base class of the bag and episode errors this package raises on purpose."""
 
 
 class BagError(MetricsError):
@@ -26,15 +32,3 @@ class TopicError(BagError):
 
 class EpisodeError(MetricsError):
     """The data in a bag cannot make an episode (e.g. fewer than two poses)."""
-
-
-class ConfigError(MetricsError):
-    """A parameter (of any node or package: sim, env, trainer, metrics), a topic map, an episode
-    fact, a robot, a world or a file they name is unknown or invalid. The one class for every
-    pic4rl package: ``pic4rl_sim.errors`` and ``pic4rl_bridge.errors`` re-export it, and this
-    package, the lowest room, imports no other."""
-
-
-class OutputError(MetricsError):
-    """An output (``--out``) cannot be written: a full disk, a parent that is a file, no
-    permission."""

@@ -13,9 +13,9 @@ import math
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from .errors import ConfigError
-from .geometry import Footprint, Mount
-from .goal import Goal
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.goal import Goal
 
 #: ``decode(raw, key, source) -> value``.
 Decoder = Callable[[Any, str, str], Any]

@@ -1,6 +1,6 @@
 """The sim node's parameters as data, and the typed configuration built from their values.
 
-``SimParams`` describes the node's own parameters (``pic4rl_sim.schema``: description, unit,
+``SimParams`` describes the node's own parameters (``pic4rl_base.schema``: description, unit,
 range); the sensor parameters are the fields of the robot's sensor specs, with the robot's
 values as defaults, and the world parameters those of the chosen generator, so the table is a
 function of the robot (``parameter_table``). The node declares them from it and
@@ -17,7 +17,10 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from pic4rl_metrics.goal import Goal
+from pic4rl_base.errors import ConfigError, require, unknown_key
+from pic4rl_base.goal import Goal
+from pic4rl_base.schema import (ParamEnum, ParamSpec, ParamType, Range, check, from_params, param,
+                                param_names, specs)
 
 from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
@@ -25,18 +28,6 @@ from .engine.robot_specs import RobotSpec, load_robot
 from .engine.sensors import SENSOR_KINDS
 from .engine.worlds.generators import GENERATORS, make_world
 from .engine.worlds.spec import WorldSpec
-from .errors import ConfigError, require, unknown_key
-from .schema import (
-    ParamEnum,
-    ParamSpec,
-    ParamType,
-    Range,
-    check,
-    from_params,
-    param,
-    param_names,
-    specs,
-)
 
 MAX_SEED = 2**31 - 1
 _SEED = Range(0, MAX_SEED)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import math
 
+from pic4rl_base.geometry import Footprint, Mount
 from pic4rl_metrics.contract import EpisodeFacts
-from pic4rl_metrics.geometry import Footprint, Mount
 
 #: Facts as the env writes them (a Jackal after a goToPose episode).
 ENV_FACTS = EpisodeFacts(

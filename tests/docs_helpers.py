@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from pic4rl_sim.schema import TYPE_NAMES, literal, specs
+from pic4rl_base.schema import TYPE_NAMES, literal, specs
 
 
 def parameter_rows(cls: type) -> dict[str, tuple[str, str]]:

@@ -15,7 +15,7 @@ from import_helpers import imports, module_name
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "architecture.md"
-PACKAGES = ("pic4rl_sim", "pic4rl_bridge", "pic4rl_agents", "pic4rl_metrics")
+PACKAGES = ("pic4rl_base", "pic4rl_sim", "pic4rl_bridge", "pic4rl_agents", "pic4rl_metrics")
 #: Roots of the repository paths the doc may write; a token with a placeholder is no path.
 PATH = re.compile(r"(?:pic4rl_\w+|tests|docs|config)(?:/[\w.]+)*/?")
 BRIDGE_NEVER = ("torch", "stable_baselines3", "sb3_contrib", "optuna", "pic4rl_agents")
@@ -225,7 +225,7 @@ def test_the_metrics_core_reaches_no_reading_table_picture_or_cli_module() -> No
 
 # -- sub-package exports --------------------------------------------------------------------------
 
-#: Sub-packages whose ``__init__`` lists its public names (``pic4rl_metrics.lazy.lazy_exports``).
+#: Sub-packages whose ``__init__`` lists its public names (``pic4rl_base.lazy.lazy_exports``).
 LAZY = sorted(module_name(p) for package in PACKAGES for p in (ROOT / package).rglob("__init__.py")
               if "lazy_exports(" in p.read_text(encoding="utf-8"))
 

@@ -4,7 +4,7 @@ a new model from a ``TrainConfig`` (``new_model``) or a saved one (``load_model`
 networks (``DepthGoalExtractor``). Only ``algorithm_table`` is light; the rest load torch.
 """
 
-from pic4rl_metrics.lazy import homes_of, lazy_exports
+from pic4rl_base.lazy import homes_of, lazy_exports
 
 _HOMES = homes_of({
     "algorithm_table": ("ALGORITHM_TABLE", "AlgorithmEntry"),

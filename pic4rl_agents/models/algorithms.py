@@ -22,18 +22,18 @@ from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.save_util import load_from_zip_file
 from torch import nn
 
+from pic4rl_agents.config import TrainConfig
+from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
 
-from pic4rl_metrics.atomic import replacing
 from .algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
-from pic4rl_agents.config import TrainConfig
 from .exploration import EpsilonGreedy
 from .extractors import DepthGoalExtractor
 
 
 class AtomicSave:
     """Mixin for an SB3 algorithm: ``save`` and ``save_replay_buffer`` to a path write a
-    temporary file and rename it (``pic4rl_metrics.atomic``), so that a kill mid-save leaves the
+    temporary file and rename it (``pic4rl_base.atomic``), so that a kill mid-save leaves the
     previous file, not a truncated one; SB3's callbacks (checkpoints, the best model) save
     through them too."""
 

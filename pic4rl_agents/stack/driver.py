@@ -211,7 +211,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
     """Drive ``episodes`` episodes of ``stack`` in the env of ``config`` (+ ``overrides``):
     the sim node (its params written to ``sim_file``) and the stack in ROS domain ``domain``,
     both stopped at the end; the episodes' outcomes in order."""
-    from pic4rl_sim import params_file
+    from pic4rl_base import params_file
 
     ros_env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
                os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}

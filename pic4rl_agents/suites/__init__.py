@@ -4,7 +4,7 @@ cells on a process pool or Ray and the command (``runner``), and the suite's tab
 leaderboards and report from its bags (``table``).
 """
 
-from pic4rl_metrics.lazy import homes_of, lazy_exports
+from pic4rl_base.lazy import homes_of, lazy_exports
 
 _HOMES = homes_of({
     "suite": ("Cell", "PairSet", "Suite", "load_suite"),

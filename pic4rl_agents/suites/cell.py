@@ -23,15 +23,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
-from pic4rl_metrics import atomic
-from pic4rl_metrics.bags.inputs import METADATA
-from pic4rl_sim import params_file
-
-from .suite import Cell
 from pic4rl_agents.testing.plan import AgentSpec, TestPlan, recorded, resolve_agents
 from pic4rl_agents.testing.policies import is_plugin
+from pic4rl_base import atomic, params_file
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
+from pic4rl_metrics.bags.inputs import METADATA
+
+from .suite import Cell
 
 DONE = "cell.json"  # a finished cell's marker
 ERROR = "cell.error"  # the last attempt's error, in one line

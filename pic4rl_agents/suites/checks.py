@@ -15,7 +15,7 @@ from typing import Any
 
 from pic4rl_agents.stack.spec import StackSpec, stack_spec
 from pic4rl_agents.testing.plan import TestPlan, resolve_agents
-from pic4rl_sim import params_file
+from pic4rl_base import params_file
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.config import TransportName
 from pic4rl_bridge.errors import ConfigError, require, unknown_key

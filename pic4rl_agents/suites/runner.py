@@ -26,13 +26,13 @@ from multiprocessing.connection import wait
 from pathlib import Path
 from typing import Any
 
+from pic4rl_base import atomic
+from pic4rl_base.entry import entry_point
 from pic4rl_bridge.errors import BridgeError, ConfigError
-from pic4rl_metrics import atomic
-from pic4rl_metrics.entry import entry_point
 
 from . import cell as bench_cell
-from .table import SuiteTable, write_results
 from .suite import Cell, Suite, load_suite
+from .table import SuiteTable, write_results
 
 log = logging.getLogger(__name__)
 POLL_S = 0.5

@@ -35,17 +35,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-
-from pic4rl_bridge.config import TransportName
-from pic4rl_bridge.errors import ConfigError, require
-from pic4rl_sim import params_file
-from pic4rl_sim.engine.sampling import PAIR_KINDS
-from pic4rl_sim.schema import read_yaml
-from pic4rl_metrics.tables.protocol import LAYOUTS
-
 from pic4rl_agents.config import SIM_NODE
 from pic4rl_agents.stack.spec import StackSpec
 from pic4rl_agents.testing.plan import DEFAULT_PAIRS
+from pic4rl_base import params_file
+from pic4rl_base.schema import read_yaml
+from pic4rl_bridge.config import TransportName
+from pic4rl_bridge.errors import ConfigError, require
+from pic4rl_metrics.tables.protocol import LAYOUTS
+from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from . import checks
 

@@ -23,19 +23,19 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from pic4rl_metrics import atomic
+from pic4rl_base import atomic
+from pic4rl_metrics.core.registry import METRICS
 from pic4rl_metrics.tables.aggregate import wilson_interval
 from pic4rl_metrics.tables.batch import MetricsResult, compute
-from pic4rl_metrics.viz.html_report import write_report
+from pic4rl_metrics.tables.layouts import render_rows
 from pic4rl_metrics.tables.paired import agent_names
 from pic4rl_metrics.tables.protocol import (FULL_RUNS_LABEL, LAYOUTS, Layout, empty_cells,
                                             protocol_cells)
 from pic4rl_metrics.tables.protocol import header as layout_header
+from pic4rl_metrics.tables.text import plain_text
+from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.viz.plots import save_figure
 from pic4rl_metrics.viz.report_maps import SKETCH_SCANS
-from pic4rl_metrics.core.registry import METRICS
-from pic4rl_metrics.tables.layouts import render_rows
-from pic4rl_metrics.tables.text import plain_text
 
 from .suite import Cell, Suite
 

@@ -4,7 +4,7 @@ into bags, then one metrics table from the bags; ``drive_and_judge`` from Python
 drives an episode (``policies``: a model, a baseline, a policy plugin or a TorchScript file).
 """
 
-from pic4rl_metrics.lazy import homes_of, lazy_exports
+from pic4rl_base.lazy import homes_of, lazy_exports
 
 _HOMES = homes_of({
     "plan": ("AgentSpec", "DEFAULT_PAIRS", "TestPlan", "resolve_agents"),

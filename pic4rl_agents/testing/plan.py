@@ -13,17 +13,16 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
+from pic4rl_agents import rundir
+from pic4rl_agents.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_base import params_file
 from pic4rl_bridge.baselines import BASELINES, check_fits
 from pic4rl_bridge.config import EnvConfig, agent_conflicts
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.scenario import Scenario
-from pic4rl_sim import params_file
-
-from pic4rl_agents import rundir
-from pic4rl_agents.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
-from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
 
 from .policies import is_plugin, load_plugin, torchscript_env
 

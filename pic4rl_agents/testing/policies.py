@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from pic4rl_bridge.control.plugin import ACTS, Policy, PolicyFailure, TaskInfo, check_policy
-from pic4rl_bridge.control.plugin import command_of
+from pic4rl_base.schema import read_yaml
+from pic4rl_bridge.control.plugin import (ACTS, Policy, PolicyFailure, TaskInfo, check_policy,
+                                          command_of)
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_sim.schema import read_yaml
 
 ENTRY_POINTS = "pic4rl.policies"  # name → a Policy class or object, for installed packages
 SIDECARS = (".yaml", ".yml", ".json")  # model.pt's sidecar: model.yaml (or model.pt.yaml)
@@ -183,8 +183,8 @@ class TorchScriptPolicy(Policy):
 def sb3_class(algorithm: str) -> Any:
     """The SB3 or sb3-contrib algorithm class named ``algorithm`` (any case: ``ppo``,
     ``RecurrentPPO``, ``sb3_contrib.TQC``)."""
-    import stable_baselines3
     import sb3_contrib
+    import stable_baselines3
     from stable_baselines3.common.base_class import BaseAlgorithm
 
     name = algorithm.rpartition(".")[2].lower()

@@ -40,20 +40,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from pic4rl_bridge.settings.baselines import PREFIX as BASELINES_PREFIX
-from pic4rl_bridge.settings.baselines import baselines_config_from_params
+from pic4rl_agents.config import ENV_NODE, SIM_NODE
+from pic4rl_agents.console import console_logging
+from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_base import atomic
+from pic4rl_base.entry import entry_point
 from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
+from pic4rl_bridge.settings.baselines import PREFIX as BASELINES_PREFIX
+from pic4rl_bridge.settings.baselines import baselines_config_from_params
 from pic4rl_bridge.settings.tasks import TASKS
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-from pic4rl_metrics import atomic
-from pic4rl_metrics.entry import entry_point
-
-from pic4rl_agents.config import ENV_NODE, SIM_NODE
-from pic4rl_agents.overrides import check_overrides, parse_overrides
-from pic4rl_agents.console import console_logging
-from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
 from .plan import AgentSpec, TestPlan, recorded, resolve_agents
 from .policies import Driver, PolicyFailure
 
@@ -112,8 +111,8 @@ def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) ->
     goals and the success rate (named as ``task`` names its goals: ``row ends``), or for a
     table without a goal (person monitoring) full runs, their k/n, and no goal's columns."""
     from pic4rl_metrics.tables.groups import headline, headline_columns
-    from pic4rl_metrics.tables.text import OUTCOME_COUNTS, render_comparison
     from pic4rl_metrics.tables.results import table_columns
+    from pic4rl_metrics.tables.text import OUTCOME_COUNTS, render_comparison
 
     if headline(table) != "success":
         counts = {"n_full_runs": "full runs", **{k: v for k, v in OUTCOME_COUNTS.items()
@@ -152,12 +151,12 @@ def judge(run_dir: Path, task: str, *,
 
 def _check_video() -> None:
     """``--video``'s encoder is there, before any episode is driven."""
-    from pic4rl_metrics.errors import MetricsError
+    from pic4rl_base.errors import Pic4rlError
     from pic4rl_metrics.viz.video_batch import ffmpeg_writer
 
     try:
         ffmpeg_writer()
-    except MetricsError as err:
+    except Pic4rlError as err:
         raise ConfigError(f"--video: {err}") from err
 
 

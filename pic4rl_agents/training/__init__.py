@@ -5,7 +5,7 @@ evaluation curves (``python -m pic4rl_agents.training.curves``), the run's ``sum
 and the evaluations' videos.
 """
 
-from pic4rl_metrics.lazy import homes_of, lazy_exports
+from pic4rl_base.lazy import homes_of, lazy_exports
 
 _HOMES = homes_of({
     "train": ("Trainer", "main"),

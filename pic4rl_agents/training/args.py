@@ -7,23 +7,15 @@ import argparse
 import dataclasses
 from typing import Any
 
-from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import ConfigError, unknown_key
-from pic4rl_sim import params_file
-from pic4rl_sim.schema import help_text, param_names, specs
-
 from pic4rl_agents import rundir
-from pic4rl_agents.config import (
-    ENV_NODE,
-    NODES,
-    SIM_NODE,
-    TRAINER_NODE,
-    RunConfig,
-    TrainConfig,
-    run_config,
-)
+from pic4rl_agents.config import (ENV_NODE, NODES, SIM_NODE, TRAINER_NODE, RunConfig, TrainConfig,
+                                  run_config)
 from pic4rl_agents.overrides import check_overrides, parse_overrides
 from pic4rl_agents.rosargs import RosArgs
+from pic4rl_base import params_file
+from pic4rl_base.schema import help_text, param_names, specs
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.errors import ConfigError, unknown_key
 
 DESCRIPTION = ("pic4rl-train: the training node. It owns the env (the paper's "
                "training(env(Node))) and trains an SB3 agent on it, with checkpoints, resume, "

@@ -20,11 +20,11 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 from stable_baselines3.common.vec_env import VecEnv
 
+from pic4rl_agents.rundir import EVALUATIONS
+from pic4rl_base import atomic
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 
-from pic4rl_metrics import atomic
 from .curves import save_reward_curve
-from pic4rl_agents.rundir import EVALUATIONS
 
 log = logging.getLogger(__name__)
 

@@ -18,13 +18,11 @@ from typing import Any
 import pandas as pd
 from stable_baselines3.common.monitor import LoadMonitorResultsError, load_results
 
+from pic4rl_agents import rundir
+from pic4rl_base import atomic
 from pic4rl_bridge.errors import ConfigError
 
-from pic4rl_metrics import atomic
-
-from pic4rl_agents import rundir
 from .envs import DRIVER_KEY
-
 
 #: The ``driver`` of an episode a monitor file from before drivers were recorded holds.
 UNRECORDED = "unrecorded"

@@ -17,12 +17,12 @@ import gymnasium as gym
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
+from pic4rl_agents.config import CurriculumConfig, EvalConfig
+from pic4rl_base.schema import to_params
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
-from pic4rl_sim.schema import to_params
 
-from pic4rl_agents.config import CurriculumConfig, EvalConfig
 from .curriculum import STAGE_KEY, Curriculum
 
 #: The ``info`` key (a monitor column) naming who drove an ended episode, one of ``DRIVERS``.

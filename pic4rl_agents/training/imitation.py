@@ -32,16 +32,15 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
-from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
-from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import ConfigError
+from pic4rl_agents.config import NODES, ImitationConfig
+from pic4rl_base import params_file
 from pic4rl_bridge.baselines.registry import Baseline
 from pic4rl_bridge.baselines.registry import make_expert as baseline_expert
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.scenario import Scenario
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, BaselinesConfig, baselines_config
 from pic4rl_bridge.settings.tasks import EXPERT_TASKS
-from pic4rl_sim import params_file
-
-from pic4rl_agents.config import NODES, ImitationConfig
 
 from .callbacks import WallClockLimit
 from .envs import set_driver

@@ -25,16 +25,15 @@ from typing import Any
 
 import yaml
 
-from pic4rl_bridge.config import EnvConfig
-from pic4rl_bridge.errors import BridgeError, TransportError
-
-from pic4rl_metrics import atomic
-from pic4rl_metrics.entry import entry_point
-
 from pic4rl_agents import rundir
 from pic4rl_agents.config import RunConfig
 from pic4rl_agents.console import console_logging
 from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_base import atomic
+from pic4rl_base.entry import entry_point
+from pic4rl_bridge.config import EnvConfig
+from pic4rl_bridge.errors import BridgeError, TransportError
+
 from .args import build_parser, resolve
 
 log = logging.getLogger(__name__)
@@ -199,7 +198,7 @@ class Trainer:
         this session's ``logs/``."""
         from stable_baselines3.common.logger import configure
 
-        from pic4rl_agents.models.algorithms import new_model, load_model
+        from pic4rl_agents.models.algorithms import load_model, new_model
 
         cfg = self.config.train
         if self.resume is None:

@@ -16,8 +16,8 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 from stable_baselines3.common.logger import TensorBoardOutputFormat
 
+from pic4rl_base.errors import Pic4rlError
 from pic4rl_bridge.config import EnvConfig
-from pic4rl_metrics.errors import MetricsError
 from pic4rl_metrics.viz.video_batch import write_video
 
 log = logging.getLogger(__name__)
@@ -86,7 +86,7 @@ class EvalVideoCallback(BaseCallback):
             target = self.out_dir / f"eval_{steps}_steps_episode_{i}.mp4"
             try:
                 write_video(frames, target, fps=fps)
-            except MetricsError as err:
+            except Pic4rlError as err:
                 log.warning("evaluation video not written: %s", err)
                 continue
             self.written.append(target)

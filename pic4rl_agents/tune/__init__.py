@@ -3,7 +3,7 @@
 seeding (``settings``) and the summary written after every trial (``summary``).
 """
 
-from pic4rl_metrics.lazy import homes_of, lazy_exports
+from pic4rl_base.lazy import homes_of, lazy_exports
 
 _HOMES = homes_of({
     "search": ("create_study", "main", "objective", "optimize"),

@@ -32,14 +32,14 @@ import optuna
 from sqlalchemy.engine import URL
 from stable_baselines3.common.callbacks import BaseCallback
 
-from pic4rl_bridge.errors import BridgeError, ConfigError
-from pic4rl_metrics.entry import Interrupted, entry_point
-
-from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.training.callbacks import SeededEvalCallback
 from pic4rl_agents.config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
-from pic4rl_agents.overrides import check_overrides, parse_overrides
 from pic4rl_agents.console import console_logging
+from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
+from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.training.callbacks import SeededEvalCallback
+from pic4rl_base.entry import Interrupted, entry_point
+from pic4rl_bridge.errors import BridgeError, ConfigError
+
 from .settings import TrialSeeded, TuneSettings
 from .space import Fixing
 from .summary import log_trial, write_summary

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import optuna
 import yaml
 
-from pic4rl_metrics import atomic
+from pic4rl_base import atomic
 
 if TYPE_CHECKING:
     import pandas as pd

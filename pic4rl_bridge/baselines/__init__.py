@@ -13,7 +13,7 @@ and ``row_follower``). Their settings (the ``baselines:`` section) are one room 
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "Baseline": "registry", "BASELINES": "registry", "BASELINE_TASKS": "registry",

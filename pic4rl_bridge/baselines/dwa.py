@@ -8,15 +8,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_metrics.geometry import wrap_angle
 
+from pic4rl_base.geometry import wrap_angle
+
+from ..control.actions import normalized_action
 from ..errors import ConfigError
 from ..perception.collision import sensed_points
-from ..robot_info import RobotInfo
-from ..control.actions import normalized_action
 from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
 from ..settings.baselines import DwaConfig
-
 
 _LANES = 72  # directions (5° apart) checked for a free lane toward the goal
 

@@ -23,14 +23,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_metrics.geometry import project
+
+from pic4rl_base.geometry import project
 from pic4rl_sim.engine.paths import grid_search, grid_steps, segment_samples
 from pic4rl_sim.engine.taut_path import pull_taut
 
-from ..settings.baselines import ExplorerConfig
-from ..robot_info import RobotInfo
-from ..readings.frame import SensorFrame
 from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
+from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
+from ..settings.baselines import ExplorerConfig
 
 _PAD_CELLS = 60  # free cells round the window's content (3 m at 5 cm)
 #: A cell with less clearance than the full margin (but the narrow one) costs this many times

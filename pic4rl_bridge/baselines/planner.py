@@ -23,14 +23,16 @@ or wider (``plan_margin_m``: a plan that keeps more than the simulator's widest 
 from __future__ import annotations
 
 import numpy as np
-from pic4rl_metrics.geometry import project
+
+from pic4rl_base.geometry import project
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path, planner_for
 from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 from ..control.actions import normalized_action
 from ..control.pursuit import pursuit_command
-from ..robot_info import RobotInfo
 from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
+
 
 class PlannerController:
     """The privileged planner for goToPose on ``world`` (see the module's docstring)."""

@@ -32,15 +32,16 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-from pic4rl_metrics.geometry import wrap_angle
+
+from pic4rl_base.geometry import wrap_angle
 
 from ..config import EnvConfig
-from ..errors import ConfigError
-from ..robot_info import RobotInfo
 from ..control.actions import normalized_action
-from ..settings.tasks import EXPERT_TASKS
+from ..errors import ConfigError
 from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
 from ..settings.baselines import BaselinesConfig
+from ..settings.tasks import EXPERT_TASKS
 from .dwa import DwaController
 
 if TYPE_CHECKING:

@@ -24,18 +24,19 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
-from pic4rl_metrics.geometry import project
+
+from pic4rl_base.geometry import project
 from pic4rl_metrics.core.crop_rows import LaneFit, LaneWindow, fit_lane
 from pic4rl_sim.engine.geometry import point_along
 
 from ..config import EnvConfig
+from ..control.actions import normalized_action
 from ..errors import ConfigError
 from ..perception.collision import sensed_points
 from ..perception.observations import target_polar
 from ..perception.rows import centerlines, row_centerline
-from ..robot_info import RobotInfo
-from ..control.actions import normalized_action
 from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.worlds.spec import WorldSpec

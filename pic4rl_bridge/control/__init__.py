@@ -11,7 +11,7 @@ shared types and perception only, never a baseline, task, transport or the env
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "planar_command": "actions", "normalized_action": "actions",

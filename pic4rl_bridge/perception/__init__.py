@@ -10,7 +10,7 @@ row being driven). Pure numpy; names are imported on first use.
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "assess": "collision", "Safety": "collision", "sensed_points": "collision",

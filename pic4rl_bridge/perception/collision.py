@@ -16,14 +16,14 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from pic4rl_metrics.geometry import sensor_to_base
+
+from pic4rl_base.geometry import sensor_to_base
 from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
-from ..robot_info import RobotInfo
 from ..readings.frame import ScanData, SensorFrame
 from ..readings.sensor_table import SENSORS
-
+from ..robot_info import RobotInfo
 
 #: Pixels whose point lies this high above the floor or lower are the floor, not an obstacle
 #: (``pointcloud_to_laserscan``'s ``min_height``): a camera sees the floor in its lower rows,

@@ -16,13 +16,13 @@ from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
-from pic4rl_metrics.geometry import wrap_angle
+
+from pic4rl_base.geometry import wrap_angle
 from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import DepthObsConfig, LidarObsConfig
 from ..errors import ConfigError
 from ..readings.frame import ScanData
-
 
 #: A beam this close (rad) below a sector's start counts in that sector: a LaserScan's float32
 #: fields put a beam meant to lie on a boundary up to ~6e-7 rad off it (the sim's included).

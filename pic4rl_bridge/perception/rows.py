@@ -12,7 +12,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from pic4rl_metrics.geometry import project
+
+from pic4rl_base.geometry import project
 from pic4rl_sim.engine.geometry import polyline_length
 
 from ..config import EnvConfig

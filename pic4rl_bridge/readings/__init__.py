@@ -11,7 +11,7 @@ perception, control, baselines and tasks read frames; the transports make them
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "SensorFrame": "frame", "ScanData": "frame",

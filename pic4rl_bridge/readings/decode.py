@@ -10,7 +10,8 @@ import sys
 from typing import Any
 
 import numpy as np
-from pic4rl_metrics.goal import Goal
+
+from pic4rl_base.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..errors import TransportError

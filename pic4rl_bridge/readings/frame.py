@@ -14,8 +14,9 @@ from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from pic4rl_metrics.geometry import scan_points, yaw_from_quaternion, yaw_to_quaternion
-from pic4rl_metrics.goal import Goal
+
+from pic4rl_base.geometry import scan_points, yaw_from_quaternion, yaw_to_quaternion
+from pic4rl_base.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 

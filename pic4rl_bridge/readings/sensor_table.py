@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from pic4rl_metrics.goal import Goal
+
+from pic4rl_base.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
 

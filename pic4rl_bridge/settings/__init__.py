@@ -3,14 +3,14 @@
 ``tasks`` (``TASKS``: each task's env ids, sensors, reward scales, section and experts;
 ``TaskName``, ``SensorName``, ``task_spec``, ``env_ids``, the tasks' sections) and
 ``baselines`` (the ``baselines:`` section: ``BaselinesConfig`` and each baseline's settings).
-Pure dataclasses over ``pic4rl_sim.schema``: they import the bridge's ``errors`` and nothing
+Pure dataclasses over ``pic4rl_base.schema``: they import the bridge's ``errors`` and nothing
 above (``tests/bridge/test_layers.py``), so ``pic4rl_bridge.config`` builds the env's
 configuration from them before any task or baseline exists. Names are imported on first use.
 """
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "TASKS": "tasks", "TaskSpec": "tasks", "TaskName": "tasks", "SensorName": "tasks",

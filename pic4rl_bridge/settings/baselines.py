@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, Range, check, from_params, param, section
+from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, Range, check, from_params, param, section
 
 from ..errors import ConfigError, require
 

@@ -19,10 +19,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pic4rl_sim.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
+from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
-from .baselines import DwaConfig
 from ..errors import ConfigError, require
+from .baselines import DwaConfig
 
 
 @dataclass(frozen=True)

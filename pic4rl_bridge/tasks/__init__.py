@@ -8,7 +8,7 @@ reward scales, section and experts) is a setting, one room lower:
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "Task": "base", "EpisodeContext": "base", "Judgement": "base", "make_task": "base",

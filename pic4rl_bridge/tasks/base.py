@@ -16,13 +16,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
+from pic4rl_base.goal import Goal
 from pic4rl_metrics.contract import Outcome
-from pic4rl_metrics.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 from ..config import EnvConfig
-from ..robot_info import RobotInfo
 from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
 from ..settings.tasks import task_spec
 
 if TYPE_CHECKING:

@@ -25,28 +25,22 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from pic4rl_base.geometry import project
 from pic4rl_metrics.contract import Outcome
-from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import Twist2D, point_along
 
+from ..baselines.explorer_plan import ExplorerPlan
 from ..config import EnvConfig
 from ..control.actions import planar_action_space, planar_command
 from ..perception.collision import assess
-from ..baselines.explorer_plan import ExplorerPlan
+from ..perception.observations import (MAX_TARGET_DISTANCE_M, NORMALIZED_GOAL_DISTANCE_M,
+                                       clipped_action, depth_observation, depth_space,
+                                       lidar_sectors, target_polar)
 from ..perception.occupancy import OccupancyGrid, sensed_scan
-from ..robot_info import RobotInfo
 from ..readings.frame import SensorFrame
-from .base import EpisodeContext, Judgement, Task
+from ..robot_info import RobotInfo
 from ..settings.tasks import GoalInput, GoToPoseReward
-from ..perception.observations import (
-    MAX_TARGET_DISTANCE_M,
-    NORMALIZED_GOAL_DISTANCE_M,
-    clipped_action,
-    depth_observation,
-    depth_space,
-    lidar_sectors,
-    target_polar,
-)
+from .base import EpisodeContext, Judgement, Task
 
 
 class _GoToPose(Task):

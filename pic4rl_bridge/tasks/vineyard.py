@@ -16,20 +16,20 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pic4rl_base.geometry import project
 from pic4rl_metrics.contract import Outcome
-from pic4rl_metrics.geometry import project
 from pic4rl_sim.engine.geometry import Twist2D, polyline_length
 
 from ..config import EnvConfig
+from ..control.actions import planar_action_space, planar_command
 from ..errors import ConfigError
 from ..perception.collision import assess
 from ..perception.observations import depth_observation, depth_space
 from ..perception.rows import centerlines, row_centerline
-from ..robot_info import RobotInfo
 from ..readings.frame import SensorFrame
-from .base import EpisodeContext, Judgement, Task
-from ..control.actions import planar_action_space, planar_command
+from ..robot_info import RobotInfo
 from ..settings.tasks import VineyardReward
+from .base import EpisodeContext, Judgement, Task
 
 if TYPE_CHECKING:
     from pic4rl_sim.engine.worlds.spec import WorldSpec

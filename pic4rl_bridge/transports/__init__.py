@@ -10,7 +10,7 @@ imported on first use, so importing one light module loads no MuJoCo or rclpy.
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "Transport": "transport", "EpisodeRequest": "transport", "RawMessage": "transport",

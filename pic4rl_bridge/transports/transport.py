@@ -9,7 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from pic4rl_metrics.goal import Goal
+from pic4rl_base.goal import Goal
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import QosSettings
 

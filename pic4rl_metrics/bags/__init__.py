@@ -8,7 +8,7 @@ bag writer (``bagwriter``: the recorder's and the synthetic bags') lives here to
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "OpenBag": "bagfile", "BagWriter": "bagwriter", "discover": "inputs", "read_episode":

@@ -22,34 +22,17 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-from rosbags.interfaces import (
-    Connection,
-    Qos,
-    QosDurability,
-    QosHistory,
-    QosLiveliness,
-    QosReliability,
-    QosTime,
-)
+from rosbags.interfaces import (Connection, Qos, QosDurability, QosHistory, QosLiveliness,
+                                QosReliability, QosTime)
 from rosbags.rosbag2 import Writer, WriterError
 from rosbags.rosbag2.enums import CompressionMode, StoragePlugin
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
-from ..contract import (
-    FACTS_TOPIC,
-    OUTCOME_TOPIC,
-    WRITTEN_OUTCOMES,
-    ROS_DISTRO,
-    STORAGES,
-    EpisodeFacts,
-    Outcome,
-    encode_custom_data,
-    encode_facts_json,
-    outcome_event,
-    plain,
-    typestore,
-)
-from ..errors import OutputError
+from pic4rl_base.errors import OutputError
+
+from ..contract import (FACTS_TOPIC, OUTCOME_TOPIC, ROS_DISTRO, STORAGES, WRITTEN_OUTCOMES,
+                        EpisodeFacts, Outcome, encode_custom_data, encode_facts_json, outcome_event,
+                        plain, typestore)
 from .bagfile import uri_path
 
 STRING = "std_msgs/msg/String"

@@ -21,14 +21,16 @@ import numpy as np
 from rosbags.interfaces import Connection
 from tqdm import tqdm
 
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Mount
+
 from ..contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from ..core.plausibility import check_one_track
 from ..core.roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from ..core.scan_summary import ScanStream
 from ..core.series import Episode, PoseSeries
 from ..core.timebase import ONE_SOURCE_ROLES, Samples, one_source, pose_series
-from ..errors import ConfigError, CorruptBagError, EpisodeError
-from ..geometry import Mount
+from ..errors import CorruptBagError, EpisodeError
 from . import tf
 from .bagfile import OpenBag, bag_errors
 from .topics import TopicMap, choose_topics

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry import wrap_angle
+from pic4rl_base.geometry import wrap_angle
 
 #: (parent, child, stamp ns, tx, ty, tz, qx, qy, qz, qw) of one ``TransformStamped``.
 Row = tuple[str, str, int, float, float, float, float, float, float, float]

@@ -25,10 +25,12 @@ from typing import Any
 
 import yaml
 
+from pic4rl_base.errors import ConfigError
+
 from .. import contract
 from ..contract import EpisodeFacts, parse_facts
 from ..core.roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
-from ..errors import ConfigError, TopicError
+from ..errors import TopicError
 
 
 def normalize_topic(name: str) -> str:

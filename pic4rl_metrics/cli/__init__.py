@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "main": "commands", "build_parser": "commands",

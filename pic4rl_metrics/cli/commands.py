@@ -16,16 +16,17 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from .. import atomic
+from pic4rl_base import atomic
+from pic4rl_base.entry import entry_point
+from pic4rl_base.errors import ConfigError, OutputError
+
 from ..bags.inputs import discover
 from ..bags.topics import TopicMap, load_topic_map, parse_frames
 from ..contract import EpisodeFacts, parse_facts
 from ..core.registry import METRICS, REGISTRY
 from ..core.roles import ROLES, Role
-from ..entry import entry_point
-from ..errors import ConfigError, OutputError
-from ..tables.groups import BY_CHOICES, parse_by, render_groups
 from ..tables.batch import MetricsResult, compute
+from ..tables.groups import BY_CHOICES, parse_by, render_groups
 from ..tables.layouts import FORMATS
 from ..tables.paired import render_paired
 from ..tables.protocol import LAYOUTS, protocol_table
@@ -272,7 +273,7 @@ def _report_failures(result: MetricsResult) -> int:
 
 def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
     from ..viz.plots import (  # matplotlib on demand
-        by_world, trajectories_figure, episode_figure, figure_names, save_figure)
+        by_world, episode_figure, figure_names, save_figure, trajectories_figure)
 
     out: Path = args.out
     drawn = [r for r in result.results if r.episode is not None]

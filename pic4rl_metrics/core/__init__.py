@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "Episode": "series", "PoseSeries": "series_kinds", "ScanSeries": "series_kinds",

@@ -13,20 +13,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from pic4rl_base.geometry import distance_to_polyline
+
 from ..contract import BARN_WORLDS, UNJUDGED, EpisodeFacts, Outcome, world_set
-from ..geometry import distance_to_polyline
-from .kinematics import (
-    Derivative,
-    PathTurning,
-    VelocitySeries,
-    bearing_in_body,
-    differentiate,
-    path_length,
-    path_turning,
-    seconds,
-    velocity_series,
-)
 from .crop_rows import deviations
+from .kinematics import (Derivative, PathTurning, VelocitySeries, bearing_in_body, differentiate,
+                         path_length, path_turning, seconds, velocity_series)
 from .roles import SERIES_ROLES
 from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
 from .series import Episode

@@ -11,7 +11,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..geometry import wrap_angle
+from pic4rl_base.geometry import wrap_angle
+
 from .series import PoseSeries
 
 NS = 1e-9

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any
 
-from ..errors import ConfigError
+from pic4rl_base.errors import ConfigError
+
 from .derived import INPUT_TESTS, Derived
 
 log = logging.getLogger(__name__)

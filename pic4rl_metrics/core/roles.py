@@ -17,8 +17,9 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
+from pic4rl_base.geometry import yaw_from_quaternion
+
 from .. import contract
-from ..geometry import yaw_from_quaternion
 from .timebase import Samples, cmd_series, point_series, scan_series
 
 ODOMETRY = "nav_msgs/msg/Odometry"

@@ -19,8 +19,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from pic4rl_base.geometry import Footprint, Mount
+
 from ..contract import EpisodeFacts
-from ..geometry import Footprint, Mount
 from .crop_rows import lane_sides
 from .series_kinds import ScanSeries
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import Mount, scan_points
+from pic4rl_base.geometry import Mount, scan_points
 
 
 @dataclass(frozen=True)

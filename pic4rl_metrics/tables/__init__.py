@@ -9,7 +9,7 @@ text, markdown, CSV, LaTeX or JSON.
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "compute": "batch", "judge_bag": "batch", "BagResult": "batch", "MetricsResult":

@@ -19,9 +19,10 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from pic4rl_base.errors import ConfigError
+
 from ..contract import Outcome
 from ..core.registry import REGISTRY
-from ..errors import ConfigError
 from .results import ERROR_COLUMN
 
 #: Group name of rows whose key is missing (and, for ``agent``, whose run is missing too).

@@ -19,6 +19,8 @@ from typing import Any
 import pandas as pd
 from tqdm import tqdm
 
+from pic4rl_base.errors import ConfigError, Pic4rlError
+
 from ..bags.inputs import discover
 from ..bags.reader import read_episode
 from ..bags.topics import TopicMap
@@ -26,7 +28,6 @@ from ..contract import EpisodeFacts
 from ..core.metrics import compute_metrics
 from ..core.registry import REGISTRY
 from ..core.series import Episode
-from ..errors import ConfigError, MetricsError
 from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
 
 log = logging.getLogger(__name__)
@@ -117,7 +118,7 @@ def judge_bag(
                                progress=progress, scan_sample=scan_sample)
         judged = compute_metrics(episode, selected, explicit=metrics is not None)
         return BagResult(str(bag), episode, judged)
-    except MetricsError as err:
+    except Pic4rlError as err:
         return BagResult(str(bag), None, None, str(err))
     except Exception as err:  # noqa: BLE001 - one broken bag must not stop a batch
         log.debug("unexpected error on %s", bag, exc_info=True)

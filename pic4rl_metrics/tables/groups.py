@@ -21,9 +21,10 @@ from dataclasses import dataclass
 
 import pandas as pd
 
+from pic4rl_base.errors import ConfigError
+
 from ..contract import task_name, world_set
 from ..core.registry import REGISTRY
-from ..errors import ConfigError
 from .aggregate import DASH, FULL_RUNS, UNKNOWN_GROUP, _missing, aggregate
 from .layouts import check_format, latex_escape
 from .text import render_comparison

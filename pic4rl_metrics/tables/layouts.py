@@ -11,7 +11,8 @@ import io
 import json
 from collections.abc import Sequence
 
-from ..errors import ConfigError
+from pic4rl_base.errors import ConfigError
+
 from .aggregate import DASH
 
 FORMATS: tuple[str, ...] = ("table", "csv", "json", "markdown", "latex")

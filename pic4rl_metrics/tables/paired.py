@@ -26,7 +26,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from ..errors import ConfigError
+from pic4rl_base.errors import ConfigError
+
 from .aggregate import _error_mask, _group_keys
 from .groups import Group, join, split
 from .layouts import check_format, render_rows

@@ -23,9 +23,10 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
+from pic4rl_base.errors import ConfigError
+
 from ..core.derived import INPUT_TESTS, Derived
 from ..core.registry import METRICS
-from ..errors import ConfigError
 from .aggregate import (FULL_RUN, FULL_RUNS, _error_mask, _group_keys, aggregate,
                         bootstrap_interval, wilson_interval)
 from .groups import headline, join, split, with_world_set

@@ -17,8 +17,9 @@ from pathlib import PurePath
 import numpy as np
 import pandas as pd
 
+from pic4rl_base.errors import ConfigError
+
 from ..core.registry import METRICS
-from ..errors import ConfigError
 from .aggregate import DASH, EPISODE_COUNTED, FULL_RUNS
 from .layouts import check_format, csv_text, fixed_width, latex_escape, markdown, tabular
 from .results import ERROR_COLUMN, TABLE1_COLUMNS

@@ -5,7 +5,7 @@ agents × pairs × runs at chosen success rates (``synthetic_bench``). Test supp
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "write_episode_bag": "synthetic", "write_long_bag": "synthetic", "write_benchmark":

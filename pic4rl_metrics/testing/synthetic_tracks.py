@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import wrap_angle
+from pic4rl_base.geometry import wrap_angle
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ Pillow and imageio load only here.
 
 from __future__ import annotations
 
-from ..lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "episode_figure": "plots", "trajectories_figure": "plots", "View": "raster",

@@ -21,15 +21,16 @@ from urllib.parse import quote
 
 import pandas as pd
 
-from .. import atomic
+from pic4rl_base import atomic
+from pic4rl_base.errors import ConfigError, OutputError
+
 from ..contract import Outcome
 from ..core.registry import METRICS
-from ..errors import ConfigError, OutputError
 from ..tables.aggregate import FULL_RUNS, _group_keys, aggregate, wilson_interval
 from ..tables.batch import MetricsResult
 from ..tables.groups import Group, headline, split
-from ..tables.paired import N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, pair_labels, paired_cells
-from ..tables.paired import grouped_paired, seed_spread
+from ..tables.paired import (N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, grouped_paired,
+                             pair_labels, paired_cells, seed_spread)
 from ..tables.results import ROW_COLUMNS
 from ..tables.text import plain_text, short_bag
 from . import html_page as hp

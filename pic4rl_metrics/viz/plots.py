@@ -18,14 +18,14 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from .. import atomic
+from pic4rl_base import atomic
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Mount
 from ..contract import EpisodeFacts, Outcome
 from ..core.kinematics import differentiate, seconds, velocity_series
 from ..core.registry import METRICS
 from ..core.scan_summary import ScanSummary
 from ..core.series import Episode, ScanSeries
-from ..errors import ConfigError
-from ..geometry import Mount
 from ..tables.results import EpisodeMetrics
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.

@@ -21,9 +21,10 @@ from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from pic4rl_base.errors import ConfigError
+
 from ..contract import Outcome
 from ..core.series import Episode
-from ..errors import ConfigError
 from . import raster
 from .plots import END_STYLE, plot_trajectory, plot_velocity_profile, scan_hits_world
 from .raster import COLORS, View

@@ -17,11 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from .. import atomic
+from pic4rl_base import atomic
+from pic4rl_base.errors import ConfigError, OutputError, Pic4rlError
+
 from ..bags.inputs import discover
 from ..bags.topics import TopicMap
 from ..contract import EpisodeFacts
-from ..errors import ConfigError, MetricsError, OutputError
 from ..tables.batch import BagResult, judge_bag, resolve_jobs, run_parallel
 from ..tables.paired import pair_key
 from .video import EpisodeScene, VideoOptions, extent, union
@@ -168,7 +169,7 @@ def _render(job: _Job) -> list[VideoResult]:
         frames = scenes[0].frames() if len(scenes) == 1 else side_by_side(scenes)
         count = write_video(frames, job.target, fps=job.options.fps, gif=gif,
                             overwrite=job.overwrite, threads=job.threads)
-    except MetricsError as err:
+    except Pic4rlError as err:
         return [VideoResult(r.bag, error=str(err)) for r in results]
     return [VideoResult(r.bag, str(job.target), count, s.duration_s)
             for r, s in zip(results, scenes)]

@@ -5,7 +5,7 @@ rclpy; names are imported on first use, so importing the package loads no MuJoCo
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "Engine": "core", "StepResult": "core", "limit_command": "core",

@@ -14,25 +14,18 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
-from pic4rl_metrics.geometry import wrap_angle
-from pic4rl_metrics.goal import Goal
+from pic4rl_base.errors import require
+from pic4rl_base.geometry import wrap_angle
+from pic4rl_base.goal import Goal
 
-from ..errors import WorldError, require
+from ..errors import WorldError
 from .engine_config import EngineConfig
 from .geometry import Pose2D, Twist2D
 from .model import build_model
 from .paths import plan_path
 from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
-from .sensors import (
-    KINDS_BY_NAME,
-    SENSOR_KINDS,
-    DepthCamera,
-    Imu,
-    ImuReading,
-    Lidar,
-    WheelOdometry,
-)
+from .sensors import KINDS_BY_NAME, SENSOR_KINDS, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
 from .worlds.spec import WorldSpec
 
 log = logging.getLogger(__name__)

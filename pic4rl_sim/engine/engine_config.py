@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import require
+from pic4rl_base.errors import require
 
 __all__ = ["EngineConfig"]
 

@@ -1,5 +1,5 @@
 """Planar poses: the few shapes every part of the sim shares (the robot's ``Footprint``, angle
-wrapping and a yaw's quaternion are ``pic4rl_metrics.geometry``'s, shared with the bridge and
+wrapping and a yaw's quaternion are ``pic4rl_base.geometry``'s, shared with the bridge and
 the metrics)."""
 
 from __future__ import annotations

@@ -30,7 +30,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import require
+from pic4rl_base.errors import require
+
 from .taut_path import pull_taut
 from .worlds.spec import WorldSpec
 

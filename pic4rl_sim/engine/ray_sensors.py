@@ -14,8 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import require
-from ..schema import FRACTION, Range, check, param
+from pic4rl_base.errors import require
+from pic4rl_base.schema import FRACTION, Range, check, param
+
 from .geometry import Pose2D
 
 if TYPE_CHECKING:

@@ -16,19 +16,11 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, TypeVar
 
-from pic4rl_metrics.geometry import Footprint
+from pic4rl_base.errors import ConfigError, require, unknown_key
+from pic4rl_base.geometry import Footprint
+from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, read_yaml
 
-from ..errors import ConfigError, require, unknown_key
-from ..schema import NON_NEGATIVE, POSITIVE, read_yaml
-from .sensors import (
-    KINDS_BY_NAME,
-    SENSOR_KINDS,
-    DepthCameraSpec,
-    ImuSpec,
-    LidarSpec,
-    OdometrySpec,
-)
-
+from .sensors import KINDS_BY_NAME, SENSOR_KINDS, DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
 
 
 class Drive(str, Enum):

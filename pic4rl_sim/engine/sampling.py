@@ -19,7 +19,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import WorldError, require
+from pic4rl_base.errors import require
+
+from ..errors import WorldError
 from .engine_config import EngineConfig
 from .geometry import Pose2D
 from .worlds.spec import PersonSpec, WorldSpec

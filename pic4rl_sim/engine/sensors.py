@@ -17,9 +17,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pic4rl_metrics.geometry import wrap_angle, yaw_to_quaternion
+from pic4rl_base.geometry import wrap_angle, yaw_to_quaternion
+from pic4rl_base.schema import FRACTION, Range, check, param
 
-from ..schema import FRACTION, Range, check, param
 from .geometry import Pose2D, Twist2D
 from .ray_sensors import DepthCamera, DepthCameraSpec, Lidar, LidarSpec
 

@@ -27,31 +27,16 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from pic4rl_metrics.geometry import yaw_to_quaternion
-from pic4rl_metrics.goal import Goal
+from pic4rl_base.geometry import yaw_to_quaternion
+from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
 from ..engine.geometry import Pose2D
 from ..engine.sensors import EXACT_VARIANCE
 from ..engine.worlds.spec import WorldSpec
-from ..interfaces import (
-    CAMERA_INFO,
-    CLOCK,
-    DEPTH_IMAGE,
-    EPISODE_TOPICS,
-    GOAL_POSE,
-    GROUND_TRUTH,
-    IMU,
-    ODOM,
-    PERSON_POSE,
-    PLAN,
-    SCAN,
-    STEP_TOPICS,
-    TF,
-    TF_STATIC,
-    WORLD_MARKERS,
-    Interface,
-)
+from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
+                          IMU, ODOM, PERSON_POSE, PLAN, SCAN, STEP_TOPICS, TF, TF_STATIC,
+                          WORLD_MARKERS, Interface)
 from .transforms import OdomTransform, static_transforms
 
 WORLD_FRAME = "world"

@@ -11,10 +11,11 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from ..engine.robot_specs import load_robot
-from ..errors import ConfigError
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.schema import ParamSpec, ParamType, help_text
+
 from ..config import ROBOT, parameter_table, resolve
-from ..schema import ParamSpec, ParamType, help_text
+from ..engine.robot_specs import load_robot
 
 _ROS_TYPES = {ParamType.BOOL: Parameter.Type.BOOL, ParamType.INTEGER: Parameter.Type.INTEGER,
               ParamType.DOUBLE: Parameter.Type.DOUBLE, ParamType.STRING: Parameter.Type.STRING,

@@ -51,29 +51,21 @@ from rclpy.timer import Timer
 from rclpy.utilities import remove_ros_args
 from std_srvs.srv import Empty
 
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.params_file import param_rules
+
+from ..config import (MAX_SEED, ClockConfig, ClockMode, SimConfig, WorldChoice, build_clock,
+                      build_config)
 from ..engine.core import Engine, StepResult, limit_command
 from ..engine.geometry import Twist2D
-from ..errors import ConfigError, WorldError
-from ..interfaces import (
-    CMD_VEL,
-    DIAGNOSTICS,
-    EPISODE_TOPICS,
-    INTERFACES,
-    PAUSE_PHYSICS,
-    RESET_WORLD,
-    STEP_TOPICS,
-    UNPAUSE_PHYSICS,
-    Direction,
-    Interface,
-)
+from ..engine.sampling import check_free
+from ..engine.worlds.spec import WorldSpec
+from ..errors import WorldError
+from ..interfaces import (CMD_VEL, DIAGNOSTICS, EPISODE_TOPICS, INTERFACES, PAUSE_PHYSICS,
+                          RESET_WORLD, STEP_TOPICS, UNPAUSE_PHYSICS, Direction, Interface)
 from .messages import PHYSICS_STATUS, StateMessages, episode_messages
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
-from ..config import (MAX_SEED, ClockConfig, ClockMode, SimConfig, WorldChoice, build_clock,
-                      build_config)
-from ..engine.sampling import check_free
-from ..engine.worlds.spec import WorldSpec
-from ..params_file import param_rules
 
 _CLOCK_KEYS = frozenset({"clock_mode", "real_time_factor", "cmd_timeout_s"})
 _THROTTLE_S = 5.0

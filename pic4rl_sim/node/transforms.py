@@ -20,7 +20,7 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import Header
 from tf2_msgs.msg import TFMessage
 
-from pic4rl_metrics.geometry import yaw_to_quaternion
+from pic4rl_base.geometry import yaw_to_quaternion
 
 from ..engine.core import Engine
 

@@ -1,5 +1,5 @@
 """Resolve once, pass down: ``pic4rl-test`` and ``pic4rl-train`` read each params file once
-(``pic4rl_sim.params_file.read``, the one reader), then hand typed configs down; nothing
+(``pic4rl_base.params_file.read``, the one reader), then hand typed configs down; nothing
 below them reads a file again."""
 
 from __future__ import annotations
@@ -12,11 +12,10 @@ import pandas as pd
 import pytest
 from agents_helpers import ROOT
 
-from pic4rl_agents.testing import tester
-
-from pic4rl_agents.training import args as trainargs
 from pic4rl_agents.rosargs import split_ros_args
-from pic4rl_sim import params_file
+from pic4rl_agents.testing import tester
+from pic4rl_agents.training import args as trainargs
+from pic4rl_base import params_file
 
 AGENT = ROOT / "checkpoints" / "td3_lidar"
 

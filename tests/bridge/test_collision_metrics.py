@@ -1,16 +1,16 @@
 """On recorded episodes the metrics flag the very steps the env flagged: both place the scan's
 points by the LiDAR's mount and measure their signed distance to the footprint with the one
-geometry (``pic4rl_metrics.geometry``)."""
+geometry (``pic4rl_base.geometry``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+from world_helpers import walled_square_mjcf
 
 from pic4rl_metrics import compute, read_episode
 from pic4rl_metrics.core.scan_summary import scan_clearance
-from world_helpers import walled_square_mjcf
 
 # --- recorded episodes: the env's flags are the metrics' flags ------------------------------
 

@@ -12,18 +12,14 @@ from typing import Any
 
 import pytest
 import yaml
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_sim.engine.geometry import Pose2D
 
-from pic4rl_sim.interfaces import RECORDED
-from pic4rl_sim.schema import param_names
-from pic4rl_bridge.config import (
-    EnvConfig,
-    env_config_from_params,
-    load_env_config,
-)
+from pic4rl_base.geometry import Footprint
+from pic4rl_base.schema import param_names
+from pic4rl_bridge.config import EnvConfig, env_config_from_params, load_env_config
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.scenario import Scenario
+from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_sim.interfaces import RECORDED
 
 REPO = Path(__file__).resolve().parents[2]
 CONFIGS = sorted((REPO / "config").glob("env_*.yaml"))
@@ -365,7 +361,7 @@ def test_bad_sim_parameters_are_config_errors() -> None:
 
 def test_gym_make_finds_a_relative_episodes_file_beside_the_params_file(tmp_path, monkeypatch):
     """``episodes.file`` relative to the params file is found from any working directory, by
-    ``gym.make`` as by ``pic4rl-train`` (one loader: ``pic4rl_sim.params_file``)."""
+    ``gym.make`` as by ``pic4rl-train`` (one loader: ``pic4rl_base.params_file``)."""
     import gymnasium as gym
 
     import pic4rl_bridge  # noqa: F401  (registers the ids)

@@ -12,17 +12,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
+from pic4rl_base.geometry import Footprint
+from pic4rl_bridge.baselines.follow import HeadingController, PersonFollower
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
-from pic4rl_bridge.baselines.follow import HeadingController, PersonFollower
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_metrics import compute
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_person_omni.yaml"

@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 from docs_helpers import broken_links, literal, parameter_rows, section, table_rows
 
+from pic4rl_base.schema import param_names
 from pic4rl_bridge import ENV_IDS
-from pic4rl_bridge.settings.baselines import BaselinesConfig
 from pic4rl_bridge.config import EnvConfig, load_env_config
-from pic4rl_sim.schema import param_names
+from pic4rl_bridge.settings.baselines import BaselinesConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "bridge.md"

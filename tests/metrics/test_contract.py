@@ -14,10 +14,10 @@ from contract_helpers import ENV_FACTS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.goal import Goal
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
-from pic4rl_metrics.geometry import Footprint, Mount
-from pic4rl_metrics.goal import Goal
 
 FINITE = st.floats(allow_nan=False, allow_infinity=False, width=64)
 POSITIVE = st.floats(min_value=1e-6, max_value=1e6, allow_nan=False)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from pic4rl_metrics.entry import Interrupted, entry_point
-from pic4rl_metrics.errors import ConfigError
+from pic4rl_base.entry import Interrupted, entry_point
+from pic4rl_base.errors import ConfigError
 
 
 class OwnError(Exception):

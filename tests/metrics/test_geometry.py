@@ -1,4 +1,4 @@
-"""The one geometry every package uses (``pic4rl_metrics.geometry``), against analytic answers:
+"""The one geometry every package uses (``pic4rl_base.geometry``), against analytic answers:
 angle wrapping, a yaw's quaternion and back, a scan's points from an offset and turned
 mount, and a footprint's signed distance."""
 
@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_metrics.geometry import (Footprint, Mount, scan_points, sensor_to_base, wrap_angle,
-                                     yaw_from_quaternion, yaw_to_quaternion)
+from pic4rl_base.geometry import (Footprint, Mount, scan_points, sensor_to_base, wrap_angle,
+                                  yaw_from_quaternion, yaw_to_quaternion)
 
 
 def test_wrap_angle_maps_into_minus_pi_to_pi_for_floats_and_arrays() -> None:

@@ -7,7 +7,7 @@ import pickle
 
 import numpy as np
 
-from pic4rl_metrics.goal import Goal
+from pic4rl_base.goal import Goal
 
 
 def test_a_goal_is_its_position_pair_and_keeps_its_heading() -> None:

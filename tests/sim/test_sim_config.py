@@ -10,23 +10,15 @@ import sys
 
 import pytest
 
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_sim.errors import ConfigError
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Footprint
+from pic4rl_base.schema import param_names
+from pic4rl_sim.config import (ROBOT, ClockMode, ParamType, build_config, parameter_table,
+                               parse_goal, parse_start, resolve)
 from pic4rl_sim.engine.geometry import Pose2D
-from pic4rl_sim.config import (
-    ROBOT,
-    ClockMode,
-    ParamType,
-    build_config,
-    parameter_table,
-    parse_goal,
-    parse_start,
-    resolve,
-)
 from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI, robot_from_mapping
 from pic4rl_sim.engine.sensors import SENSOR_KINDS
 from pic4rl_sim.engine.worlds.generators import GENERATORS
-from pic4rl_sim.schema import param_names
 
 RCLPY_OWN = ("use_sim_time", "start_type_description_service")
 

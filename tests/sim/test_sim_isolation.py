@@ -1,7 +1,6 @@
 """The engine stands without ROS: rclpy only in the node's modules, never torch or SB3; of the
-other pic4rl packages only ``pic4rl_metrics.errors`` (every package's one ``ConfigError``) and
-``pic4rl_metrics.geometry`` (the robot's ``Footprint``, also an episode fact),
-``pic4rl_metrics.goal`` (the one ``Goal``) and ``pic4rl_metrics.lazy`` (sub-package exports)."""
+other pic4rl packages only the shared base (``pic4rl_base``: errors, geometry, the goal, the
+parameter machinery), never the metrics."""
 
 from __future__ import annotations
 
@@ -16,11 +15,8 @@ PACKAGE = REPO / "pic4rl_sim"
 ROS_PACKAGE = "node"  # pic4rl_sim/node/: the only place that may import rclpy and messages
 ROS_ROOTS = ("rclpy", "geometry_msgs", "nav_msgs", "sensor_msgs", "std_srvs", "rosgraph_msgs",
              "visualization_msgs", "rcl_interfaces", "builtin_interfaces")
-NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_bridge", "pic4rl_agents")
-#: The doors to another pic4rl package: the lowest room's shared ``ConfigError`` and
-#: ``Footprint``, both light (no pandas, rosbags or matplotlib).
-METRICS_DOORS = {"pic4rl_metrics.errors", "pic4rl_metrics.geometry", "pic4rl_metrics.goal",
-                 "pic4rl_metrics.lazy"}
+NEVER = ("torch", "stable_baselines3", "gymnasium", "pic4rl_metrics", "pic4rl_bridge",
+         "pic4rl_agents")
 #: What the metrics' doors must not load: the metrics' heavy libraries.
 METRICS_HEAVY = ("pandas", "rosbags", "matplotlib")
 
@@ -46,8 +42,6 @@ def test_only_the_node_modules_import_ros_and_none_imports_rl_or_siblings() -> N
     for path in modules:
         roots = imported_roots(path)
         assert not roots & set(NEVER), f"{path.name} imports {sorted(roots & set(NEVER))}"
-        metrics = {m for m in imported_modules(path) if m.split(".")[0] == "pic4rl_metrics"}
-        assert metrics <= METRICS_DOORS, f"{path.name} imports {sorted(metrics)}"
         if path.relative_to(PACKAGE).parts[0] != ROS_PACKAGE:
             ros = sorted(roots & set(ROS_ROOTS))
             assert not ros, f"{path.name} imports {ros}"
@@ -77,5 +71,5 @@ def test_importing_the_engine_loads_no_ros_or_rl_module() -> None:
 def test_reading_parameters_and_worlds_needs_no_mujoco() -> None:
     """A params file is read, checked and its worlds generated without MuJoCo (only a user's
     MJCF world loads it)."""
-    assert _loaded("pic4rl_sim.config, pic4rl_sim.params_file, pic4rl_sim.schema, "
+    assert _loaded("pic4rl_sim.config, pic4rl_base.params_file, pic4rl_base.schema, "
                    "pic4rl_sim.engine.worlds.generators") == ([], False)

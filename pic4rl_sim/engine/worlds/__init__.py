@@ -9,7 +9,7 @@ world; loads MuJoCo). Names are imported on first use.
 
 from __future__ import annotations
 
-from pic4rl_metrics.lazy import lazy_exports
+from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "WorldSpec": "spec", "Box": "spec", "Cylinder": "spec", "PersonSpec": "spec",

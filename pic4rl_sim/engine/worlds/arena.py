@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import require
+from pic4rl_base.errors import require
+
 from .spec import Box
 
 WALL_THICKNESS_M = 0.1

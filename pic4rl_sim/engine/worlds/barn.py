@@ -20,8 +20,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any, ClassVar
 
-from ...errors import require
-from ...schema import check
+from pic4rl_base.errors import require
+from pic4rl_base.schema import check
+
 from ..geometry import Pose2D
 from .arena import walls
 from .spec import Cylinder, WorldSpec

@@ -18,7 +18,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from ...schema import PROBABILITY, Range, check, param, to_params
+from pic4rl_base.schema import PROBABILITY, Range, check, param, to_params
+
 from .arena import rng_for, walls
 from .barn import start_and_goal
 from .spec import Cylinder, WorldSpec

@@ -2,7 +2,7 @@
 
 Generators are pure functions ``build(seed, params)``, so an evaluation names its worlds by
 (kind, seed, params) and gets the same geometry back. Each generator's parameters are a frozen
-dataclass of ``param(...)`` fields (``pic4rl_sim.schema``): the only place of their defaults,
+dataclass of ``param(...)`` fields (``pic4rl_base.schema``): the only place of their defaults,
 units, ranges and descriptions, which the sim node declares as ``world.<kind>.<name>`` and the
 docs list; a value out of range is a ``ConfigError`` naming that key. ``make_world`` is the one
 entry point for configuration (a generator name, or a user's ``.xml`` file, read with MuJoCo
@@ -18,17 +18,10 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from ...errors import ConfigError, require, unknown_key
-from ...schema import (
-    POSITIVE,
-    PROBABILITY,
-    Range,
-    check,
-    param,
-    param_names,
-    redefault,
-    to_params,
-)
+from pic4rl_base.errors import ConfigError, require, unknown_key
+from pic4rl_base.schema import (POSITIVE, PROBABILITY, Range, check, param, param_names, redefault,
+                                to_params)
+
 from ..person_walk import corner_occluders, leg_speeds
 from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
 from .barn import BarnParams, barn

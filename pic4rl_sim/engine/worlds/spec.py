@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import require
+from pic4rl_base.errors import require
+
 from ..geometry import Pose2D
 
 

@@ -16,8 +16,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from ...errors import require
-from ...schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
+from pic4rl_base.errors import require
+from pic4rl_base.schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
+
 from ..geometry import Pose2D
 from .arena import rng_for, walls
 from .spec import Box, Cylinder, WorldSpec

@@ -16,10 +16,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents.suites import runner as bench
-
 from pic4rl_agents.suites import cell as benchcell
-
+from pic4rl_agents.suites import runner as bench
 from pic4rl_agents.suites import table as benchtable
 from pic4rl_agents.suites.suite import load_suite
 from pic4rl_bridge.errors import ConfigError

@@ -13,10 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pic4rl_agents.testing import policies
+from pic4rl_agents.testing import policies, tester
 from pic4rl_agents.testing.plan import TestPlan, resolve_agents
 from pic4rl_agents.testing.tester import drive_and_judge
-from pic4rl_agents.testing import tester
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import read_episode
 from pic4rl_metrics.cli import commands as cli

@@ -22,13 +22,13 @@ import pytest
 import yaml
 from agents_helpers import CONFIG, LIDAR_TD3, TrainedRun
 
-from pic4rl_agents.testing import tester
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.rosargs import split_ros_args
+from pic4rl_agents.testing import tester
 from pic4rl_agents.testing.plan import DEFAULT_PAIRS, AgentSpec, resolve_agents
+from pic4rl_base.atomic import claim_dir
 from pic4rl_bridge.config import load_env_config
 from pic4rl_metrics.tables.aggregate import aggregate
-from pic4rl_metrics.atomic import claim_dir
 from pic4rl_metrics.tables.batch import MetricsResult, compute
 from pic4rl_sim.engine.core import EngineConfig
 from pic4rl_sim.engine.robot_specs import JACKAL

@@ -14,10 +14,10 @@ import pytest
 import yaml
 from agents_helpers import ROOT
 
-from pic4rl_agents.testing import tester
 from pic4rl_agents.suites.cell import _plan
 from pic4rl_agents.suites.suite import load_suite
 from pic4rl_agents.testing import plan as testplan
+from pic4rl_agents.testing import tester
 from pic4rl_agents.testing.plan import resolve_agents
 from pic4rl_bridge.config import AGENT_KEYS, EnvConfig, agent_keys
 from pic4rl_bridge.errors import ConfigError

@@ -19,13 +19,12 @@ from pathlib import Path
 import pytest
 import yaml
 from agents_helpers import LIDAR_TD3, ROOT, SHORT_EPISODES, TINY, TRAINED_STEPS, TrainedRun
-
 from stable_baselines3.common.save_util import load_from_pkl
 
-from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import load_model
-from pic4rl_metrics.atomic import replacing
 from pic4rl_agents.rundir import find_resume
+from pic4rl_agents.training import train
+from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
 
 VICTIM = Path(__file__).with_name("checkpoint_victim.py")

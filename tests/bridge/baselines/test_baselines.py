@@ -16,20 +16,20 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_sim import params_file
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from world_helpers import walled_square_mjcf
 
-from pic4rl_bridge.settings.baselines import BASELINES_NODE, DwaConfig, baselines_config
-from pic4rl_bridge.baselines.registry import make_baseline
+from pic4rl_base import params_file
+from pic4rl_base.geometry import Footprint
 from pic4rl_bridge.baselines.dwa import DwaController
+from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig, load_env_config
+from pic4rl_bridge.control.actions import planar_command
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.control.actions import planar_command
+from pic4rl_bridge.settings.baselines import BASELINES_NODE, DwaConfig, baselines_config
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
@@ -173,8 +173,7 @@ def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
     baseline's ``expert``, made by that baseline's own maker, and a name no baseline answers
     to is refused in one line."""
     from pic4rl_bridge.baselines.follow import HeadingController
-    from pic4rl_bridge.baselines.registry import (BASELINE_TASKS, EXPERT_BASELINES,
-                                                  make_expert)
+    from pic4rl_bridge.baselines.registry import BASELINE_TASKS, EXPERT_BASELINES, make_expert
     from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 
     assert EXPERT_BASELINES == {"planner": "planner", "explorer": "explorer",

@@ -9,15 +9,15 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_metrics.geometry import Footprint
+
+from pic4rl_base.geometry import Footprint
+from pic4rl_bridge.baselines.planner import PlannerController
+from pic4rl_bridge.control.actions import planar_command
+from pic4rl_bridge.readings.frame import SensorFrame
+from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
-
-from pic4rl_bridge.readings.frame import SensorFrame
-from pic4rl_bridge.baselines.planner import PlannerController
-from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.control.actions import planar_command
 
 GAP = (0.5, 2.0)  # the gap in the wall along x = 0 (y, m)
 WORLD = WorldSpec("gap", (-4.0, -4.0, 4.0, 4.0), boxes=(

@@ -11,14 +11,14 @@ import pytest
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
-from pic4rl_metrics.geometry import yaw_to_quaternion
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Image, LaserScan
 
-from pic4rl_bridge.readings import decode
+from pic4rl_base.geometry import yaw_to_quaternion
 from pic4rl_bridge.errors import TransportError
+from pic4rl_bridge.readings import decode
 from pic4rl_bridge.readings.frame import ScanData, as_published, yaw_from_quaternion
+from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 
 YAWS = [0.0, 0.3, -0.3, 1.0, math.pi / 2, -math.pi / 2, 2.5, -2.5, 3.1, -3.1,
         math.pi, -math.pi, math.nextafter(math.pi, 0.0)]
@@ -190,7 +190,7 @@ def test_unsupported_depth_encoding_names_the_topic(encoding: str) -> None:
 def test_a_goal_pose_keeps_its_heading_and_the_identity_means_none() -> None:
     """The sim's ``goal_pose`` of a goal with and without heading, through CDR, back to the
     same ``Goal``."""
-    from pic4rl_metrics.goal import Goal
+    from pic4rl_base.goal import Goal
     from pic4rl_sim.node.messages import goal_pose
 
     for goal in (Goal(1.5, -2.0), Goal(1.5, -2.0, 0.75), Goal(0.0, 0.0, -3.0)):

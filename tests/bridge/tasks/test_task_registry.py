@@ -11,27 +11,17 @@ import numpy as np
 import pytest
 
 import pic4rl_bridge
+from pic4rl_base.geometry import Footprint
+from pic4rl_base.schema import param_names
 from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.settings.tasks import (
-    TASKS,
-    EnvId,
-    GoToPoseReward,
-    PersonConfig,
-    PersonReward,
-    TaskName,
-    TaskSpec,
-    VineyardConfig,
-    VineyardReward,
-    env_ids,
-    task_spec,
-)
+from pic4rl_bridge.settings.tasks import (TASKS, EnvId, GoToPoseReward, PersonConfig, PersonReward,
+                                          TaskName, TaskSpec, VineyardConfig, VineyardReward,
+                                          env_ids, task_spec)
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_sim.schema import param_names
 
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.5, width_m=0.43),
                    omni=False, min_linear_m_s=0.0, max_linear_m_s=0.5,

@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 from metrics_helpers import result_row as _row
 
+from pic4rl_base.errors import ConfigError
 from pic4rl_metrics.tables.aggregate import UNKNOWN_GROUP, aggregate
-from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.tables.text import render_comparison
 from pic4rl_metrics.tables.results import ERROR_COLUMN
+from pic4rl_metrics.tables.text import render_comparison
 
 NAN = math.nan
 

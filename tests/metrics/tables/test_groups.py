@@ -22,13 +22,13 @@ import pandas as pd
 import pytest
 from metrics_helpers import result_row
 
+from pic4rl_base.errors import ConfigError
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.tables.aggregate import aggregate
 from pic4rl_metrics.tables.batch import compute
 from pic4rl_metrics.tables.groups import parse_by, render_groups, split
 from pic4rl_metrics.tables.results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, table_columns
 from pic4rl_metrics.tables.text import render_comparison
-from pic4rl_metrics.errors import ConfigError
 from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
 
 EXACT = 1e-9

@@ -9,11 +9,11 @@ import math
 import pandas as pd
 import pytest
 
+from pic4rl_base.errors import ConfigError
 from pic4rl_metrics.tables.aggregate import aggregate
-from pic4rl_metrics.errors import ConfigError
 from pic4rl_metrics.tables.layouts import FORMATS
-from pic4rl_metrics.tables.text import render_comparison, render_episodes
 from pic4rl_metrics.tables.results import TABLE1_COLUMNS
+from pic4rl_metrics.tables.text import render_comparison, render_episodes
 
 NAN = math.nan
 

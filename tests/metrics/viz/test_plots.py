@@ -9,20 +9,14 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import Footprint
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
-from pic4rl_metrics.errors import ConfigError
-from pic4rl_metrics.geometry import Footprint
-from pic4rl_metrics.viz.plots import (
-    trajectories_figure,
-    episode_figure,
-    plot_acceleration_profile,
-    plot_trajectory,
-    plot_velocity_profile,
-    save_figure,
-    scan_points_world,
-)
-from pic4rl_metrics.tables.results import METRIC_COLUMNS, EpisodeMetrics
 from pic4rl_metrics.core.series import CmdSeries, Episode, PoseSeries, ScanSeries
+from pic4rl_metrics.tables.results import METRIC_COLUMNS, EpisodeMetrics
+from pic4rl_metrics.viz.plots import (episode_figure, plot_acceleration_profile, plot_trajectory,
+                                      plot_velocity_profile, save_figure, scan_points_world,
+                                      trajectories_figure)
 
 T0 = 1_700_000_000_000_000_000  # an epoch-like stamp (ns), where float64 would lose ns
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from pic4rl_base.geometry import Footprint
 from pic4rl_metrics.viz import raster
-from pic4rl_metrics.geometry import Footprint
 from pic4rl_metrics.viz.raster import COLORS, View
 
 RED = (255, 0, 0)

@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.core import Engine, EngineConfig, limit_command
-from pic4rl_sim.errors import ConfigError, WorldError
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.engine.robot_specs import BURGER, HUSKY, JACKAL, OMNI, LidarSpec
 from pic4rl_sim.engine.worlds.spec import Box, Cylinder, PersonSpec, WorldSpec
+from pic4rl_sim.errors import WorldError
 
 
 def open_field(*boxes: Box, cylinders: tuple[Cylinder, ...] = (), person: PersonSpec | None = None

@@ -11,9 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pic4rl_sim.errors import ConfigError
-from pic4rl_sim.engine.paths import (PathPlanner, clearance_grid, planner_for,
-                                     shortest_path_length)
+from pic4rl_base.errors import ConfigError
+from pic4rl_sim.engine.paths import PathPlanner, clearance_grid, planner_for, shortest_path_length
 from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec
 
 OPEN = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0))

@@ -9,13 +9,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.engine_config import EngineConfig
+from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import OMNI
 from pic4rl_sim.engine.sampling import check_free, sample_start_goal
-from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 from pic4rl_sim.engine.worlds.generators import make_world
+from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
+from pic4rl_sim.errors import WorldError
 
 WORLDS = {kind: make_world(kind, seed=0) for kind in ("indoor", "obstacles", "person", "vineyard")}
 

@@ -9,18 +9,14 @@ import re
 import numpy as np
 import pytest
 
-from pic4rl_sim.errors import ConfigError, WorldError
+from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.paths import PathPlanner
 from pic4rl_sim.engine.robot_specs import JACKAL
-from pic4rl_sim.engine.sampling import (
-    PAIR_KINDS,
-    PairKind,
-    check_pair_filter,
-    sample_pairs,
-    sample_start_goal,
-)
-from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
+from pic4rl_sim.engine.sampling import (PAIR_KINDS, PairKind, check_pair_filter, sample_pairs,
+                                        sample_start_goal)
 from pic4rl_sim.engine.worlds.generators import make_world
+from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
+from pic4rl_sim.errors import WorldError
 
 INDOOR = make_world("indoor", seed=0)
 RADIUS = JACKAL.footprint.bounding_radius_m

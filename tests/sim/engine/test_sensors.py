@@ -8,17 +8,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from pic4rl_metrics.geometry import wrap_angle, yaw_to_quaternion
+from pic4rl_base.geometry import wrap_angle, yaw_to_quaternion
 from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
-from pic4rl_sim.engine.sensors import (
-    EXACT_VARIANCE,
-    STANDARD_GRAVITY_M_S2,
-    DepthCamera,
-    Imu,
-    Lidar,
-    WheelOdometry,
-)
+from pic4rl_sim.engine.sensors import (EXACT_VARIANCE, STANDARD_GRAVITY_M_S2, DepthCamera, Imu,
+                                       Lidar, WheelOdometry)
 
 ROOM = """
 <geom type="box" pos="2.1 0 1" size="0.1 2.2 1"/>

@@ -10,18 +10,13 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_sim.engine.worlds.barn import (
-    DATA,
-    LICENSE,
-    WORLDS,
-    challenge_test_worlds,
-    start_and_goal,
-)
+from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.paths import shortest_path_length
 from pic4rl_sim.engine.robot_specs import BUILT_IN
 from pic4rl_sim.engine.sampling import sample_start_goal
+from pic4rl_sim.engine.worlds.barn import (DATA, LICENSE, WORLDS, challenge_test_worlds,
+                                           start_and_goal)
 from pic4rl_sim.engine.worlds.generators import make_world
-from pic4rl_sim.errors import ConfigError
 
 JACKAL_RADIUS_M = BUILT_IN["jackal"].footprint.bounding_radius_m
 

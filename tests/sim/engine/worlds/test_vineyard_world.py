@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_metrics.geometry import project
-from pic4rl_sim.engine.worlds.vineyard import POST_OFFSET_M
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.geometry import project
 from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.engine.worlds.spec import WorldSpec, clearance
-from pic4rl_sim.errors import ConfigError
+from pic4rl_sim.engine.worlds.vineyard import POST_OFFSET_M
 
 
 def trunks(world: WorldSpec) -> np.ndarray:

@@ -8,17 +8,13 @@ from collections import deque
 import numpy as np
 import pytest
 
-from pic4rl_sim.errors import ConfigError, WorldError
-from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec, clearance
-from pic4rl_sim.engine.worlds.generators import (
-    GENERATORS,
-    ObstaclesParams,
-    make_world,
-    obstacles,
-    world_params,
-)
-from pic4rl_sim.schema import param_names, specs, to_params
+from pic4rl_base.errors import ConfigError
+from pic4rl_base.schema import param_names, specs, to_params
+from pic4rl_sim.engine.worlds.generators import (GENERATORS, ObstaclesParams, make_world, obstacles,
+                                                 world_params)
 from pic4rl_sim.engine.worlds.mjcf import world_from_mjcf
+from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec, clearance
+from pic4rl_sim.errors import WorldError
 
 ROBOT_RADIUS_M = 0.25
 KINDS = sorted(GENERATORS)

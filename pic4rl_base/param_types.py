@@ -1,7 +1,7 @@
 """The values a parameter holds: its ROS 2 type, its range, a string choice, and how a value
 from a file or the command line becomes one (``coerce``) or is written back (``literal``).
 
-The building blocks of ``pic4rl_sim.schema``, which re-exports them. Pure Python.
+The building blocks of ``pic4rl_base.schema``, which re-exports them. Pure Python.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ declarations of a node, the checks (one message format, ``"<key>: <value> is inv
 <what>"``, and a "did you mean" for an unknown key), the docs' tables and the ``--help`` text.
 The sim's, the env's and the trainer's parameters, and the robots' sensor specs, all go through
 here. Pure Python (no ROS, no MuJoCo), so that pic4rl_bridge and pic4rl_agents use it freely.
-The values themselves (types, ranges, choices) are ``pic4rl_sim.param_types``, re-exported here.
+The values themselves (types, ranges, choices) are ``pic4rl_base.param_types``, re-exported here.
 """
 
 from __future__ import annotations
@@ -22,19 +22,8 @@ from typing import Any, TypeVar
 import yaml
 
 from .errors import ConfigError, require, unknown_key
-from .param_types import (
-    FRACTION,
-    NON_NEGATIVE,
-    POSITIVE,
-    PROBABILITY,
-    TYPE_NAMES,
-    ParamEnum,
-    ParamType,
-    Range,
-    coerce,
-    literal,
-    param_type,
-)
+from .param_types import (FRACTION, NON_NEGATIVE, POSITIVE, PROBABILITY, TYPE_NAMES, ParamEnum,
+                          ParamType, Range, coerce, literal, param_type)
 
 __all__ = ["FRACTION", "NON_NEGATIVE", "POSITIVE", "PROBABILITY", "TYPE_NAMES", "ParamEnum",
            "ParamSpec", "ParamType", "Range", "check", "coerce", "flatten", "from_params",

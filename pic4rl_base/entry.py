@@ -2,7 +2,7 @@
 Ctrl-C end in is written once, here, not in each command.
 
 ``@entry_point("pic4rl-test", BridgeError, interrupted="...")`` over a ``main(argv) -> int``:
-a known error (``MetricsError``, which ``ConfigError`` is, and the package's own classes
+a known error (``Pic4rlError``, which ``ConfigError`` and each package's own errors are, and the classes
 named) prints ``<prog>: <its one line>`` and exits 2; Ctrl-C prints ``<prog>: <interrupted>``
 and exits 130. A command that must say more after Ctrl-C (where it left its summary) cleans up
 and raises ``Interrupted("interrupted; ...")``. Anything else is a bug and keeps its traceback.
@@ -15,7 +15,7 @@ import sys
 from collections.abc import Callable
 from typing import TypeVar
 
-from .errors import MetricsError
+from .errors import Pic4rlError
 
 #: Exit code of a known error: bad input, named in one line.
 EXIT_BAD_INPUT = 2
@@ -42,7 +42,7 @@ def entry_point(prog: str, *known: type[BaseException],
                 said = str(err) if isinstance(err, Interrupted) and str(err) else interrupted
                 print(f"{prog}: {said}", file=sys.stderr)
                 return EXIT_INTERRUPTED
-            except (MetricsError, *known) as err:
+            except (Pic4rlError, *known) as err:
                 print(f"{prog}: {err}", file=sys.stderr)
                 return EXIT_BAD_INPUT
 

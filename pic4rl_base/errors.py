@@ -1,0 +1,44 @@
+"""The errors every package shares: the one ``ConfigError`` and the helpers that word it.
+
+Messages name the key (or file) first, then the offending value (``{x!r}``) and what was
+expected, so that a bad parameter file stops a command with one readable line. Each package's
+own classes (``MetricsError``, ``SimError``, ``BridgeError``) live in its own ``errors``.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from typing import Any
+
+
+class Pic4rlError(Exception):
+    """Base class of the errors a pic4rl package raises on purpose for bad input: what a
+    console script prints as one line (``pic4rl_base.entry``)."""
+
+
+class ConfigError(Pic4rlError):
+    """A parameter (of any node or package: sim, env, trainer, metrics), a topic map, an episode
+    fact, a robot, a world or a file they name is unknown or invalid. The one class for every
+    pic4rl package; each package's ``errors`` re-exports it."""
+
+
+class OutputError(Pic4rlError):
+    """An output (``--out``) cannot be written: a full disk, a parent that is a file, no
+    permission."""
+
+
+def require(ok: bool, key: str, value: Any, expected: str) -> None:
+    """Raise ``ConfigError`` naming ``key`` unless ``ok``."""
+    if not ok:
+        msg = f"{key}: {value!r} is invalid; expected {expected}"
+        raise ConfigError(msg)
+
+
+def unknown_key(key: str, known: Iterable[str], *, where: str) -> ConfigError:
+    """An error for an unknown ``key`` in ``where`` (no prefix when empty: the caller adds
+    one), with a "did you mean" when one is close."""
+    known = sorted(known)
+    close = difflib.get_close_matches(key, known, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
+    return ConfigError(f"{f'{where}: ' if where else ''}unknown key {key!r}{hint}")
