@@ -32,10 +32,10 @@ from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, ODOM, RECORDED
 
 from .errors import ConfigError, require
-from .readings.sensor_table import SENSORS
+from .readings.sensor_table import READING_TABLE
 from .settings.baselines import PREFIX as BASELINES_PREFIX
 from .settings.baselines import ExplorerConfig
-from .settings.tasks import (TASKS, GoalInput, PersonConfig, RewardConfig, SensorName, TaskName,
+from .settings.tasks import (TASK_TABLE, GoalInput, PersonConfig, RewardConfig, SensorName, TaskName,
                              VineyardConfig)
 
 
@@ -145,14 +145,14 @@ class EpisodesConfig:
 
 def _topics_config() -> type:
     """The ``topics:`` section: the command, pose and goal topics, then one per frame sensor
-    (``SENSORS``: its sim topic, and its doc), so that a new sensor needs no field here."""
+    (``READING_TABLE``: its sim topic, and its doc), so that a new sensor needs no field here."""
     fields = [
         ("cmd_vel", str, param(CMD_VEL.name, doc=f"velocity commands ({CMD_VEL.type} or "
                                                  "TwistStamped)")),
         ("pose", str, param(ODOM.name, doc=f"odom (wheel odometry) | ground_truth, or any "
                                            f"{ODOM.type} topic")),
         ("goal", str, param(GOAL_POSE.name, doc=GOAL_POSE.type)),
-        *((s.name, str, param(s.default_topic, doc=s.topic_doc)) for s in SENSORS),
+        *((s.name, str, param(s.default_topic, doc=s.topic_doc)) for s in READING_TABLE),
     ]
     return dataclasses.make_dataclass(
         "TopicsConfig", fields, frozen=True,
@@ -205,7 +205,7 @@ class RecordConfig:
 class EnvConfig:
     """Everything ``NavEnv`` needs besides the simulator's own parameters (``sim_params``)."""
 
-    task: TaskName = param(TaskName(next(iter(TASKS))), doc=" | ".join(TASKS))
+    task: TaskName = param(TaskName(next(iter(TASK_TABLE))), doc=" | ".join(TASK_TABLE))
     sensor: SensorName = param(SensorName(next(iter(SensorName)).value),
                                doc=" | ".join(s.value for s in SensorName))
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "

@@ -25,7 +25,7 @@ _HOMES = {
     "MetricsError": "errors", "TopicError": "errors",
     "Footprint": "contract", "Derived": "core.derived", "compute_metrics": "core.metrics",
     "read_episode": "bags.reader",
-    "METRICS": "core.registry", "REGISTRY": "core.registry", "Metric": "core.registry",
+    "METRICS": "core.registry", "METRIC_TABLE": "core.registry", "Metric": "core.registry",
     "metric": "core.registry",
     "TABLE1_COLUMNS": "tables.results", "EpisodeMetrics": "tables.results",
     "Episode": "core.series",
@@ -42,7 +42,7 @@ __getattr__, __dir__ = lazy_exports(__name__, _HOMES, namespace=globals(), befor
 
 __all__ = [
     "METRICS",
-    "REGISTRY",
+    "METRIC_TABLE",
     "TABLE1_COLUMNS",
     "BagError",
     "BagResult",

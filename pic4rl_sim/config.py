@@ -25,8 +25,8 @@ from pic4rl_base.schema import (ParamEnum, ParamSpec, ParamType, Range, check, f
 from .engine.engine_config import EngineConfig
 from .engine.geometry import Pose2D
 from .engine.robot_specs import RobotSpec, load_robot
-from .engine.sensors import SENSOR_KINDS
-from .engine.worlds.generators import GENERATORS, make_world
+from .engine.sensors import SENSOR_TABLE
+from .engine.worlds.generators import WORLD_TABLE, make_world
 from .engine.worlds.spec import WorldSpec
 
 MAX_SEED = 2**31 - 1
@@ -46,7 +46,7 @@ class SimParams:
 
     robot: str = param("jackal", doc="built-in robot (jackal, husky, burger, omni) or the path "
                        "of a robot YAML file")
-    world: str = param("indoor", doc=f"world generator ({', '.join(GENERATORS)}) or the path of "
+    world: str = param("indoor", doc=f"world generator ({', '.join(WORLD_TABLE)}) or the path of "
                        "an MJCF .xml file")
     world_variant: int = param(0, doc="seed of the world generator: the same variant gives the "
                                "same geometry", range=_SEED)
@@ -91,21 +91,21 @@ ROBOT = _CORE[0]
 def _world_params() -> tuple[ParamSpec, ...]:
     """``world.<kind>.<param>`` for every parameter of every generator."""
     return tuple(dataclasses.replace(spec, description=f"{kind} world: {spec.description}")
-                 for kind, generator in GENERATORS.items()
+                 for kind, generator in WORLD_TABLE.items()
                  for spec in specs(generator.params, prefix=f"world.{kind}."))
 
 
 def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
-    """Sensor overrides: the fields of the robot's sensor specs (``SENSOR_KINDS``), with the
+    """Sensor overrides: the fields of the robot's sensor specs (``SENSOR_TABLE``), with the
     robot's own sensors as defaults (a sensor the robot lacks defaults to the stock one,
     disabled), after an ``<name>.enabled`` switch for each optional sensor."""
     switches = tuple(ParamSpec(f"{k.name}.enabled", ParamType.BOOL,
                                robot.sensors[k.name] is not None,
                                f"whether the robot carries its {k.label} "
                                f"(publishes {k.publishes})")
-                     for k in SENSOR_KINDS if k.optional)
+                     for k in SENSOR_TABLE if k.optional)
     fields = (specs(k.spec, defaults=robot.sensors[k.name] or k.spec(), prefix=f"{k.name}.")
-              for k in SENSOR_KINDS)
+              for k in SENSOR_TABLE)
     return (*switches, *(spec for group in fields for spec in group))
 
 
@@ -207,7 +207,7 @@ def build_robot(values: Mapping[str, Any]) -> RobotSpec:
     """The ``robot`` parameter's robot with the sensor parameters applied."""
     robot = load_robot(values["robot"])
     changes: dict[str, Any] = {}
-    for kind in SENSOR_KINDS:
+    for kind in SENSOR_TABLE:
         if kind.optional and not values[f"{kind.name}.enabled"]:
             changes[kind.name] = None
             continue
@@ -224,13 +224,13 @@ def build_world_choice(values: Mapping[str, Any]) -> WorldChoice:
     kind = values["world"]
     if kind.endswith(".xml"):
         return WorldChoice(kind, values["world_variant"])
-    if kind not in GENERATORS:
-        close = difflib.get_close_matches(kind, GENERATORS, n=1)
+    if kind not in WORLD_TABLE:
+        close = difflib.get_close_matches(kind, WORLD_TABLE, n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
         raise ConfigError(f"world: {kind!r} is invalid; expected a generator "
-                          f"({', '.join(GENERATORS)}) or a path ending in .xml{hint}")
+                          f"({', '.join(WORLD_TABLE)}) or a path ending in .xml{hint}")
     params = tuple((name, values[f"world.{kind}.{name}"])
-                   for name in param_names(GENERATORS[kind].params))
+                   for name in param_names(WORLD_TABLE[kind].params))
     return WorldChoice(kind, values["world_variant"], params)
 
 

@@ -158,16 +158,16 @@ UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACES = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, CAMERA_INFO,
+INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, CAMERA_INFO,
               DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
-_BY_NAME = {i.name: i for i in INTERFACES}
+_BY_NAME = {i.name: i for i in INTERFACE_TABLE}
 #: A step's state topics, in publishing order.
-STEP_TOPICS = tuple(i for i in INTERFACES if i.cadence is Cadence.STEP)
+STEP_TOPICS = tuple(i for i in INTERFACE_TABLE if i.cadence is Cadence.STEP)
 #: An episode's topics, in publishing order (at each reset, before the step topics).
-EPISODE_TOPICS = tuple(i for i in INTERFACES if i.cadence is Cadence.EPISODE)
+EPISODE_TOPICS = tuple(i for i in INTERFACE_TABLE if i.cadence is Cadence.EPISODE)
 #: The topics recorded to each episode's bag by default (the bag contract), in ``record_order``.
-RECORDED = tuple(name for _, name in sorted((i.record_order, i.name) for i in INTERFACES
+RECORDED = tuple(name for _, name in sorted((i.record_order, i.name) for i in INTERFACE_TABLE
                                              if i.record_order is not None))
 
 

@@ -50,7 +50,7 @@ from pic4rl_bridge.baselines import BASELINES
 from pic4rl_bridge.errors import BridgeError, ConfigError, TransportError
 from pic4rl_bridge.settings.baselines import PREFIX as BASELINES_PREFIX
 from pic4rl_bridge.settings.baselines import baselines_config_from_params
-from pic4rl_bridge.settings.tasks import TASKS
+from pic4rl_bridge.settings.tasks import TASK_TABLE
 from pic4rl_sim.engine.sampling import PAIR_KINDS
 
 from .plan import AgentSpec, TestPlan, recorded, resolve_agents
@@ -82,7 +82,7 @@ def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) ->
 
     env = NavEnv(spec.run.env)
     outcomes: list[str] = []
-    headline, words = TASKS[spec.run.env.task].headline
+    headline, words = TASK_TABLE[spec.run.env.task].headline
     try:
         policy = Driver(spec, env)
         bar = tqdm(range(episodes), desc=spec.name, unit="episode", disable=not progress)
@@ -119,7 +119,7 @@ def render_table(table: pd.DataFrame, task: str, fmt: str, *, with_std: bool) ->
                                                  if k not in ("n_success", "n_timeout")}}
         return render_comparison(table, fmt, columns=headline_columns(
             table, table_columns(table)), with_std=with_std, counts=counts)
-    outcome, words = TASKS[task].headline
+    outcome, words = TASK_TABLE[task].headline
     counts = {**OUTCOME_COUNTS, "n_success": words if outcome == "goal" else "goals"}
     columns = list(table_columns(table))
     if "spl_mean" in table.columns and table["spl_mean"].notna().any():
@@ -180,7 +180,7 @@ def drive_and_judge(plan: TestPlan, agents: Sequence[AgentSpec] | None = None) -
         for spec in specs:
             outcomes[spec.name] = drive_agent(spec, episodes=plan.n_episodes, seed=plan.seed,
                                             progress=plan.progress)
-            headline, words = TASKS[spec.run.env.task].headline
+            headline, words = TASK_TABLE[spec.run.env.task].headline
             log.info("%s: %d/%d %s", spec.name, outcomes[spec.name].count(headline),
                      len(outcomes[spec.name]), words)
     except BaseException:

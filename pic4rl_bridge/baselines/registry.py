@@ -128,7 +128,7 @@ def _heading(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
 
 @dataclass(frozen=True)
 class BaselineSpec:
-    """One baseline: the tasks it drives (``TASKS``' names) and what makes it from the env's
+    """One baseline: the tasks it drives (``TASK_TABLE``' names) and what makes it from the env's
     config, the robot, the simulated world (``None`` on a real robot) and the ``baselines:``
     section's settings; ``one_world``: it drives on one world's map (refused when the env
     draws a world per episode)."""
@@ -136,7 +136,7 @@ class BaselineSpec:
     tasks: tuple[str, ...]
     make: Callable[[EnvConfig, RobotInfo, WorldSpec | None, BaselinesConfig], Baseline]
     one_world: bool = False
-    #: The ``imitation.expert`` name (a ``TASKS`` entry's ``experts``) under which it labels
+    #: The ``imitation.expert`` name (a ``TASK_TABLE`` entry's ``experts``) under which it labels
     #: states for imitation; empty: no expert.
     expert: str = ""
 

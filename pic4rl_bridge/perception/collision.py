@@ -22,7 +22,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 
 from ..config import EnvConfig
 from ..readings.frame import ScanData, SensorFrame
-from ..readings.sensor_table import SENSORS
+from ..readings.sensor_table import READING_TABLE
 from ..robot_info import RobotInfo
 
 #: Pixels whose point lies this high above the floor or lower are the floor, not an obstacle
@@ -98,7 +98,7 @@ def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
     """The obstacle points (n, 2, base frame, m) the robot senses: those of the first reading,
     in the sensor table's order, that is a scan (the LiDAR's, or any range sensor's decoded
     to ``ScanData``) or the depth image; none without one."""
-    for sensor in SENSORS:
+    for sensor in READING_TABLE:
         reading = frame.readings.get(sensor.name)
         if isinstance(reading, ScanData):
             return reading.points()

@@ -15,7 +15,7 @@ from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "SensorFrame": "frame", "ScanData": "frame",
-    "SENSORS": "sensor_table", "BY_NAME": "sensor_table", "FrameSensor": "sensor_table",
+    "READING_TABLE": "sensor_table", "BY_NAME": "sensor_table", "FrameSensor": "sensor_table",
     "build_frame": "sensor_table",
 }
 __all__ = sorted(_EXPORTS)

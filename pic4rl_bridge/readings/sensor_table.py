@@ -37,7 +37,7 @@ class FrameSensor:
     #: (engine, its sensor's mount) → the same value as the decoded message, or ``None`` when
     #: the engine has no such sensor (the in-process transport when it does not record).
     read: Callable[[Any, Pose2D], Any]
-    #: The robot's sensor kind (a ``SENSOR_KINDS`` name, a ``RobotInfo.mounts`` key) that
+    #: The robot's sensor kind (a ``SENSOR_TABLE`` name, a ``RobotInfo.mounts`` key) that
     #: makes the reading and whose mount ``decode`` and ``read`` take; ``None``: no mount.
     kind: str | None = None
     #: Published once an episode (subscribed like the goal, decoded once per message).
@@ -100,7 +100,7 @@ def _depth_cdr(data: bytes, mount: Pose2D, topic: str) -> np.ndarray | None:
     return None if image is None else decode.depth_image(image, topic=topic)
 
 
-SENSORS = (
+READING_TABLE = (
     FrameSensor("scan", SCAN, lambda msg, mount, topic: decode.scan(msg, mount), _read_scan,
                 kind="lidar", read_cdr=lambda data, mount, topic: cdr.scan(data, mount)),
     FrameSensor("depth", DEPTH_IMAGE,
@@ -114,7 +114,7 @@ SENSORS = (
                 "e.g. nav2's /plan)"),
 )
 #: The frame's sensors by name, in the table's order.
-BY_NAME = {s.name: s for s in SENSORS}
+BY_NAME = {s.name: s for s in READING_TABLE}
 
 
 def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
@@ -124,7 +124,7 @@ def build_frame(stamp_ns: int, odometry: tuple[Pose2D, Twist2D],
     each sensor ``wanted`` in the table's order (the rest, and a ``None`` value, absent)."""
     pose, twist = odometry
     readings = {}
-    for sensor in SENSORS:
+    for sensor in READING_TABLE:
         if sensor.name in wanted and (reading := value(sensor)) is not None:
             readings[sensor.name] = reading
     return SensorFrame(stamp_ns, pose, twist, goal, readings)

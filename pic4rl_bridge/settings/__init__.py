@@ -1,6 +1,6 @@
 """Settings: the bridge's tables and sections that every room above reads, at the bottom.
 
-``tasks`` (``TASKS``: each task's env ids, sensors, reward scales, section and experts;
+``tasks`` (``TASK_TABLE``: each task's env ids, sensors, reward scales, section and experts;
 ``TaskName``, ``SensorName``, ``task_spec``, ``env_ids``, the tasks' sections) and
 ``baselines`` (the ``baselines:`` section: ``BaselinesConfig`` and each baseline's settings).
 Pure dataclasses over ``pic4rl_base.schema``: they import the bridge's ``errors`` and nothing
@@ -13,7 +13,7 @@ from __future__ import annotations
 from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
-    "TASKS": "tasks", "TaskSpec": "tasks", "TaskName": "tasks", "SensorName": "tasks",
+    "TASK_TABLE": "tasks", "TaskSpec": "tasks", "TaskName": "tasks", "SensorName": "tasks",
     "task_spec": "tasks", "env_ids": "tasks", "EXPERT_TASKS": "tasks",
     "BaselinesConfig": "baselines", "DwaConfig": "baselines", "PlannerConfig": "baselines",
     "ExplorerConfig": "baselines",

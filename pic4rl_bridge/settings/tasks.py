@@ -4,7 +4,7 @@ its states for imitation (the baselines name the tasks they drive in their own t
 ``pic4rl_bridge.baselines.registry.BASELINE_TABLE``).
 
 ``TaskName``, ``SensorName``, ``make_task``, ``pic4rl_bridge.ENV_IDS``, imitation's experts and
-the env's per-task choices derive from ``TASKS``. Pure dataclasses (no numpy, no ROS), so that
+the env's per-task choices derive from ``TASK_TABLE``. Pure dataclasses (no numpy, no ROS), so that
 ``import pic4rl_bridge`` registers the ids without importing a task's code, which
 ``TaskSpec.build`` names by string, as Gymnasium's entry points do.
 
@@ -167,7 +167,7 @@ class TaskSpec:
         return f"{self.name}/{sensor}" if self.per_sensor else self.name
 
 
-TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
+TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
     TaskSpec("goToPose",
              (EnvId("pic4rl/GoToPoseLidar-v0", "lidar"),
               EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True})),
@@ -191,18 +191,18 @@ TASKS: dict[str, TaskSpec] = {spec.name: spec for spec in (
 )}
 
 #: The task choice of ``nav_env``'s ``task`` key, one value per registered task.
-TaskName = ParamEnum("TaskName", {name: name for name in TASKS})  # type: ignore[misc]
+TaskName = ParamEnum("TaskName", {name: name for name in TASK_TABLE})  # type: ignore[misc]
 #: The ``sensor`` choice: every sensor a task observes through, in the table's order.
 SensorName = ParamEnum("SensorName",  # type: ignore[misc]
-                       {s: s for spec in TASKS.values() for s in spec.sensors})
+                       {s: s for spec in TASK_TABLE.values() for s in spec.sensors})
 #: Each ``imitation.expert`` name → the task it labels.
-EXPERT_TASKS = {name: spec.name for spec in TASKS.values() for name in spec.experts}
+EXPERT_TASKS = {name: spec.name for spec in TASK_TABLE.values() for name in spec.experts}
 
 
 def _reward_class() -> type:
     """Every task's reward class at once: the ``reward:`` section a params file writes."""
-    # Reversed: a dataclass collects fields from its last base first; the table follows TASKS.
-    bases = tuple(dict.fromkeys(spec.reward for spec in reversed(TASKS.values())))
+    # Reversed: a dataclass collects fields from its last base first; the table follows TASK_TABLE.
+    bases = tuple(dict.fromkeys(spec.reward for spec in reversed(TASK_TABLE.values())))
     cls = type("RewardConfig", bases, {"__doc__": "Reward scales; each term is reported in "
                                                   "``info[\"reward_terms\"]``.",
                                        "__module__": __name__})
@@ -215,7 +215,7 @@ RewardConfig = _reward_class()
 def env_ids() -> dict[str, dict[str, Any]]:
     """Every registered id → the ``NavEnv`` keyword arguments that make it."""
     out: dict[str, dict[str, Any]] = {}
-    for spec in TASKS.values():
+    for spec in TASK_TABLE.values():
         for env in spec.env_ids:
             kwargs: dict[str, Any] = {"task": spec.name, "sensor": env.sensor}
             if env.sim_defaults:
@@ -226,7 +226,7 @@ def env_ids() -> dict[str, dict[str, Any]]:
 
 def task_spec(name: str) -> TaskSpec:
     """The entry of task ``name`` (``ConfigError`` naming the registered ones)."""
-    if name not in TASKS:
-        raise ConfigError(f"task: {name!r} is invalid; expected one of {', '.join(TASKS)}")
-    return TASKS[name]
+    if name not in TASK_TABLE:
+        raise ConfigError(f"task: {name!r} is invalid; expected one of {', '.join(TASK_TABLE)}")
+    return TASK_TABLE[name]
 

@@ -1,7 +1,7 @@
 """Tasks: observation, reward and termination as pure functions of decoded sensor data.
 
 ``base`` (``Task``, ``EpisodeContext``, ``Judgement``, ``make_task``) and one module per task:
-``goto``, ``person``, ``vineyard``. Their table (``TASKS``: each task's env ids, sensors,
+``goto``, ``person``, ``vineyard``. Their table (``TASK_TABLE``: each task's env ids, sensors,
 reward scales, section and experts) is a setting, one room lower:
 ``pic4rl_bridge.settings.tasks``. Names are imported on first use.
 """

@@ -21,7 +21,7 @@ from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import (
     CMD_VEL,
     EPISODE_TOPICS,
-    INTERFACES,
+    INTERFACE_TABLE,
     STEP_TOPICS,
     QosKind,
     bridge_qos,
@@ -39,7 +39,7 @@ from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 _POSE_SOURCES = ("odom", "ground_truth")
 #: The QoS the sim node offers its topics with, and the ROS transport its ``cmd_vel``; the
 #: rest: ``OfferedQos()``.
-_NODE_QOS = {i.name: i.qos.value for i in INTERFACES if i.qos is not None}
+_NODE_QOS = {i.name: i.qos.value for i in INTERFACE_TABLE if i.qos is not None}
 _NODE_QOS[CMD_VEL.name] = bridge_qos(QosKind.RELIABLE)
 
 

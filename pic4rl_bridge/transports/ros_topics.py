@@ -23,7 +23,7 @@ from geometry_msgs.msg import Twist, TwistStamped
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import (
     GOAL_POSE,
-    INTERFACES,
+    INTERFACE_TABLE,
     ODOM,
     STEP_TOPICS,
     Cadence,
@@ -39,10 +39,10 @@ from rosgraph_msgs.msg import Clock
 from ..config import EnvConfig, SensorQos
 from ..errors import ConfigError
 from ..readings import decode
-from ..readings.sensor_table import SENSORS
+from ..readings.sensor_table import READING_TABLE
 
 #: The sim node's state and episode topics by relative name, recordable by name alone.
-KNOWN_TOPICS = {i.name: i for i in INTERFACES if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
+KNOWN_TOPICS = {i.name: i for i in INTERFACE_TABLE if i.cadence in (Cadence.STEP, Cadence.EPISODE)}
 #: A step's topics in the sim's publishing order.
 _STEP_ORDER = {t.name: i for i, t in enumerate(STEP_TOPICS)}
 def cdr_stamp(data: bytes) -> int:
@@ -163,16 +163,16 @@ def wiring(config: EnvConfig, sensors: frozenset[str],
     out.wanted = {t.pose: (ODOM.type, bridge_qos(QosKind.RELIABLE)),
                   t.goal: (GOAL_POSE.type, goal_qos)}
     out.roles = {"pose": t.pose, "goal": t.goal}
-    out.episodic = {t.goal, *(getattr(t, s.name) for s in SENSORS if s.episodic)}
+    out.episodic = {t.goal, *(getattr(t, s.name) for s in READING_TABLE if s.episodic)}
     # Episodic sensors first, like the goal (the plan; nav2's /plan: on each replan).
-    for sensor in sorted(SENSORS, key=lambda s: not s.episodic):
+    for sensor in sorted(READING_TABLE, key=lambda s: not s.episodic):
         if sensor.name in sensors:
             topic = getattr(t, sensor.name)
             out.wanted[topic] = ((sensor.interface.type, goal_qos) if sensor.episodic
                                  else _like(sensor.interface, sensor_qos))
             out.roles[sensor.name] = topic
-    out.once = [s.name for s in SENSORS if s.name in out.roles and s.episodic]
-    stepped = [s for s in SENSORS if s.name in out.roles and not s.episodic]
+    out.once = [s.name for s in READING_TABLE if s.name in out.roles and s.episodic]
+    stepped = [s for s in READING_TABLE if s.name in out.roles and not s.episodic]
     last = max(stepped, key=lambda s: _STEP_ORDER[s.interface.name], default=None)
     out.sync = out.roles[last.name] if last is not None else t.pose
     if config.record.enabled:

@@ -26,7 +26,7 @@ from pic4rl_base.geometry import Mount
 
 from ..contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from ..core.plausibility import check_one_track
-from ..core.roles import LASER_SCAN, ODOMETRY, ROLES, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
+from ..core.roles import LASER_SCAN, ODOMETRY, ROLE_TABLE, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from ..core.scan_summary import ScanStream
 from ..core.series import Episode, PoseSeries
 from ..core.timebase import ONE_SOURCE_ROLES, Samples, one_source, pose_series
@@ -50,7 +50,7 @@ LONG_BAG_MESSAGES = 100_000
 
 #: Per role, the payload kept of each message (a TFMessage's transforms whatever the role).
 _EXTRACTORS: dict[str, Callable[[Any, str], Any]] = {
-    "pose": pose_row, **{role.name: role.extract for role in ROLES}}
+    "pose": pose_row, **{role.name: role.extract for role in ROLE_TABLE}}
 
 
 class _BagContents:

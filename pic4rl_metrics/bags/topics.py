@@ -29,7 +29,7 @@ from pic4rl_base.errors import ConfigError
 
 from .. import contract
 from ..contract import EpisodeFacts, parse_facts
-from ..core.roles import ODOMETRY, ROLE, ROLE_TYPES, ROLES, SUPPORTED_POSE_MSGS, TF_MESSAGE
+from ..core.roles import ODOMETRY, ROLE, ROLE_TYPES, ROLE_TABLE, SUPPORTED_POSE_MSGS, TF_MESSAGE
 from ..errors import TopicError
 
 
@@ -39,8 +39,8 @@ def normalize_topic(name: str) -> str:
     return name if name.startswith("/") else f"/{name}"
 
 
-_YAML_KEY = {role.name: role.key for role in ROLES}
-_DEFAULT_TOPICS = tuple((role.name, role.topic) for role in ROLES)
+_YAML_KEY = {role.name: role.key for role in ROLE_TABLE}
+_DEFAULT_TOPICS = tuple((role.name, role.topic) for role in ROLE_TABLE)
 
 
 @dataclass(frozen=True, init=False)
@@ -51,7 +51,7 @@ class TopicMap:
     and a keyword (``TopicMap(scan="/front/scan")``, ``dataclasses.replace``)."""
 
     pose: tuple[str, ...] = (contract.GROUND_TRUTH_TOPIC, contract.ODOM_TOPIC)
-    #: (role, topic) for every role, in ``ROLES`` order.
+    #: (role, topic) for every role, in ``ROLE_TABLE`` order.
     topics: tuple[tuple[str, str | None], ...] = _DEFAULT_TOPICS
     #: (parent, child): the pose is ``child``'s in ``parent`` from the ``TFMessage`` topics
     #: (``pose``, default ``/tf``, and its ``_static`` sibling) instead of a pose topic.
@@ -168,7 +168,7 @@ def topic_map_from_dict(
 
 #: Roles that, when their default topic is absent, take the bag's only topic of their type
 #: (a namespaced ``/robot1/scan``), as the pose takes the only ``Odometry`` topic.
-_ONLY_OF_TYPE = {role.name: role.only_of_type for role in ROLES if role.only_of_type}
+_ONLY_OF_TYPE = {role.name: role.only_of_type for role in ROLE_TABLE if role.only_of_type}
 _FRAMES_HINT = "pass --pose-frames PARENT:CHILD (e.g. odom:base_link) to read poses from it"
 
 

@@ -23,8 +23,8 @@ from pic4rl_base.errors import ConfigError, OutputError
 from ..bags.inputs import discover
 from ..bags.topics import TopicMap, load_topic_map, parse_frames
 from ..contract import EpisodeFacts, parse_facts
-from ..core.registry import METRICS, REGISTRY
-from ..core.roles import ROLES, Role
+from ..core.registry import METRICS, METRIC_TABLE
+from ..core.roles import ROLE_TABLE, Role
 from ..tables.batch import MetricsResult, compute
 from ..tables.groups import BY_CHOICES, parse_by, render_groups
 from ..tables.layouts import FORMATS
@@ -74,7 +74,7 @@ def _add_input_options(parser: argparse.ArgumentParser, *, metrics: bool = True)
 
 
 #: The input roles with a ``--<role>-topic`` option.
-_FLAGGED = tuple(role for role in ROLES if role.flag)
+_FLAGGED = tuple(role for role in ROLE_TABLE if role.flag)
 
 
 def _dest(role: Role) -> str:
@@ -256,7 +256,7 @@ def _check_report_inputs(args: argparse.Namespace) -> None:
 def _report_failures(result: MetricsResult) -> int:
     for failed in result.failed:
         print(f"error: {failed.error}", file=sys.stderr)
-    for problem in (*REGISTRY.plugin_errors, *result.skipped):
+    for problem in (*METRIC_TABLE.plugin_errors, *result.skipped):
         print(f"warning: {problem}", file=sys.stderr)
     for ok in result.results:
         for warning in ok.warnings:

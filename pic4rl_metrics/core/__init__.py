@@ -16,8 +16,8 @@ from pic4rl_base.lazy import lazy_exports
 
 _HOMES = {
     "Episode": "series", "PoseSeries": "series_kinds", "ScanSeries": "series_kinds",
-    "CmdSeries": "series_kinds", "PointSeries": "series_kinds", "ROLES": "roles", "Role":
-    "roles", "Derived": "derived", "REGISTRY": "registry", "METRICS": "registry", "Metric":
+    "CmdSeries": "series_kinds", "PointSeries": "series_kinds", "ROLE_TABLE": "roles", "Role":
+    "roles", "Derived": "derived", "METRIC_TABLE": "registry", "METRICS": "registry", "Metric":
     "registry", "EpisodeMetrics": "registry", "metric": "registry", "compute_metrics":
     "metrics", "fit_lane": "crop_rows",
 }

@@ -15,7 +15,7 @@ import numpy as np
 from ..contract import Outcome
 from .derived import NAN, ROW_TASK, Derived
 from .kinematics import interval_mean, seconds, time_mean, time_std
-from .registry import REGISTRY, EpisodeMetrics, Metric, evaluate, metric
+from .registry import METRIC_TABLE, EpisodeMetrics, Metric, evaluate, metric
 from .series import Episode
 from .plausibility import (
     PLAUSIBLE_ACC_MPS2,
@@ -265,7 +265,7 @@ _register("n_speed_outliers", "count", "speed outliers")(
     lambda d: len(speed_outliers(d.velocity.speed, d.facts.max_speed_mps)))
 
 #: pic4rl's own columns, in table order (user metrics come after them).
-BUILTIN_COLUMNS: tuple[str, ...] = tuple(REGISTRY.metrics)
+BUILTIN_COLUMNS: tuple[str, ...] = tuple(METRIC_TABLE.metrics)
 
 
 # --- checks on the data ----------------------------------------------------------------------
@@ -325,6 +325,6 @@ def compute_metrics(
     ``explicit``: the metrics were asked for by name, so a missing input is warned about.
     """
     derived = Derived(episode)
-    selected = REGISTRY.select() if metrics is None else tuple(metrics)
+    selected = METRIC_TABLE.select() if metrics is None else tuple(metrics)
     values, warnings = evaluate(derived, selected, explicit=explicit)
     return EpisodeMetrics(values, warnings=(*data_warnings(derived), *warnings))

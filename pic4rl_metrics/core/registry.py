@@ -194,9 +194,9 @@ class Registry:
 
 
 #: The process-wide registry: pic4rl's metrics, then plugins, then metrics registered at run time.
-REGISTRY = Registry()
+METRIC_TABLE = Registry()
 #: Label and unit of every registered column (``METRICS[name].label``, ``.unit``).
-METRICS = MetricInfo(REGISTRY)
+METRICS = MetricInfo(METRIC_TABLE)
 
 
 def metric(
@@ -208,7 +208,7 @@ def metric(
     quality: bool = False,
     text: bool = False,
     table: tuple[str, int] | None = None,
-    registry: Registry = REGISTRY,
+    registry: Registry = METRIC_TABLE,
     _builtin: bool = False,
 ) -> Callable[[Callable[[Derived], Any]], Callable[[Derived], Any]]:
     """Decorator: register ``func(derived) -> float`` as the column ``name`` (``table``: its

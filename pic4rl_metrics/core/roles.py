@@ -4,7 +4,7 @@ Each ``Role`` declares its default topic (the bag contract's name), the message 
 accepts, what is kept of each message, the ``Episode`` series it fills (if any) and the test
 a metric needing it applies. ``TopicMap``'s role topics, ``ROLE_TYPES``, the reader's
 extractors and series, ``Episode``'s optional series, ``INPUT_TESTS``, the topic-map keys and
-the ``--<role>-topic`` options all derive from ``ROLES``, so a new input is one entry here
+the ``--<role>-topic`` options all derive from ``ROLE_TABLE``, so a new input is one entry here
 (and its row in docs/metrics.md). The pose is no role: it has fallbacks and ``--pose-frames``
 (``topics``).
 """
@@ -94,7 +94,7 @@ class Role:
         return series is not None and len(series) > 0
 
 
-ROLES: tuple[Role, ...] = (
+ROLE_TABLE: tuple[Role, ...] = (
     Role("scan", contract.SCAN_TOPIC, frozenset({LASER_SCAN}), _scan_row,
          series="scan", build=scan_series, flag="--scan-topic", help="LaserScan topic",
          only_of_type=LASER_SCAN),
@@ -110,11 +110,11 @@ ROLES: tuple[Role, ...] = (
     Role("outcome", contract.OUTCOME_TOPIC, frozenset({STRING}), _text,
          yaml_key="outcome_topic"),
 )
-ROLE: dict[str, Role] = {role.name: role for role in ROLES}
+ROLE: dict[str, Role] = {role.name: role for role in ROLE_TABLE}
 #: The roles that fill an ``Episode`` series, by that series' name.
-SERIES_ROLES: dict[str, Role] = {role.series: role for role in ROLES if role.series}
+SERIES_ROLES: dict[str, Role] = {role.series: role for role in ROLE_TABLE if role.series}
 #: The message types each role accepts, in the order they are chosen.
-ROLE_TYPES: dict[str, frozenset[str]] = {role.name: role.types for role in ROLES}
+ROLE_TYPES: dict[str, frozenset[str]] = {role.name: role.types for role in ROLE_TABLE}
 
 
 @cache

@@ -22,7 +22,7 @@ import pandas as pd
 from pic4rl_base.errors import ConfigError
 
 from ..contract import Outcome
-from ..core.registry import REGISTRY
+from ..core.registry import METRIC_TABLE
 from .results import ERROR_COLUMN
 
 #: Group name of rows whose key is missing (and, for ``agent``, whose run is missing too).
@@ -83,7 +83,7 @@ def _group_keys(df: pd.DataFrame, by: Sequence[str]) -> pd.DataFrame:
 
 def numeric_metric_columns(df: pd.DataFrame) -> list[str]:
     """Registered numeric metric columns of ``df``, in registry (table) order."""
-    return [n for n, m in REGISTRY.metrics.items() if n in df.columns and not m.text]
+    return [n for n, m in METRIC_TABLE.metrics.items() if n in df.columns and not m.text]
 
 
 def aggregate(
@@ -108,7 +108,7 @@ def aggregate(
     """
     by_cols = _check_request(df, by, over)
     metrics = numeric_metric_columns(df)
-    quality = [m for m in metrics if REGISTRY.metrics[m].quality]
+    quality = [m for m in metrics if METRIC_TABLE.metrics[m].quality]
     if over == "success" and quality and "success" not in metrics:
         msg = "aggregate: over='success' needs a 'success' column; pass over='all'"
         raise ConfigError(msg)

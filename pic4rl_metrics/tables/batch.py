@@ -26,7 +26,7 @@ from ..bags.reader import read_episode
 from ..bags.topics import TopicMap
 from ..contract import EpisodeFacts
 from ..core.metrics import compute_metrics
-from ..core.registry import REGISTRY
+from ..core.registry import METRIC_TABLE
 from ..core.series import Episode
 from .results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, EpisodeMetrics
 
@@ -113,7 +113,7 @@ def judge_bag(
     ``scan_sample``: at most that many whole scans beside the summary (maps);
     ``progress``: a bar on stderr while a long bag is read."""
     try:
-        selected = REGISTRY.select(metrics)
+        selected = METRIC_TABLE.select(metrics)
         episode = read_episode(bag, topic_map, facts, given, full_scans=full_scans,
                                progress=progress, scan_sample=scan_sample)
         judged = compute_metrics(episode, selected, explicit=metrics is not None)
@@ -164,7 +164,7 @@ def compute(
     jobs = resolve_jobs(jobs)
     if metrics is None and topic_map is not None:
         metrics = topic_map.metrics
-    names = tuple(m.name for m in REGISTRY.select(metrics))
+    names = tuple(m.name for m in METRIC_TABLE.select(metrics))
     found = discover(inputs)
     unmatched = [BagResult(item, None, None, f"{item!r}: {why}") for item, why in found.unmatched]
     chosen = names if metrics is not None else None

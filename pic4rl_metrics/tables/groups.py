@@ -24,7 +24,7 @@ import pandas as pd
 from pic4rl_base.errors import ConfigError
 
 from ..contract import task_name, world_set
-from ..core.registry import REGISTRY
+from ..core.registry import METRIC_TABLE
 from .aggregate import DASH, FULL_RUNS, UNKNOWN_GROUP, _missing, aggregate
 from .layouts import check_format, latex_escape
 from .text import render_comparison
@@ -115,8 +115,8 @@ def headline_columns(agg: pd.DataFrame, columns: Sequence[str]) -> list[str]:
     if headline(agg) == "success":
         return list(columns)
     return [FULL_RUNS if c == "success" else c for c in columns
-            if c == "success" or c not in REGISTRY.metrics or "goal" not in
-            REGISTRY.metrics[c].needs]
+            if c == "success" or c not in METRIC_TABLE.metrics or "goal" not in
+            METRIC_TABLE.metrics[c].needs]
 
 
 def join(parts: Sequence[tuple[Group, str]], fmt: str, *, several: bool | None = None) -> str:

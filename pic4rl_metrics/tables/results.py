@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..core.metrics import BUILTIN_COLUMNS
-from ..core.registry import METRICS, REGISTRY, TABLE_SECTIONS, EpisodeMetrics, Metric
+from ..core.registry import METRICS, METRIC_TABLE, TABLE_SECTIONS, EpisodeMetrics, Metric
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -20,9 +20,9 @@ __all__ = [
 ]
 
 #: Columns of the paper's Table 1, in its order (each metric's ``table`` placement).
-TABLE1_COLUMNS: tuple[str, ...] = REGISTRY.table("paper")
+TABLE1_COLUMNS: tuple[str, ...] = METRIC_TABLE.table("paper")
 #: The vineyard's columns: a comparison shows them after Table 1's when some episode has them.
-ROW_COLUMNS: tuple[str, ...] = REGISTRY.table("row")
+ROW_COLUMNS: tuple[str, ...] = METRIC_TABLE.table("row")
 
 
 def table_columns(table: pd.DataFrame) -> tuple[str, ...]:
@@ -31,7 +31,7 @@ def table_columns(table: pd.DataFrame) -> tuple[str, ...]:
     aggregated: ``<metric>_mean``); a plugin's placed metric joins its section."""
     def has(name: str) -> bool:
         return any(c in table.columns and table[c].notna().any() for c in (name, f"{name}_mean"))
-    return tuple(c for section, always in TABLE_SECTIONS.items() for c in REGISTRY.table(section)
+    return tuple(c for section, always in TABLE_SECTIONS.items() for c in METRIC_TABLE.table(section)
                  if always or has(c))
 
 
@@ -43,4 +43,4 @@ ERROR_COLUMN = "error"
 #: pic4rl's own metric columns, in table order.
 METRIC_COLUMNS: tuple[str, ...] = BUILTIN_COLUMNS
 #: pic4rl's trajectory-quality columns: tables average them over successful episodes.
-QUALITY_COLUMNS: frozenset[str] = frozenset(n for n in BUILTIN_COLUMNS if REGISTRY.metrics[n].quality)
+QUALITY_COLUMNS: frozenset[str] = frozenset(n for n in BUILTIN_COLUMNS if METRIC_TABLE.metrics[n].quality)

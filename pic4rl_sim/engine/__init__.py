@@ -11,7 +11,7 @@ _EXPORTS = {
     "Engine": "core", "StepResult": "core", "limit_command": "core",
     "EngineConfig": "engine_config", "Pose2D": "geometry", "Twist2D": "geometry",
     "Drive": "robot_specs", "RobotSpec": "robot_specs", "load_robot": "robot_specs",
-    "SENSOR_KINDS": "sensors", "sample_start_goal": "sampling",
+    "SENSOR_TABLE": "sensors", "sample_start_goal": "sampling",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

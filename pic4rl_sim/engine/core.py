@@ -25,7 +25,7 @@ from .model import build_model
 from .paths import plan_path
 from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
-from .sensors import KINDS_BY_NAME, SENSOR_KINDS, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
+from .sensors import KINDS_BY_NAME, SENSOR_TABLE, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
 from .worlds.spec import WorldSpec
 
 log = logging.getLogger(__name__)
@@ -34,8 +34,8 @@ _DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver doe
 _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQPOS),
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
 # Independent random streams per purpose: reading one sensor never shifts another's noise
-# (a sensor kind added at the end of SENSOR_KINDS leaves the others' streams as they were).
-_STREAMS = ("sampling", *(kind.name for kind in SENSOR_KINDS))
+# (a sensor kind added at the end of SENSOR_TABLE leaves the others' streams as they were).
+_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE))
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 
@@ -79,10 +79,10 @@ class Engine:
         self.model, self.ids = build_model(robot, world, physics_dt_s=self.config.physics_dt_s)
         self.data = mujoco.MjData(self.model)
         body = self.ids.robot_body
-        #: The robot's sensors by ``SENSOR_KINDS`` name (an optional one it lacks: absent).
+        #: The robot's sensors by ``SENSOR_TABLE`` name (an optional one it lacks: absent).
         self.sensors: dict[str, Any] = {
             kind.name: kind.build(self.model, spec, body)
-            for kind in SENSOR_KINDS if (spec := robot.sensors[kind.name]) is not None}
+            for kind in SENSOR_TABLE if (spec := robot.sensors[kind.name]) is not None}
         self.lidar: Lidar | None = self.sensors.get("lidar")
         self.depth: DepthCamera | None = self.sensors.get("depth")
         self.imu: Imu = self.sensors["imu"]
@@ -251,7 +251,7 @@ class Engine:
         return self.world.person.pose_at(self.episode_time_s)
 
     def read(self, sensor: str) -> Any:
-        """The robot's ``sensor`` (a ``SENSOR_KINDS`` name) read now, with its own noise
+        """The robot's ``sensor`` (a ``SENSOR_TABLE`` name) read now, with its own noise
         stream (its kind's ``read``); error if the robot has none."""
         require(sensor in self.sensors, f"robot.{sensor}", None, f"a {sensor} on the robot")
         read = KINDS_BY_NAME[sensor].read

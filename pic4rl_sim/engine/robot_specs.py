@@ -20,7 +20,7 @@ from pic4rl_base.errors import ConfigError, require, unknown_key
 from pic4rl_base.geometry import Footprint
 from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, read_yaml
 
-from .sensors import KINDS_BY_NAME, SENSOR_KINDS, DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
+from .sensors import KINDS_BY_NAME, SENSOR_TABLE, DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
 
 
 class Drive(str, Enum):
@@ -46,7 +46,7 @@ class RobotSpec:
     max_linear_accel_m_s2: float
     max_angular_accel_rad_s2: float
     max_lateral_m_s: float = 0.0  # omni only
-    #: Its sensors by ``SENSOR_KINDS`` name, all kinds in the table's order (a kind not given
+    #: Its sensors by ``SENSOR_TABLE`` name, all kinds in the table's order (a kind not given
     #: gets its stock spec, or ``None`` when optional and not ``carried``).
     sensors: Mapping[str, Any] = field(default_factory=dict)
 
@@ -55,9 +55,9 @@ class RobotSpec:
         for key in self.sensors:
             if key not in KINDS_BY_NAME:
                 raise unknown_key(key, KINDS_BY_NAME, where="robot sensors")
-        stock = {k.name: k.spec() if k.carried else None for k in SENSOR_KINDS}
+        stock = {k.name: k.spec() if k.carried else None for k in SENSOR_TABLE}
         sensors = {name: self.sensors.get(name, spec) for name, spec in stock.items()}
-        for kind in SENSOR_KINDS:
+        for kind in SENSOR_TABLE:
             spec = sensors[kind.name]
             ok = isinstance(spec, kind.spec) or (spec is None and kind.optional)
             require(ok, f"robot.{kind.name}", spec,
@@ -78,10 +78,10 @@ class RobotSpec:
         return hash((self.name, self.drive, self.footprint))
 
     def with_sensors(self, **changes: Any) -> RobotSpec:
-        """A copy with sensors (``SENSOR_KINDS``' names) replaced."""
+        """A copy with sensors (``SENSOR_TABLE``' names) replaced."""
         return dataclasses.replace(self, sensors={**self.sensors, **changes})
 
-    # The stock kinds, typed; a kind added to SENSOR_KINDS is read as ``sensors[name]``.
+    # The stock kinds, typed; a kind added to SENSOR_TABLE is read as ``sensors[name]``.
     @property
     def lidar(self) -> LidarSpec | None:
         return self.sensors["lidar"]
@@ -128,7 +128,7 @@ OMNI = RobotSpec(
     max_linear_accel_m_s2=2.0, max_angular_accel_rad_s2=4.0,
     sensors={"lidar": LidarSpec(mount_xyz_m=(0.0, 0.0, 0.35)), "depth": None},
 )
-BUILT_IN: dict[str, RobotSpec] = {r.name: r for r in (JACKAL, HUSKY, BURGER, OMNI)}
+ROBOT_TABLE: dict[str, RobotSpec] = {r.name: r for r in (JACKAL, HUSKY, BURGER, OMNI)}
 
 _T = TypeVar("_T")
 
@@ -164,9 +164,9 @@ def _as_file(robot: RobotSpec) -> dict[str, Any]:
 def robot_from_mapping(data: Mapping[str, Any], *, where: str = "robot") -> RobotSpec:
     """A robot from a robot file's keys; sensors as nested mappings or null."""
     data = dict(data)
-    base = BUILT_IN.get(str(data.pop("base", "")))  # start from a built-in robot if named
+    base = ROBOT_TABLE.get(str(data.pop("base", "")))  # start from a built-in robot if named
     values: dict[str, Any] = _as_file(base) if base else {}
-    nested = {"footprint": Footprint, **{k.name: k.spec for k in SENSOR_KINDS}}
+    nested = {"footprint": Footprint, **{k.name: k.spec for k in SENSOR_TABLE}}
     for key, value in data.items():  # nested mappings refine the base robot's sensors
         old = values.get(key)
         merge = isinstance(old, dict) and isinstance(value, Mapping)
@@ -192,11 +192,11 @@ def robot_from_mapping(data: Mapping[str, Any], *, where: str = "robot") -> Robo
 def load_robot(name_or_path: str | Path) -> RobotSpec:
     """A built-in robot by name, or a robot YAML file (keys of ``RobotSpec``)."""
     text = str(name_or_path)
-    if text in BUILT_IN:
-        return BUILT_IN[text]
+    if text in ROBOT_TABLE:
+        return ROBOT_TABLE[text]
     path = Path(text)
     if path.suffix not in (".yaml", ".yml"):
-        raise unknown_key(text, BUILT_IN, where="robot")
+        raise unknown_key(text, ROBOT_TABLE, where="robot")
     data = read_yaml(path, "robot file")
     if not isinstance(data, Mapping):
         raise ConfigError(f"robot: {str(path)!r} must hold a mapping of robot keys")

@@ -1,4 +1,4 @@
-"""A robot's sensors in one table, ``SENSOR_KINDS``: each kind's spec (the robot's data and the
+"""A robot's sensors in one table, ``SENSOR_TABLE``: each kind's spec (the robot's data and the
 sim's ``<kind>.*`` parameters) and how the engine builds and reads it. The IMU and wheel
 odometry live here beside their specs; the ray-casting LiDAR and depth camera in
 ``ray_sensors``.
@@ -196,7 +196,7 @@ def _read_imu(imu: Imu, engine: Any, rng: np.random.Generator) -> ImuReading:
 #: Every kind of sensor, in ``RobotSpec.sensors``' order: the sim's parameters, a robot
 #: file's keys, the engine's sensors and their random streams derive from it (a kind added
 #: at the end leaves the others' noise as it was).
-SENSOR_KINDS = (
+SENSOR_TABLE = (
     SensorKind("lidar", LidarSpec,
                lambda model, spec, body: Lidar(model, spec, exclude_body=body), _read_rays,
                optional=True, label="LiDAR", publishes="scan"),
@@ -207,4 +207,4 @@ SENSOR_KINDS = (
     SensorKind("odometry", OdometrySpec, lambda model, spec, body: WheelOdometry(spec)),
 )
 #: The kinds by name.
-KINDS_BY_NAME = {kind.name: kind for kind in SENSOR_KINDS}
+KINDS_BY_NAME = {kind.name: kind for kind in SENSOR_TABLE}

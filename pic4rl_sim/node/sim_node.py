@@ -61,7 +61,7 @@ from ..engine.geometry import Twist2D
 from ..engine.sampling import check_free
 from ..engine.worlds.spec import WorldSpec
 from ..errors import WorldError
-from ..interfaces import (CMD_VEL, DIAGNOSTICS, EPISODE_TOPICS, INTERFACES, PAUSE_PHYSICS,
+from ..interfaces import (CMD_VEL, DIAGNOSTICS, EPISODE_TOPICS, INTERFACE_TABLE, PAUSE_PHYSICS,
                           RESET_WORLD, STEP_TOPICS, UNPAUSE_PHYSICS, Direction, Interface)
 from .messages import PHYSICS_STATUS, StateMessages, episode_messages
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
@@ -193,7 +193,7 @@ class SimNode(Node):
         """The table's subscription and services, each to its handler."""
         handlers = {CMD_VEL: self._on_cmd_vel, RESET_WORLD: self._on_reset,
                     PAUSE_PHYSICS: self._on_pause, UNPAUSE_PHYSICS: self._on_unpause}
-        for interface in INTERFACES:
+        for interface in INTERFACE_TABLE:
             if interface.direction is Direction.SUB:
                 self.create_subscription(ros_type(interface.type), interface.name,
                                          handlers[interface], qos_profile(interface))

@@ -111,7 +111,7 @@ def test_a_room_reaching_up_is_refused(tmp_path: Path) -> None:
         "settings and shared types", "perception", "control", "baselines and planners",
         "tasks", "transports", "env"]
     fake = tmp_path / "collision.py"
-    fake.write_text("from ..settings.tasks import TASKS\n\n\ndef f():\n"
+    fake.write_text("from ..settings.tasks import TASK_TABLE\n\n\ndef f():\n"
                     "    from ..baselines.planner import PlannerController\n", encoding="utf-8")
     assert upward_imports({"pic4rl_bridge.perception.collision": fake}) == [
         "pic4rl_bridge.perception.collision:5 → pic4rl_bridge.baselines.planner "

@@ -17,10 +17,10 @@ import pytest
 
 from pic4rl_sim.engine.model import WHEEL_GRIP, yaw_inertia_kg_m2
 from pic4rl_sim.config import ParamSpec, parameter_table
-from pic4rl_sim.engine.robot_specs import BUILT_IN, JACKAL, Drive, RobotSpec
+from pic4rl_sim.engine.robot_specs import ROBOT_TABLE, JACKAL, Drive, RobotSpec
 from pic4rl_sim.engine.sensors import STANDARD_GRAVITY_M_S2
-from pic4rl_sim.engine.worlds.generators import GENERATORS
-from pic4rl_sim.interfaces import INTERFACES, Interface
+from pic4rl_sim.engine.worlds.generators import WORLD_TABLE
+from pic4rl_sim.interfaces import INTERFACE_TABLE, Interface
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "sim.md"
@@ -67,7 +67,7 @@ def parameter_tables(robot: RobotSpec = JACKAL) -> dict[str, list[str]]:
     """The rows of docs/sim.md's parameter tables: node and episode, sensors, then one table
     per world generator."""
     tables: dict[str, list[str]] = {"node": [], "sensors": []}
-    tables.update({f"world.{kind}": [] for kind in GENERATORS})
+    tables.update({f"world.{kind}": [] for kind in WORLD_TABLE})
     for spec in parameter_table(robot):
         parts = spec.name.split(".")
         if parts[0] == "world" and len(parts) == 3:
@@ -92,7 +92,7 @@ def _n(value: float) -> str:
 def robot_tables() -> dict[str, list[str]]:
     """The rows of docs/sim.md's three robot tables: body, limits, sensors."""
     body, limits, sensors = [], [], []
-    for r in BUILT_IN.values():
+    for r in ROBOT_TABLE.values():
         fp = r.footprint
         shape = (f"circle, r {_n(fp.radius_m)}" if fp.radius_m is not None
                  else f"{_n(fp.length_m)} × {_n(fp.width_m)}")  # type: ignore[arg-type]
@@ -158,7 +158,7 @@ def doc_interface_rows(doc: str) -> dict[str, list[str]]:
 
 def node_interface_names() -> set[str]:
     """Every topic and service name of the node: its interface table's."""
-    return {interface.name for interface in INTERFACES}
+    return {interface.name for interface in INTERFACE_TABLE}
 
 
 @pytest.fixture(scope="module")
@@ -191,7 +191,7 @@ def test_every_topic_and_service_of_the_node_is_in_the_doc(doc):
 
 def test_the_interface_table_is_current(doc):
     rows = doc_interface_rows(doc)
-    expected = {f"`{i.name}`": interface_cells(i) for i in INTERFACES}
+    expected = {f"`{i.name}`": interface_cells(i) for i in INTERFACE_TABLE}
     assert list(rows) == list(expected), "docs/sim.md's interface rows differ from interfaces.py"
     stale = [name for name, cells in rows.items()
              if cells[:FRAME] + cells[FRAME + 1:] != expected[name]]
@@ -207,7 +207,7 @@ def test_every_config_file_is_in_the_doc(doc):
 
 
 def test_every_built_in_robot_and_world_is_in_the_doc(doc):
-    missing = [name for name in (*BUILT_IN, *GENERATORS) if f"`{name}`" not in doc]
+    missing = [name for name in (*ROBOT_TABLE, *WORLD_TABLE) if f"`{name}`" not in doc]
     assert not missing, f"docs/sim.md does not name {missing}"
 
 
@@ -235,7 +235,7 @@ if __name__ == "__main__":
     frames = {name: cells[FRAME] for name, cells in doc_interface_rows(DOC.read_text()).items()}
     print("<!-- interfaces (frame cells from the doc) -->")
     print(INTERFACE_HEADER)
-    for interface in INTERFACES:
+    for interface in INTERFACE_TABLE:
         cells = interface_cells(interface)
         cells.insert(FRAME, frames.get(cells[1], "?"))
         print("| " + " | ".join(cells) + " |")

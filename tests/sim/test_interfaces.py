@@ -15,7 +15,7 @@ from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
 from pic4rl_sim.interfaces import (
     GOAL_POSE,
-    INTERFACES,
+    INTERFACE_TABLE,
     RECORDED,
     SCAN,
     STEP_TOPICS,
@@ -35,10 +35,10 @@ UNREAD_BY_METRICS = {"/camera/depth/image_raw", "/camera/depth/camera_info", "/p
 
 
 def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts() -> None:
-    names = [i.name for i in INTERFACES]
+    names = [i.name for i in INTERFACE_TABLE]
     assert len(set(names)) == len(names)
     assert all(n and not n.startswith("/") for n in names)
-    orders = [i.record_order for i in INTERFACES if i.record_order is not None]
+    orders = [i.record_order for i in INTERFACE_TABLE if i.record_order is not None]
     assert sorted(orders) == list(range(len(orders)))
     assert RECORDED == ("clock", "ground_truth", "odom", "scan", "cmd_vel", "goal_pose",
                         "camera/depth/image_raw", "camera/depth/camera_info", "person/pose",
@@ -47,7 +47,7 @@ def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts(
 
 def test_a_step_ends_with_the_scan_and_only_topics_have_a_qos() -> None:
     assert STEP_TOPICS[-1] is SCAN
-    for i in INTERFACES:
+    for i in INTERFACE_TABLE:
         assert (i.qos is None) == (i.direction is Direction.SRV), i.name
         assert (i.cadence is not None) == (i.direction is Direction.PUB), i.name
 
@@ -62,7 +62,7 @@ def test_lookups_take_relative_and_resolved_names() -> None:
 
 
 def test_every_type_resolves_and_the_profiles_are_the_tables() -> None:
-    for i in INTERFACES:
+    for i in INTERFACE_TABLE:
         kind = ros_type(i.type)
         assert i.type.split("/") == [kind.__module__.split(".")[0], i.type.split("/")[1],
                                      kind.__name__]

@@ -16,31 +16,31 @@ from pic4rl_base.schema import param_names
 from pic4rl_sim.config import (ROBOT, ClockMode, ParamType, build_config, parameter_table,
                                parse_goal, parse_start, resolve)
 from pic4rl_sim.engine.geometry import Pose2D
-from pic4rl_sim.engine.robot_specs import BUILT_IN, BURGER, JACKAL, OMNI, robot_from_mapping
-from pic4rl_sim.engine.sensors import SENSOR_KINDS
-from pic4rl_sim.engine.worlds.generators import GENERATORS
+from pic4rl_sim.engine.robot_specs import ROBOT_TABLE, BURGER, JACKAL, OMNI, robot_from_mapping
+from pic4rl_sim.engine.sensors import SENSOR_TABLE
+from pic4rl_sim.engine.worlds.generators import WORLD_TABLE
 
 RCLPY_OWN = ("use_sim_time", "start_type_description_service")
 
 
 def values_for(robot_name: str = "jackal", **overrides) -> dict:
     overrides = {k.replace("__", "."): v for k, v in overrides.items()}
-    return resolve(parameter_table(BUILT_IN[robot_name]), {"robot": robot_name, **overrides})
+    return resolve(parameter_table(ROBOT_TABLE[robot_name]), {"robot": robot_name, **overrides})
 
 
-@pytest.mark.parametrize("robot", sorted(BUILT_IN))
+@pytest.mark.parametrize("robot", sorted(ROBOT_TABLE))
 def test_the_defaults_build_a_valid_config_for_every_robot(robot):
     config = build_config(values_for(robot))
-    assert config.robot == BUILT_IN[robot]  # the robot's own sensors are the defaults
+    assert config.robot == ROBOT_TABLE[robot]  # the robot's own sensors are the defaults
     assert config.clock.mode is ClockMode.LOCKSTEP
     assert config.episode.start is None and config.episode.goal is None
     assert config.world.build().name == "indoor"
 
 
-@pytest.mark.parametrize("kind", sorted(GENERATORS))
+@pytest.mark.parametrize("kind", sorted(WORLD_TABLE))
 def test_every_world_generator_builds_from_its_parameters(kind):
     config = build_config(values_for(world=kind))
-    assert set(dict(config.world.params)) == set(param_names(GENERATORS[kind].params))
+    assert set(dict(config.world.params)) == set(param_names(WORLD_TABLE[kind].params))
     assert config.world.build().name == kind
 
 
@@ -52,8 +52,8 @@ def test_every_parameter_is_described_typed_and_within_its_own_range():
         assert spec.description.strip(), spec.name
         assert spec.check(spec.default) == spec.default, spec.name
     world_params = {name for name in names if name.startswith("world.")}
-    assert world_params == {f"world.{kind}.{p}" for kind in GENERATORS
-                            for p in param_names(GENERATORS[kind].params)}
+    assert world_params == {f"world.{kind}.{p}" for kind in WORLD_TABLE
+                            for p in param_names(WORLD_TABLE[kind].params)}
 
 
 @pytest.mark.parametrize("spec", [s for s in parameter_table(JACKAL) if s.range],
@@ -148,9 +148,9 @@ def test_sensor_parameters_override_the_robots_sensors():
 
 
 def test_a_robot_holds_one_spec_per_sensor_kind():
-    """``RobotSpec.sensors`` has every ``SENSOR_KINDS`` kind in order (the typed accessors read
+    """``RobotSpec.sensors`` has every ``SENSOR_TABLE`` kind in order (the typed accessors read
     it); a robot file writes each at the top level; a wrong kind or spec is named."""
-    assert list(JACKAL.sensors) == [k.name for k in SENSOR_KINDS]
+    assert list(JACKAL.sensors) == [k.name for k in SENSOR_TABLE]
     assert JACKAL.lidar is JACKAL.sensors["lidar"] and JACKAL.depth is None
     refined = robot_from_mapping({"base": "jackal", "depth": {"width": 10},
                                   "lidar": {"beams": 9}})
@@ -197,7 +197,7 @@ def test_only_robot_world_sensor_and_timing_changes_need_a_new_engine():
 
 
 def test_the_robot_parameter_comes_first_and_is_a_string():
-    assert ROBOT.type is ParamType.STRING and ROBOT.default in BUILT_IN
+    assert ROBOT.type is ParamType.STRING and ROBOT.default in ROBOT_TABLE
 
 
 def test_params_does_not_import_rclpy():

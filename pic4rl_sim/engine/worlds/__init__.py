@@ -1,7 +1,7 @@
 """Worlds: the arena a robot drives in, as data, and the generators that make one.
 
 ``spec`` (``WorldSpec``: walls, obstacles and people as boxes and cylinders), ``generators``
-(``GENERATORS``: each generator's parameters and ``make_world``), ``arena`` (walls and the
+(``WORLD_TABLE``: each generator's parameters and ``make_world``), ``arena`` (walls and the
 seeded random stream), ``barn`` (BARN's 300 worlds, from ``data/``), ``barn_like`` (BARN-like
 fields from a seed), ``vineyard`` (the vineyard's rows and lanes) and ``mjcf`` (a user's MJCF
 world; loads MuJoCo). Names are imported on first use.
@@ -13,7 +13,7 @@ from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "WorldSpec": "spec", "Box": "spec", "Cylinder": "spec", "PersonSpec": "spec",
-    "GENERATORS": "generators", "make_world": "generators", "world_params": "generators",
+    "WORLD_TABLE": "generators", "make_world": "generators", "world_params": "generators",
     "world_from_mjcf": "mjcf",
 }
 __all__ = sorted(_EXPORTS)

@@ -295,7 +295,7 @@ class Generator(NamedTuple):
 
 
 #: Every generator, by the ``KIND`` of its parameters.
-GENERATORS: dict[str, Generator] = {g.params.KIND: g for g in (
+WORLD_TABLE: dict[str, Generator] = {g.params.KIND: g for g in (
     Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
     Generator(VineyardParams, vineyard), Generator(PersonParams, person),
     Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like))}
@@ -304,9 +304,9 @@ GENERATORS: dict[str, Generator] = {g.params.KIND: g for g in (
 def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:
     """Generator ``kind``'s parameters: ``params`` over the defaults, typed and checked; an
     unknown kind or name is a ``ConfigError`` with a "did you mean"."""
-    if kind not in GENERATORS:
-        raise unknown_key(kind, GENERATORS, where="world")
-    cls = GENERATORS[kind].params
+    if kind not in WORLD_TABLE:
+        raise unknown_key(kind, WORLD_TABLE, where="world")
+    cls = WORLD_TABLE[kind].params
     names = param_names(cls)
     for name in params or {}:
         if name not in names:
@@ -324,4 +324,4 @@ def make_world(kind: str, *, seed: int = 0, **params: Any) -> WorldSpec:
 
         return world_from_mjcf(kind)
     typed = world_params(kind, params)
-    return GENERATORS[kind].build(seed, typed)
+    return WORLD_TABLE[kind].build(seed, typed)

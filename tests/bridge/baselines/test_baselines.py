@@ -162,14 +162,14 @@ def test_the_baselines_settings_are_their_own_section(tmp_path):
 
 def test_the_baseline_table_drives_every_registered_task_and_no_other() -> None:
     from pic4rl_bridge.baselines.registry import BASELINE_TABLE
-    from pic4rl_bridge.settings.tasks import TASKS
+    from pic4rl_bridge.settings.tasks import TASK_TABLE
 
     driven = {t for spec in BASELINE_TABLE.values() for t in spec.tasks}
-    assert driven == set(TASKS)
+    assert driven == set(TASK_TABLE)
 
 
 def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
-    """Imitation's experts come from the baseline table: each ``TASKS`` expert name is one
+    """Imitation's experts come from the baseline table: each ``TASK_TABLE`` expert name is one
     baseline's ``expert``, made by that baseline's own maker, and a name no baseline answers
     to is refused in one line."""
     from pic4rl_bridge.baselines.follow import HeadingController

@@ -19,7 +19,7 @@ from pic4rl_sim.node.messages import StateMessages, plan_message
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
-from pic4rl_bridge.readings.sensor_table import SENSORS, FrameSensor, build_frame
+from pic4rl_bridge.readings.sensor_table import READING_TABLE, FrameSensor, build_frame
 
 BRIDGE = Path(__file__).resolve().parents[3] / "pic4rl_bridge"
 #: The fields every frame has; the sensors' are its ``readings``.
@@ -32,7 +32,7 @@ def test_a_frame_holds_the_tables_sensors_as_readings() -> None:
     needs no new field."""
     fields = [f.name for f in dataclasses.fields(SensorFrame)]
     assert fields == [*ALWAYS, "readings"]
-    names = [s.name for s in SENSORS]
+    names = [s.name for s in READING_TABLE]
     frame = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, names[::-1],
                         lambda sensor: f"value of {sensor.name}")
     assert list(frame.readings) == names
@@ -49,7 +49,7 @@ def test_each_sensor_has_its_topic_parameter_with_the_tables_default() -> None:
     """``topics:`` holds one parameter per sensor of the table (with its sim topic as the
     default), which the params file sets and the schema checks like any other."""
     default = EnvConfig()
-    for sensor in SENSORS:
+    for sensor in READING_TABLE:
         assert getattr(default.topics, sensor.name) == sensor.interface.name
         remapped = env_config_from_params({f"topics.{sensor.name}": f"/robot2/{sensor.name}"})
         assert getattr(remapped.topics, sensor.name) == f"/robot2/{sensor.name}"
@@ -91,7 +91,7 @@ def replay(engine: Engine) -> None:
         engine.step(Twist2D(0.3, 0.1, 0.2))
 
 
-@pytest.mark.parametrize("sensor", SENSORS, ids=lambda s: s.name)
+@pytest.mark.parametrize("sensor", READING_TABLE, ids=lambda s: s.name)
 def test_the_engine_read_equals_the_decoded_message(engine: Engine, sensor: FrameSensor) -> None:
     mount = Pose2D(0.1, 0.0, 0.0)
     messages = StateMessages(engine)

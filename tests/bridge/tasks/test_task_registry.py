@@ -1,4 +1,4 @@
-"""The task registry: each entry of ``TASKS`` drives its env ids, the task built, its reward
+"""The task registry: each entry of ``TASK_TABLE`` drives its env ids, the task built, its reward
 scales, its section and its experts; nothing else lists tasks (a baseline names the tasks it
 drives in its own table)."""
 
@@ -17,7 +17,7 @@ from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.settings.tasks import (TASKS, EnvId, GoToPoseReward, PersonConfig, PersonReward,
+from pic4rl_bridge.settings.tasks import (TASK_TABLE, EnvId, GoToPoseReward, PersonConfig, PersonReward,
                                           TaskName, TaskSpec, VineyardConfig, VineyardReward,
                                           env_ids, task_spec)
 from pic4rl_bridge.tasks import make_task
@@ -40,7 +40,7 @@ def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaul
     }
     for env_id, kwargs in pic4rl_bridge.ENV_IDS.items():
         assert gym.spec(env_id).kwargs == kwargs
-        spec = TASKS[kwargs["task"]]
+        spec = TASK_TABLE[kwargs["task"]]
         assert kwargs["sensor"] in spec.sensors
 
 
@@ -49,7 +49,7 @@ def test_an_entry_alone_adds_an_id(monkeypatch):
     toy = TaskSpec("toy", (EnvId("pic4rl/Toy-v0", "depth", {"world": "person"}),),
                    sensors=("depth",), reward=GoToPoseReward,
                    build="pic4rl_bridge.tasks.goto:build")
-    monkeypatch.setitem(TASKS, "toy", toy)
+    monkeypatch.setitem(TASK_TABLE, "toy", toy)
     assert env_ids()["pic4rl/Toy-v0"] == {"task": "toy", "sensor": "depth",
                                          "sim_defaults": {"world": "person"}}
     # its build is found by name: goToPose's, through the config's sensor
@@ -89,7 +89,7 @@ def test_each_task_reads_its_own_reward_scales_from_the_one_reward_section():
         assert isinstance(reward, cls)
     assert (reward.goal, reward.progress, reward.facing, reward.collision) == (
         500.0, 7.0, 3.0, -9.0)
-    own = {spec.name: {f.name for f in dataclasses.fields(spec.reward)} for spec in TASKS.values()}
+    own = {spec.name: {f.name for f in dataclasses.fields(spec.reward)} for spec in TASK_TABLE.values()}
     assert own["vineyard"] == {"collision", "step", "progress", "centering", "row_end"}
     assert own["personMonitoring"] == {"collision", "step", "facing", "person_distance",
                                        "bearing"}
@@ -103,7 +103,7 @@ def test_each_task_reads_its_own_reward_scales_from_the_one_reward_section():
 
 
 def test_a_tasks_section_is_its_entrys():
-    sections = {spec.section for spec in TASKS.values() if spec.section is not None}
+    sections = {spec.section for spec in TASK_TABLE.values() if spec.section is not None}
     assert sections == {("vineyard", VineyardConfig), ("person", PersonConfig)}
     config = env_config_from_params({"task": "personMonitoring", "person.distance_m": 1.5,
                                      "vineyard.end_tolerance_m": 0.2})
@@ -124,9 +124,9 @@ def test_the_baselines_come_from_their_table_and_the_facts_from_the_entries():
                                           r"task is 'vineyard'\. Test it with --baseline "
                                           r"centerline or row_follower"):
         check_fits("dwa", EnvConfig(task="vineyard"))
-    assert TASKS["goToPose"].fact_name("depth") == "goToPose/depth"
-    assert TASKS["vineyard"].fact_name("depth") == "vineyard"
-    assert [s.name for s in TASKS.values() if s.uses_world] == ["vineyard"]
+    assert TASK_TABLE["goToPose"].fact_name("depth") == "goToPose/depth"
+    assert TASK_TABLE["vineyard"].fact_name("depth") == "vineyard"
+    assert [s.name for s in TASK_TABLE.values() if s.uses_world] == ["vineyard"]
 
 
 def test_make_task_refuses_what_the_entry_cannot_build():

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 import pic4rl_metrics.core.registry as registry_module
-from pic4rl_metrics import REGISTRY, ConfigError, Derived, Metric, compute, metric
+from pic4rl_metrics import METRIC_TABLE, ConfigError, Derived, Metric, compute, metric
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.core.registry import Registry
 from pic4rl_metrics.tables.results import METRIC_COLUMNS
@@ -41,7 +41,7 @@ def user_metrics() -> Iterator[None]:
     metric("broken_m", unit="m")(lambda d: 1 / 0)
     yield
     for name in ("mean_x_m", "person_far_m", "broken_m"):
-        REGISTRY.remove(name)
+        METRIC_TABLE.remove(name)
 
 
 @pytest.fixture
@@ -71,7 +71,7 @@ def test_registered_metrics_reach_worker_processes(user_metrics: None, tmp_path:
 
 def test_metrics_selects_columns_and_keeps_outcome_and_success(bag: Path) -> None:
     frame = compute([bag], metrics=["spl", "path_length_m"]).frame
-    metric_cols = [c for c in frame.columns if c in REGISTRY.metrics]
+    metric_cols = [c for c in frame.columns if c in METRIC_TABLE.metrics]
     assert metric_cols == ["outcome", "success", "path_length_m", "spl"]  # registry order
     assert frame.iloc[0]["spl"] == pytest.approx(1.0, abs=1e-9)
 
@@ -85,11 +85,11 @@ def test_a_missing_input_of_a_named_builtin_is_warned(bag: Path) -> None:
 
 def test_unknown_and_duplicate_names_are_refused() -> None:
     with pytest.raises(ConfigError, match=r"'path_lenght_m' is not a metric; did you mean 'path_length_m'"):
-        REGISTRY.select(["path_lenght_m"])
+        METRIC_TABLE.select(["path_lenght_m"])
     with pytest.raises(ConfigError, match="'spl' is registered already"):
         metric("spl", unit="-")(mean_x)
     with pytest.raises(ConfigError, match="one of pic4rl's own"):
-        REGISTRY.remove("spl")
+        METRIC_TABLE.remove("spl")
     with pytest.raises(ConfigError, match=r"unknown inputs \['map'\]"):
         Metric("m", "m", "m", mean_x, needs=frozenset({"map"}))
 
@@ -116,13 +116,13 @@ def test_a_plugin_arrives_through_the_entry_point_group(
     assert list(fresh.metrics) == ["plugin_path_twice_m"]
     assert "no_such_package_xyz" in fresh.plugin_errors[0]
     # through the process-wide registry, as compute() loads it
-    monkeypatch.setattr(REGISTRY, "_plugins_loaded", False)
-    monkeypatch.setattr(REGISTRY, "plugin_errors", [])
+    monkeypatch.setattr(METRIC_TABLE, "_plugins_loaded", False)
+    monkeypatch.setattr(METRIC_TABLE, "plugin_errors", [])
     try:
         row = compute([bag]).frame.iloc[0]
         assert row["plugin_path_twice_m"] == pytest.approx(4.0, abs=1e-9)
     finally:
-        REGISTRY.remove("plugin_path_twice_m")
+        METRIC_TABLE.remove("plugin_path_twice_m")
 
 
 def test_the_cli_selects_metrics(
@@ -130,7 +130,7 @@ def test_the_cli_selects_metrics(
 ) -> None:
     assert main(["compute", "--metrics", "path_length_m,mean_x_m", "--format", "csv", str(bag)]) == 0
     back = pd.read_csv(io.StringIO(capsys.readouterr().out))
-    assert [c for c in back.columns if c in REGISTRY.metrics] == [
+    assert [c for c in back.columns if c in METRIC_TABLE.metrics] == [
         "outcome", "success", "path_length_m", "mean_x_m",
     ]
     assert main(["compare", "--metrics", "mean_x_m", "--format", "markdown", str(bag)]) == 0
@@ -147,7 +147,7 @@ def test_the_topic_map_selects_metrics(bag: Path, tmp_path: Path) -> None:
     assert main(["compute", "--topic-map", str(topic_map), "--format", "csv",
                  "--out", str(tmp_path / "out.csv"), str(bag)]) == 0
     back = pd.read_csv(tmp_path / "out.csv")
-    assert [c for c in back.columns if c in REGISTRY.metrics] == ["outcome", "success", "path_length_m"]
+    assert [c for c in back.columns if c in METRIC_TABLE.metrics] == ["outcome", "success", "path_length_m"]
 
 
 def test_every_builtin_metric_is_documented() -> None:
@@ -177,9 +177,9 @@ def test_a_metric_s_table_placement_is_in_its_registry_entry() -> None:
     try:
         frame = pd.DataFrame({"row_width_m": [0.8], "row_path_mae_m": [math.nan]})
         assert table_columns(frame) == (*TABLE1_COLUMNS, "row_width_m")
-        assert REGISTRY.table("row") == ("row_width_m", *ROW_COLUMNS)
+        assert METRIC_TABLE.table("row") == ("row_width_m", *ROW_COLUMNS)
     finally:
-        REGISTRY.remove("row_width_m")
+        METRIC_TABLE.remove("row_width_m")
 
 
 @pytest.mark.bad_input

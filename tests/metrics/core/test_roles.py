@@ -18,7 +18,7 @@ from pic4rl_metrics.core.roles import (
     POSE_COV,
     POSE_STAMPED,
     ROLE_TYPES,
-    ROLES,
+    ROLE_TABLE,
     SERIES_ROLES,
     SUPPORTED_POSE_MSGS,
     TWIST_STAMPED,
@@ -37,9 +37,9 @@ def _pose() -> PoseSeries:
 
 def test_a_topic_map_has_every_role_with_its_default_topic() -> None:
     topic_map = TopicMap()
-    assert {role.name: getattr(topic_map, role.name) for role in ROLES} == {
-        role.name: role.topic for role in ROLES}
-    assert set(ROLE_TYPES) == {role.name for role in ROLES}
+    assert {role.name: getattr(topic_map, role.name) for role in ROLE_TABLE} == {
+        role.name: role.topic for role in ROLE_TABLE}
+    assert set(ROLE_TYPES) == {role.name for role in ROLE_TABLE}
 
 
 def test_a_role_topic_is_a_keyword_normalized_and_replaced() -> None:
@@ -57,12 +57,12 @@ def test_a_role_topic_is_a_keyword_normalized_and_replaced() -> None:
 
 
 def test_topic_map_yaml_keys_and_cli_options_come_from_the_table() -> None:
-    data = {role.key: f"/mapped/{role.name}" for role in ROLES}
+    data = {role.key: f"/mapped/{role.name}" for role in ROLE_TABLE}
     topic_map, _, _ = topic_map_from_dict(data, source="test")
-    assert all(getattr(topic_map, r.name) == f"/mapped/{r.name}" for r in ROLES)
-    assert topic_map.explicit == {role.name for role in ROLES}
-    assert {r.key for r in ROLES} >= {"scan", "cmd_vel", "facts_topic", "outcome_topic"}
-    flagged = [role for role in ROLES if role.flag]
+    assert all(getattr(topic_map, r.name) == f"/mapped/{r.name}" for r in ROLE_TABLE)
+    assert topic_map.explicit == {role.name for role in ROLE_TABLE}
+    assert {r.key for r in ROLE_TABLE} >= {"scan", "cmd_vel", "facts_topic", "outcome_topic"}
+    flagged = [role for role in ROLE_TABLE if role.flag]
     assert [r.flag for r in flagged] == ["--scan-topic", "--cmd-topic", "--goal-topic",
                                          "--person-topic"]
     argv = ["compute", "bag"] + [x for r in flagged for x in (r.flag, f"/cli/{r.name}")]
@@ -84,7 +84,7 @@ def test_an_episode_has_every_series_role_as_an_attribute() -> None:
 
 
 def test_a_series_role_is_an_input_a_metric_can_need() -> None:
-    assert set(SERIES_ROLES.values()) <= {r for r in ROLES if r.name in INPUT_TESTS}
+    assert set(SERIES_ROLES.values()) <= {r for r in ROLE_TABLE if r.name in INPUT_TESTS}
     cmd = CmdSeries(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), np.zeros(0))
     empty = Derived(Episode(Path("b"), EpisodeFacts(), _pose(), "/odom", cmd=cmd))
     assert [name for name in ("scan", "cmd_vel", "person") if INPUT_TESTS[name](empty)] == []
@@ -104,7 +104,7 @@ def test_the_stamped_types_are_those_with_a_header() -> None:
 def test_docs_topic_table_names_every_role_its_topic_and_types() -> None:
     table = DOC.read_text().split("## Inputs and conventions", 1)[1].split("\n\n", 2)[1]
     rows = table.splitlines()[2:]
-    for role in ROLES:
+    for role in ROLE_TABLE:
         row = next((r for r in rows if f"`{role.topic}`" in r), None)
         assert row is not None, f"docs/metrics.md's topic table has no row for {role.name}"
         for msgtype in role.types:

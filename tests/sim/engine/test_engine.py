@@ -227,18 +227,18 @@ def test_a_given_start_gets_a_goal_far_enough_and_a_failed_reset_changes_nothing
 
 
 def test_every_sensor_kind_is_built_and_read_through_the_table():
-    """``SENSOR_KINDS`` (sensors) is the robot's sensors' one table: a robot holds one spec per
+    """``SENSOR_TABLE`` (sensors) is the robot's sensors' one table: a robot holds one spec per
     kind in its order, gets one engine sensor per spec it carries, and ``read`` of each equals
     its named reader on the same noise stream."""
     from pic4rl_sim.engine.robot_specs import DepthCameraSpec, ImuSpec
-    from pic4rl_sim.engine.sensors import SENSOR_KINDS
+    from pic4rl_sim.engine.sensors import SENSOR_TABLE
 
-    assert list(JACKAL.sensors) == [k.name for k in SENSOR_KINDS]
+    assert list(JACKAL.sensors) == [k.name for k in SENSOR_TABLE]
     robot = JACKAL.with_sensors(lidar=LidarSpec(beams=30, noise_std_m=0.02),
                                 depth=DepthCameraSpec(width=8, height=6, noise_std_m=0.02),
                                 imu=ImuSpec(gyro_noise_std_rad_s=0.1))
     engine = Engine(robot, open_field(Box(2.0, 0.0, 0.2, 2.0, 1.0)), seed=4)
-    assert set(engine.sensors) == {k.name for k in SENSOR_KINDS}
+    assert set(engine.sensors) == {k.name for k in SENSOR_TABLE}
     named = {"lidar": engine.scan, "depth": engine.depth_image, "imu": engine.imu_reading}
     for name, reader in named.items():
         engine.reset(seed=4)

@@ -12,13 +12,13 @@ import pytest
 
 from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.paths import shortest_path_length
-from pic4rl_sim.engine.robot_specs import BUILT_IN
+from pic4rl_sim.engine.robot_specs import ROBOT_TABLE
 from pic4rl_sim.engine.sampling import sample_start_goal
 from pic4rl_sim.engine.worlds.barn import (DATA, LICENSE, WORLDS, challenge_test_worlds,
                                            start_and_goal)
 from pic4rl_sim.engine.worlds.generators import make_world
 
-JACKAL_RADIUS_M = BUILT_IN["jackal"].footprint.bounding_radius_m
+JACKAL_RADIUS_M = ROBOT_TABLE["jackal"].footprint.bounding_radius_m
 
 
 @pytest.fixture(scope="module")

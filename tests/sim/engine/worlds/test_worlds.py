@@ -10,14 +10,14 @@ import pytest
 
 from pic4rl_base.errors import ConfigError
 from pic4rl_base.schema import param_names, specs, to_params
-from pic4rl_sim.engine.worlds.generators import (GENERATORS, ObstaclesParams, make_world, obstacles,
+from pic4rl_sim.engine.worlds.generators import (WORLD_TABLE, ObstaclesParams, make_world, obstacles,
                                                  world_params)
 from pic4rl_sim.engine.worlds.mjcf import world_from_mjcf
 from pic4rl_sim.engine.worlds.spec import Box, Cylinder, WorldSpec, clearance
 from pic4rl_sim.errors import WorldError
 
 ROBOT_RADIUS_M = 0.25
-KINDS = sorted(GENERATORS)
+KINDS = sorted(WORLD_TABLE)
 
 
 def outline(shape: Box | Cylinder, step_m: float = 0.02) -> np.ndarray:
@@ -67,8 +67,8 @@ def test_same_seed_gives_the_same_world_and_other_seeds_other_worlds(kind: str) 
     assert a == b and a.params == b.params and a.seed == 3
     others = {make_world(kind, seed=s) for s in range(4, 9)}
     assert a not in others and len(others) == 5
-    assert {k: a.params[k] for k in param_names(GENERATORS[kind].params)} == to_params(
-        GENERATORS[kind].params())
+    assert {k: a.params[k] for k in param_names(WORLD_TABLE[kind].params)} == to_params(
+        WORLD_TABLE[kind].params())
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -305,7 +305,7 @@ def test_make_world_suggests_close_names_and_checks_types() -> None:
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_generator_params_describe_every_parameter(kind: str) -> None:
-    described = specs(GENERATORS[kind].params)
+    described = specs(WORLD_TABLE[kind].params)
     assert described or kind == "barn"  # BARN's worlds are data: an index, no parameters
     for spec in described:
         assert type(spec.default) in (int, float) and spec.description and spec.bounds
