@@ -1,7 +1,7 @@
 """Peak memory and time of judging one long bag, and of its HTML report, against the bag's
 length (issue 27, item 8; issue 37, item 5).
 
-Each length is a real-robot-shaped log (``pic4rl_metrics.testing.synthetic.write_long_bag``: 50 Hz
+Each length is a real-robot-shaped log (``pic4rl_metrics.synthetic.synthetic.write_long_bag``: 50 Hz
 odometry, 40 Hz scans of 720 beams), judged by ``pic4rl_metrics.compute``, and then made into a
 page by ``pic4rl-metrics report``, each in a fresh subprocess that reports its own peak
 resident memory (``VmHWM``: ``ru_maxrss`` would carry a large parent's across exec) and wall
@@ -24,7 +24,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from pic4rl_metrics.testing.synthetic import write_long_bag
+from pic4rl_metrics.synthetic.synthetic import write_long_bag
 
 #: Judges the bag given as argv[2] (none: only imports) with ``compute`` (argv[1] ``compute``)
 #: or writes its report beside it (``report``), and prints its figures as JSON.

@@ -29,7 +29,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from pic4rl_metrics import compute
 from pic4rl_metrics.bags.inputs import discover
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, Obstacles, circle, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, Obstacles, circle, write_episode_bag
 
 REPO = Path(__file__).resolve().parents[1]
 #: Real-robot bags shared beside the repository (see their README); used when present.

@@ -1,7 +1,7 @@
 """How long ``pic4rl-metrics report`` takes on a 1,000-episode benchmark, and how long its page
 takes to open in a browser.
 
-The bags are a synthetic benchmark (``pic4rl_metrics.testing.synthetic_bench``: 5 agents × 100
+The bags are a synthetic benchmark (``pic4rl_metrics.synthetic.synthetic_bench``: 5 agents × 100
 start–goal pairs × 2 runs in a walled arena), shaped like sim episodes: ``/ground_truth`` and
 ``/odom`` at 20 Hz, ``/cmd_vel`` at 20 Hz, a 360-beam ``/scan`` at 10 Hz, facts and outcome.
 Writing them is not timed. Side by side in this one process: ``compute`` alone (reading and
@@ -33,7 +33,7 @@ from pic4rl_metrics import compute
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.viz.report_maps import SKETCH_SCANS
-from pic4rl_metrics.testing.synthetic_bench import write_benchmark
+from pic4rl_metrics.synthetic.synthetic_bench import write_benchmark
 
 AGENTS = {"td3": 0.8, "sac": 0.7, "dwa": 0.5, "proportional": 0.4, "planner": 0.95}
 RUNS = 2

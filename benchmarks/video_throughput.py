@@ -44,7 +44,7 @@ TURN = np.array([-1.0, 0.5], dtype=np.float32)
 
 
 def episode_bag(folder: Path, seconds: float) -> Path:
-    from pic4rl_metrics.testing.synthetic import Obstacles, circle, write_episode_bag
+    from pic4rl_metrics.synthetic.synthetic import Obstacles, circle, write_episode_bag
 
     arena = Obstacles(
         circles=((6.0, 6.0, 0.5), (1.5, 1.5, 0.3), (10.5, 1.5, 0.3), (1.5, 10.5, 0.3)),

@@ -10,7 +10,7 @@ _HOMES = homes_of({
     "algorithm_table": ("ALGORITHM_TABLE", "AlgorithmEntry"),
     "algorithms": ("ALGORITHMS", "algorithm_class", "check_spaces", "describe_space",
                    "load_model", "new_model"),
-    "exploration": ("EpsilonGreedy", "epsilon_at"),
+    "action_noise": ("EpsilonGreedy", "epsilon_at"),
     "extractors": ("DepthGoalExtractor",),
 })
 __all__ = sorted(_HOMES)

@@ -27,7 +27,7 @@ from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
 
 from .algorithm_table import ALGORITHM_TABLE, AlgorithmEntry
-from .exploration import EpsilonGreedy
+from .action_noise import EpsilonGreedy
 from .extractors import DepthGoalExtractor
 
 

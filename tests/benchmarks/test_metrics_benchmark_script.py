@@ -15,7 +15,7 @@ from types import ModuleType
 import pytest
 from bench_helpers import read_results
 
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "metrics_throughput.py"
 FIGURES = (

@@ -14,7 +14,7 @@ from rosbags.rosbag2 import Reader
 from pic4rl_bridge.recorder import RunRecorder
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 
 def _metadata_custom(bag: Path) -> list[tuple[str, str]]:

@@ -38,7 +38,7 @@ def episodes() -> pd.DataFrame:
 def bench_bags(tmp_path_factory: pytest.TempPathFactory):
     """A synthetic benchmark's real bags: 3 agents (dwa 50 %, planner 95 %, td3 80 % success)
     × 4 start–goal pairs × 2 runs, under ``<root>/run<r>/<agent>/episode_NNNN``."""
-    from pic4rl_metrics.testing.synthetic_bench import write_benchmark
+    from pic4rl_metrics.synthetic.synthetic_bench import write_benchmark
 
     root = tmp_path_factory.mktemp("bench") / "bags"
     write_benchmark(root, {"td3": 0.8, "dwa": 0.5, "planner": 0.95}, pairs=4, runs=2)

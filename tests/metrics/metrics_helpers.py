@@ -25,7 +25,7 @@ from rosbags.rosbag2 import Reader, Writer
 from pic4rl_metrics import compute
 from pic4rl_metrics.contract import typestore
 from pic4rl_metrics.tables.results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS
-from pic4rl_metrics.testing.synthetic import straight_line
+from pic4rl_metrics.synthetic.synthetic import straight_line
 
 EXACT = 1e-12
 DIFF = 1e-9

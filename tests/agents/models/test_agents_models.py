@@ -32,7 +32,7 @@ from pic4rl_agents.models.algorithms import (
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
-from pic4rl_agents.models.exploration import EpsilonGreedy
+from pic4rl_agents.models.action_noise import EpsilonGreedy
 from pic4rl_agents.models.extractors import DepthGoalExtractor
 from pic4rl_bridge.errors import ConfigError
 

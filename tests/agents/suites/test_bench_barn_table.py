@@ -18,7 +18,7 @@ import pytest
 from pic4rl_agents.suites import table as benchtable
 from pic4rl_agents.suites.suite import Cell, PairSet, Suite
 from pic4rl_metrics.cli import commands as cli
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 #: Per agent, per world variant: (outcome, length driven in m).
 RUNS = {

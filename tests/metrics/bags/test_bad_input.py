@@ -34,7 +34,7 @@ from pic4rl_metrics import (
 )
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import parse_facts
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     Track,

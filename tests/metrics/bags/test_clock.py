@@ -21,7 +21,7 @@ from pic4rl_metrics.bags.bagwriter import DEFAULT_QOS
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import encode_custom_data, typestore
 from pic4rl_metrics.errors import CorruptBagError
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, write_episode_bag
 
 from metrics_helpers import LINE, row
 

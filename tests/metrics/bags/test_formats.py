@@ -27,7 +27,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from pic4rl_metrics import BagError, compute, read_episode
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import STORAGES, typestore
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, Obstacles, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, Obstacles, write_episode_bag
 from pic4rl_metrics.bags.topics import TopicMap
 
 FACTS = {"agent": "td3", "run": "r1", "episode": "3", "footprint": {"radius_m": 0.2}}

@@ -13,7 +13,7 @@ from pic4rl_metrics import (
     compute,
 )
 from pic4rl_metrics.cli.commands import main
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     straight_line,
     write_episode_bag,
 )

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from pic4rl_metrics.testing.synthetic import write_long_bag
+from pic4rl_metrics.synthetic.synthetic import write_long_bag
 
 MINUTES = 30
 PEAK_MB = 300

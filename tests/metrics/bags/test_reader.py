@@ -19,7 +19,7 @@ from pic4rl_metrics import (
     compute_metrics,
     read_episode,
 )
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     write_episode_bag,

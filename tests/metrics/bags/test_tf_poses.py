@@ -18,7 +18,7 @@ from metrics_helpers import DIFF, EXACT, transform, write_tf_bag
 
 from pic4rl_metrics import TopicError, compute_metrics, read_episode
 from pic4rl_metrics.cli.commands import main
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, circle, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, circle, straight_line, write_episode_bag
 from pic4rl_metrics.bags.topics import TopicMap
 
 CIRCLE = circle(2.0, 0.5, 10.0, dt_s=0.05)  # 201 poses, 5 m of arc (1.25 rad)

@@ -28,7 +28,7 @@ from pic4rl_metrics.core.plausibility import (
 )
 from pic4rl_metrics.core.series import PoseSeries
 from pic4rl_metrics.errors import CorruptBagError
-from pic4rl_metrics.testing.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import DEFAULT_T0_NS, straight_line, write_episode_bag
 
 T = typestore().types
 NS = 1_000_000_000

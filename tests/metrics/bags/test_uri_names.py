@@ -17,7 +17,7 @@ import pytest
 from pic4rl_metrics import compute
 from pic4rl_metrics.bags.bagwriter import STRING, BagWriter, string_cdr
 from pic4rl_metrics.bags.bagfile import uri_path
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 NAMES = ["run #2", "run?1", "a%20b", "with space", "ünïcødé λ", "100%", "a#b?c%3Fd"]
 

@@ -22,7 +22,7 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from pic4rl_metrics.cli import commands as cli
-from pic4rl_metrics.testing.synthetic import (DEFAULT_T0_NS, Obstacles, straight_line,
+from pic4rl_metrics.synthetic.synthetic import (DEFAULT_T0_NS, Obstacles, straight_line,
                                               write_episode_bag)
 
 EXACT = 1e-12

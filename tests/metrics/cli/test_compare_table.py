@@ -26,7 +26,7 @@ import pytest
 
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.tables.aggregate import bootstrap_interval
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 GOTO = "goToPose/lidar"
 #: Per bag: agent, world, reference path (m), outcome, length driven (m).

@@ -14,7 +14,7 @@ from metrics_helpers import row
 
 from pic4rl_metrics.tables.results import ROW_COLUMNS, TABLE1_COLUMNS, table_columns
 from pic4rl_metrics.core.crop_rows import LaneWindow, fit_lane, lane_deviations
-from pic4rl_metrics.testing.synthetic import Obstacles, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import Obstacles, straight_line, write_episode_bag
 
 HALF_M = 1.25  # half the lane's width: trunk centres at y = +-1.25
 TRUNK_M = 0.05

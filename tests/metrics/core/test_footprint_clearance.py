@@ -15,7 +15,7 @@ import pytest
 
 from pic4rl_metrics import compute
 from pic4rl_metrics.cli.commands import main
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 from metrics_helpers import F32, JACKAL
 

@@ -22,7 +22,7 @@ from pic4rl_metrics import (
     compute_metrics,
     read_episode,
 )
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     circle,
     speed_ramp,
     straight_line,

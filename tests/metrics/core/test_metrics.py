@@ -23,7 +23,7 @@ from pic4rl_metrics import (
     compute_metrics,
     read_episode,
 )
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     Track,
@@ -337,7 +337,7 @@ def test_collision_inferred_from_scan_margin(tmp_path: Path) -> None:
 
 
 def test_collision_count_counts_rising_edges(tmp_path: Path) -> None:
-    from pic4rl_metrics.testing.synthetic import from_waypoints
+    from pic4rl_metrics.synthetic.synthetic import from_waypoints
 
     # In to 0.18 m of the wall, back to 1.03 m, in again.
     track = from_waypoints([(0.0, 0.0), (2.85, 0.0), (2.0, 0.0), (2.85, 0.0)], 0.5)

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from pic4rl_metrics import compute
-from pic4rl_metrics.testing.synthetic import Obstacles, from_waypoints, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import Obstacles, from_waypoints, write_episode_bag
 
 SHORTEST = 2 * math.sqrt(5.0)  # via the gap's corner (2, 1)
 STRAIGHT = 4.0

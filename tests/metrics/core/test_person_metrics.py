@@ -13,7 +13,7 @@ from metrics_helpers import EXACT, LINE
 from metrics_helpers import row as _row
 
 from pic4rl_metrics import compute
-from pic4rl_metrics.testing.synthetic import Track, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import Track, straight_line, write_episode_bag
 
 FACTS = {"person_distance_m": 2.0, "camera_fov_rad": math.pi / 2}
 

@@ -11,8 +11,8 @@ import pytest
 
 from pic4rl_metrics import compute
 from pic4rl_metrics.contract import parse_facts
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
-from pic4rl_metrics.testing.synthetic_tracks import Track
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic_tracks import Track
 
 
 def _judged(bag: Path, max_speed: float | None) -> dict[str, object]:

@@ -31,7 +31,7 @@ from pic4rl_metrics import (
     judge_bag,
     read_episode,
 )
-from pic4rl_metrics.testing import synthetic
+from pic4rl_metrics.synthetic import synthetic
 from pic4rl_metrics.core.metrics import MIN_PATH_M
 from pic4rl_metrics.core.plausibility import check_one_track
 from pic4rl_metrics.errors import CorruptBagError

@@ -19,7 +19,7 @@ from pic4rl_metrics import METRIC_TABLE, ConfigError, Derived, Metric, compute, 
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.core.registry import Registry
 from pic4rl_metrics.tables.results import METRIC_COLUMNS
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 LINE = straight_line(0.5, 4.0)  # x = 0, 0.05, ..., 2 m: mean x is 1 m
 

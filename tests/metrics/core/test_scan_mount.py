@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from pic4rl_metrics import compute, read_episode
-from pic4rl_metrics.testing.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import Obstacles, cast_scan, straight_line, write_episode_bag
 
 REAL_BAGS = Path(__file__).resolve().parents[3].parent / "shared" / "real_bags"
 JACKAL = {"length_m": 0.508, "width_m": 0.430}

@@ -29,7 +29,7 @@ from pic4rl_metrics.tables.batch import compute
 from pic4rl_metrics.tables.groups import parse_by, render_groups, split
 from pic4rl_metrics.tables.results import ERROR_COLUMN, ID_COLUMNS, METRIC_COLUMNS, table_columns
 from pic4rl_metrics.tables.text import render_comparison
-from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
 EXACT = 1e-9
 GOTO = "goToPose/lidar"

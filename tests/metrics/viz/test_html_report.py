@@ -149,7 +149,7 @@ def test_an_existing_out_is_refused_without_force(bench_bags: Path, tmp_path: Pa
 def test_bags_without_a_pair_are_counted_and_drawn_in_no_pair(tmp_path: Path, capsys) -> None:
     """Two agents' bags with no start or goal in their facts (as a real robot's log): no
     couple, each counted as unpaired, and the pairs' section says why it is empty."""
-    from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+    from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
     for agent in ("a", "b"):
         write_episode_bag(tmp_path / "bags" / agent, straight_line(0.5, 4.0),
@@ -224,7 +224,7 @@ def test_every_figure_can_be_saved_as_png(page: tuple[Path, _Page]) -> None:
 def test_every_name_is_escaped(tmp_path: Path, capsys) -> None:
     """Agent, world, run and episode names with markup, in the leaderboard, the logs, the
     figures' captions and file names, the downloads and the inputs, stay text."""
-    from pic4rl_metrics.testing.synthetic import straight_line, write_episode_bag
+    from pic4rl_metrics.synthetic.synthetic import straight_line, write_episode_bag
 
     evil = '<img src=x onerror="alert(1)">&amp;\'"'
     facts = {"agent": evil, "world": f"w{evil}", "run": f"r{evil}", "episode": f"e{evil}"}

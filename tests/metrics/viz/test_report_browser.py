@@ -112,7 +112,7 @@ def test_the_report_fits_a_laptops_width(browser, tmp_path: Path) -> None:
     error names a long path; no table is wider than its container, no cell's content spills
     out of it, the page does not scroll sideways and the paired table's verdict is in view.
     Each figure's save link holds its image; the leaderboard's downloads are data: URIs."""
-    from pic4rl_metrics.testing.synthetic_bench import write_benchmark
+    from pic4rl_metrics.synthetic.synthetic_bench import write_benchmark
 
     bags = tmp_path / "bags"
     write_benchmark(bags, {"sac_lidar_explorer_dagger_v2": 0.8, "td3_depth_explorer_memory": 0.5,

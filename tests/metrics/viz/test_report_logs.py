@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from pic4rl_metrics.cli import commands as cli
-from pic4rl_metrics.testing.synthetic import write_long_bag
+from pic4rl_metrics.synthetic.synthetic import write_long_bag
 from report_page import Page
 
 REAL_BAGS = Path(__file__).resolve().parents[4] / "shared" / "real_bags"

@@ -14,7 +14,7 @@ from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_metrics.cli import commands as cli
 from pic4rl_metrics.contract import EpisodeFacts
 from pic4rl_metrics.core.scan_summary import ScanStream, ScanSummary
-from pic4rl_metrics.testing.synthetic import write_long_bag
+from pic4rl_metrics.synthetic.synthetic import write_long_bag
 from pic4rl_metrics.viz.report_maps import SKETCH_POINTS, SKETCH_SCANS, sketch
 
 MINUTES = 1.5  # 3,601 scans at 40 Hz, 4,501 poses at 50 Hz

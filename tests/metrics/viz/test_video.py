@@ -16,7 +16,7 @@ import pytest
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.viz.raster import COLORS
 from pic4rl_metrics.bags.reader import read_episode
-from pic4rl_metrics.testing.synthetic import Obstacles, straight_line, write_episode_bag
+from pic4rl_metrics.synthetic.synthetic import Obstacles, straight_line, write_episode_bag
 from pic4rl_metrics.viz.video import EpisodeScene, VideoOptions, frame_count
 from pic4rl_metrics.viz.video_batch import render_videos, video_names
 

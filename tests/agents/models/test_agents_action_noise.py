@@ -20,7 +20,7 @@ from pic4rl_agents.models.algorithms import ALGORITHMS, new_model
 from pic4rl_agents.config import load_run_config
 from pic4rl_agents.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
-from pic4rl_agents.models.exploration import EpsilonGreedy, epsilon_at
+from pic4rl_agents.models.action_noise import EpsilonGreedy, epsilon_at
 
 OFF_POLICY = sorted(name for name in ALGORITHMS if ALGORITHM_TABLE[name].off_policy)
 LEARNING_STARTS = 100

@@ -12,7 +12,7 @@ from rosbags.highlevel import AnyReader
 
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import parse_facts
-from pic4rl_metrics.testing.synthetic import (
+from pic4rl_metrics.synthetic.synthetic import (
     DEFAULT_T0_NS,
     Obstacles,
     cast_scan,

@@ -1,4 +1,4 @@
-"""The paper's ε-greedy exploration with exponential decay, for SB3's off-policy algorithms.
+"""The paper's ε-greedy action noise with exponential decay, for SB3's off-policy algorithms.
 
 TF2RL, which PIC4rl-gym trained with, had only a random warm-up; the paper added ε-greedy so
 exploration never stops: after ``learning_starts``, each env's action is replaced by a uniform
