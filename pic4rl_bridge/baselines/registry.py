@@ -2,7 +2,9 @@
 here, the vineyard's row followers in ``row_followers`` and the person follower's heading law
 in ``follow``. ``BASELINE_TABLE`` is the one place a baseline is registered: the tasks it
 drives, how it is made and the imitation expert it is, if any (``BASELINES``,
-``BASELINE_TASKS``, ``--baseline``, the suites' checks and ``make_expert`` follow).
+``BASELINE_TASKS``, ``--baseline``, the suites' checks and ``make_expert`` follow). A user's
+package adds its own without editing it: a ``BaselineSpec`` named in the entry-point group
+``pic4rl.baselines`` (``pic4rl_base.plugins``; ``docs/extending.md``).
 
 - ``proportional``: turns toward the goal and drives when facing it, with no obstacle
   avoidance: the simplest baseline a learned policy should beat among obstacles, and a check
@@ -34,6 +36,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from pic4rl_base.geometry import wrap_angle
+from pic4rl_base.plugins import load_group
 
 from ..config import EnvConfig
 from ..control.actions import normalized_action
@@ -151,6 +154,9 @@ BASELINE_TABLE: dict[str, BaselineSpec] = {
     "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),
     "dwa_heading": BaselineSpec(("personMonitoring",), _heading, expert="heading"),
 }
+#: A user's baselines: each a ``BaselineSpec`` that its package names in this entry-point group.
+BASELINE_GROUP = "pic4rl.baselines"
+BASELINE_TABLE.update(load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE))
 #: Each imitation expert (``EXPERT_TASKS``' names) → the baseline that labels under it.
 EXPERT_BASELINES = {spec.expert: name for name, spec in BASELINE_TABLE.items() if spec.expert}
 #: Each baseline → the tasks it drives.

@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 import re
+import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -18,7 +21,8 @@ ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 DOC = ROOT / "docs" / "architecture.md"
 #: Each piece's folder under ``tests/places/`` → its row in the places table.
-ROWS = {"metric": "a metric"}
+ROWS = {"metric": "a metric", "baseline": "a baseline"}
+GOTO = ROOT / "config" / "env_goto_lidar.yaml"
 
 
 def _written(piece: str) -> list[Path]:
@@ -32,6 +36,28 @@ def _doc_count(row: str) -> int:
     found = re.search(rf"^\| {re.escape(row)} \| (\d+) \|", text, re.M)
     assert found, f"docs/architecture.md's places table has no row {row!r}"
     return int(found[1])
+
+
+def _install(piece: str, site: Path) -> dict[str, str]:
+    """What ``pip install`` of the user's package ``piece`` leaves behind: its entry points
+    (from its ``pyproject.toml``) in a ``.dist-info`` under ``site``; the environment of a
+    process that has it installed (its modules on the path)."""
+    project = tomllib.loads((HERE / piece / "pyproject.toml").read_text())["project"]
+    info = site / f"{project['name'].replace('-', '_')}-{project['version']}.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {project['name']}\n"
+                                   f"Version: {project['version']}\n")
+    (info / "entry_points.txt").write_text("".join(
+        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in points.items()) + "\n"
+        for group, points in project["entry-points"].items()))
+    path = os.pathsep.join([str(site), str(HERE / piece), os.environ.get("PYTHONPATH", "")])
+    return {**os.environ, "PYTHONPATH": path}
+
+
+def _console(script: str, argv: list[str], env: dict[str, str]) -> subprocess.CompletedProcess:
+    """The installed console script ``script`` run as a user runs it."""
+    return subprocess.run([str(Path(sys.executable).parent / script), *argv], env=env,
+                          capture_output=True, text=True, timeout=500, check=False)
 
 
 @pytest.mark.parametrize("piece", sorted(ROWS))
@@ -67,3 +93,47 @@ def test_a_metric_from_outside_gets_its_column_and_its_table_place(
     finally:
         METRIC_TABLE.remove("chord_m")
         sys.modules.pop("places_chord", None)
+
+
+# -- a baseline: its module and its entry point -------------------------------------------------
+
+def test_a_baseline_from_outside_is_driven_by_pic4rl_test_and_judged(tmp_path: Path) -> None:
+    from pic4rl_metrics import compute
+
+    env = _install("baseline", tmp_path / "site")
+    bags = tmp_path / "bags"
+    done = _console("pic4rl-test", ["--baseline", "bearing", "--episodes", "2", "--bags",
+                                    str(bags), "--run", "r", "--env-kwargs",
+                                    "episode_max_steps:80", "--no-progress", "--ros-args",
+                                    "--params-file", str(GOTO)], env)
+    assert done.returncode == 0, done.stderr
+    assert "bearing" in done.stdout  # its row of the table
+    result = compute([bags / "r" / "bearing"])
+    assert len(result.results) == 2 and not result.failed
+    frame = result.frame
+    assert set(frame["agent"]) == {"bearing"}
+    assert set(frame["outcome"]) <= {"goal", "collision", "timeout"}
+    assert (frame["path_length_m"] > 0.5).all()  # it drove toward its goals
+
+
+def test_a_bad_entry_point_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    from importlib.metadata import EntryPoint
+
+    from pic4rl_base import plugins
+    from pic4rl_base.errors import ConfigError
+    from pic4rl_bridge.baselines.registry import BASELINE_GROUP, BASELINE_TABLE, BaselineSpec
+
+    def points(name: str, value: str) -> None:
+        monkeypatch.setattr(plugins, "entry_points", lambda group: [
+            EntryPoint(name, value, group)])
+
+    points("mine", "math:pi")
+    with pytest.raises(ConfigError, match=r"^entry point mine = math:pi \(group "
+                       r"pic4rl.baselines\): it names a float; expected a BaselineSpec$"):
+        plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)
+    points("dwa", "math:pi")
+    with pytest.raises(ConfigError, match="'dwa' is one of pic4rl's own"):
+        plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)
+    points("mine", "no_such_module_xyz:SPEC")
+    with pytest.raises(ConfigError, match="ModuleNotFoundError"):
+        plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)

@@ -1,0 +1,58 @@
+"""The one reader of pic4rl's entry-point groups: how a user's installed package adds a piece
+to one of pic4rl's tables without editing a file of pic4rl. Its ``pyproject.toml`` names the
+piece in the group of its table::
+
+    [project.entry-points."pic4rl.baselines"]
+    mine = "my_package.my_baseline:SPEC"
+
+The groups: ``pic4rl.metrics`` (``METRIC_TABLE``), ``pic4rl.policies`` (``--agent NAME``) and
+``pic4rl.baselines`` (``BASELINE_TABLE``). A table reads its group once, when its module is
+imported, so that everything derived from it (choices, ids, sections) sees the new entry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection
+from importlib.metadata import EntryPoint, entry_points
+from typing import Any
+
+from .errors import ConfigError
+
+
+def group_points(group: str) -> list[EntryPoint]:
+    """The entry points of ``group``, one per name (the first found on the path)."""
+    found: dict[str, EntryPoint] = {}
+    for point in entry_points(group=group):
+        found.setdefault(point.name, point)
+    return list(found.values())
+
+
+def entry_point(group: str, name: str) -> EntryPoint | None:
+    """The entry point ``name`` of ``group``, or ``None``."""
+    return next((p for p in group_points(group) if p.name == name), None)
+
+
+def load_point(point: EntryPoint, where: str) -> Any:
+    """What ``point`` names; ``ConfigError`` naming it (and ``where`` asked) when it fails."""
+    try:
+        return point.load()
+    except Exception as err:
+        raise ConfigError(f"{where}: loading entry point {point.name} = {point.value} "
+                          f"(group {point.group}) failed: {type(err).__name__}: {err}") from err
+
+
+def load_group(group: str, kind: type, *, taken: Collection[str]) -> dict[str, Any]:
+    """Every entry of ``group``, by its entry point's name: each a ``kind`` whose name none
+    of ``taken`` (the shipped entries) has; ``ConfigError`` naming the entry point otherwise."""
+    loaded: dict[str, Any] = {}
+    for point in group_points(group):
+        where = f"entry point {point.name} = {point.value} (group {group})"
+        if point.name in taken:
+            raise ConfigError(f"{where}: {point.name!r} is one of pic4rl's own; choose another "
+                              "name")
+        obj = load_point(point, group)
+        if not isinstance(obj, kind):
+            raise ConfigError(f"{where}: it names a {type(obj).__name__}; expected a "
+                              f"{kind.__name__}")
+        loaded[point.name] = obj
+    return loaded
