@@ -6,7 +6,7 @@ guide.
 
 One room a sub-package: ``models`` (the algorithms and networks), ``training``, ``testing``,
 ``tune``, ``suites`` (``pic4rl-bench``) and ``stack`` (``pic4rl-run stack``); what they share
-stands here: the trainer's configuration (``config``), command-line overrides and
-``--ros-args``, a run directory's layout (``rundir``), sim processes (``simproc``) and
-``pic4rl-run`` (``run``), joining Ray.
+has two rooms of its own: ``runs`` (a run's configuration, overrides, directory and console)
+and ``launch`` (``pic4rl-run``, sim processes, ``--ros-args``, joining Ray). ``extractors``
+stays here, the import path saved depth models name.
 """

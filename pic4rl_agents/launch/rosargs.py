@@ -19,7 +19,7 @@ import yaml
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 
-from .overrides import yaml_value
+from pic4rl_agents.runs.overrides import yaml_value
 
 
 @dataclass

@@ -14,7 +14,7 @@ from pic4rl_base.schema import ParamSpec, specs
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError, require, unknown_key
 
-from .config import ENV_NODE, TRAINER_NODE, TrainConfig
+from pic4rl_agents.runs.config import ENV_NODE, TRAINER_NODE, TrainConfig
 
 _FLOAT = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+$")
 

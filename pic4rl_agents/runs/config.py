@@ -3,7 +3,7 @@
 A training file holds the three nodes' sections side by side (``pic4rl_base.params_file``).
 Each field carries its description, unit and range (``pic4rl_base.schema``); names are dotted
 as in ROS (``epsilon.decay``); every key is checked with a "did you mean". Command-line
-overrides (``pic4rl_agents.overrides``) are applied over the files by ``load_run_config``.
+overrides (``pic4rl_agents.runs.overrides``) are applied over the files by ``load_run_config``.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ with the env switched to the ROS 2 transport (``-p transport:=ros``). One ``pic4
 started per env with the run's ``sim:`` section (``n_envs > 1``: in namespaces ``env_0``,
 ``env_1``, ...), in the same ROS domain. Each process gets its own process group: Ctrl-C
 reaches the trainer first (it saves its model), then the sims are stopped; a launcher killed
-outright takes its sims with it (``pic4rl_agents.simproc``).
+outright takes its sims with it (``pic4rl_agents.launch.simproc``).
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from pic4rl_base.entry import entry_point
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError
 
-from .rosargs import RosArgs, split_ros_args
-from .simproc import start_sim, stop_group
+from pic4rl_agents.launch.rosargs import RosArgs, split_ros_args
+from pic4rl_agents.launch.simproc import start_sim, stop_group
 
 COMMANDS = {"train": "pic4rl_agents.training.train", "test": "pic4rl_agents.testing.tester"}
 STOP_TIMEOUT_S = 30.0  # a trainer saving its replay buffer may need a while
@@ -67,7 +67,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0 if argv else 2
     command, rest = argv[0], argv[1:]
     if command == "stack":  # a ROS 2 stack as the agent (docs/your-agent.md)
-        from .stack.cli import main as stack_main
+        from pic4rl_agents.stack.cli import main as stack_main
 
         return stack_main(rest)
     if command not in COMMANDS:
