@@ -35,8 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_agents.training.callbacks import StopAfterEval
-from pic4rl_agents.config import load_run_config
-from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.runs.config import load_run_config
+from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_agents.training.curves import eval_curves
 from pic4rl_agents.training.train import Trainer
 

@@ -50,7 +50,7 @@ import yaml
 from _sim import stop_sim
 
 from pic4rl_agents.models.algorithms import new_model
-from pic4rl_agents.config import RunConfig, load_run_config
+from pic4rl_agents.runs.config import RunConfig, load_run_config
 from pic4rl_agents.training.envs import env_namespace, make_vec_env
 
 ROOT = Path(__file__).resolve().parents[1]

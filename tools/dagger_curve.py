@@ -22,7 +22,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.logger import configure
 
 from pic4rl_agents.models.algorithms import new_model
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_agents.training.envs import eval_env_config, make_vec_env
 from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation
 

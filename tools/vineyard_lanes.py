@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_bridge.episodes import GoalsAndPoses, save_goals_and_poses
 from pic4rl_sim.config import build_world_choice, parameter_table, resolve
 from pic4rl_sim.engine.robot_specs import load_robot

@@ -3,7 +3,7 @@ and the keyword groups ``new_model`` gives it. ``TrainConfig``'s ``Algorithm`` a
 ``OFF_POLICY``, ``pic4rl_agents.models.algorithms.ALGORITHMS`` and ``pic4rl-tune``'s sampler
 read it.
 
-Light on purpose: ``pic4rl_agents.config`` imports it for ``--help`` and config checks, so a
+Light on purpose: ``pic4rl_agents.runs.config`` imports it for ``--help`` and config checks, so a
 class is named by its import path, imported only when a model is built or loaded.
 """
 

@@ -22,7 +22,7 @@ from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.save_util import load_from_zip_file
 from torch import nn
 
-from pic4rl_agents.config import TrainConfig
+from pic4rl_agents.runs.config import TrainConfig
 from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
 

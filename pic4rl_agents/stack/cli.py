@@ -41,7 +41,7 @@ def main(argv: Sequence[str]) -> int:
 
     from pic4rl_bridge.episodes import load_goals_and_poses
 
-    from ..simproc import domain_lease
+    from pic4rl_agents.launch.simproc import domain_lease
     from .driver import drive_stack
 
     args = build_parser().parse_args(list(argv))

@@ -34,7 +34,7 @@ from pic4rl_bridge.errors import BridgeError, StaleSensor, TransportError
 from pic4rl_bridge.transports.ros_transport import RosTransport
 from pic4rl_sim.engine.geometry import Twist2D
 
-from ..simproc import start_child, stop_group
+from pic4rl_agents.launch.simproc import start_child, stop_group
 from .spec import StackSpec
 
 #: The stack's topic, and the sim's (remapped) command topic that the env forwards it to.
@@ -208,32 +208,42 @@ def _call(env: StackEnv, service: str, what: str) -> None:
 def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                 episodes: int, seed: int, domain: int, cwd: Path,
                 sim_file: Path) -> list[str]:
-    """Drive ``episodes`` episodes of ``stack`` in the env of ``config`` (+ ``overrides``):
-    the sim node (its params written to ``sim_file``) and the stack in ROS domain ``domain``,
-    both stopped at the end; the episodes' outcomes in order."""
+    """Drive ``episodes`` episodes of ``stack`` in the env of ``config`` (an ``EnvConfig`` or
+    a params file; + ``overrides``): the sim node (its params written to ``sim_file``) and the
+    stack in ROS domain ``domain``, both stopped at the end; the episodes' outcomes in order."""
     from pic4rl_base import params_file
+    from pic4rl_bridge.config import EnvConfig, load_env_config
 
     ros_env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
                os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
     realtime = stack.clock == "realtime"
-    process = StackProcess(stack, ros_env, cwd)
-    env = StackEnv(config, overrides={**overrides, "agent": stack.name, "transport": "ros",
-                                      "ros.domain_id": domain, "topics.cmd_vel": SIM_CMD_VEL,
-                                      "ros.step_mode": "rate" if realtime else "lockstep"},
-                   stack=stack, failure=process.failure)
+    base = config if isinstance(config, EnvConfig) else load_env_config(config)
+    env_config = base.replace(**{**overrides, "agent": stack.name, "transport": "ros",
+                                 "ros.domain_id": domain, "topics.cmd_vel": SIM_CMD_VEL,
+                                 "ros.step_mode": "rate" if realtime else "lockstep"})
     clock = ({"clock_mode": "realtime", "real_time_factor": stack.real_time_factor}
              if realtime else {"clock_mode": "lockstep"})
-    sim_file.write_text(params_file.dump({"/**": {**env.config.sim_params, **clock}}))
+    sim_file.write_text(params_file.dump({"/**": {**env_config.sim_params, **clock}}))
+    # The sim and the stack start before the env is built: their start-up (seconds of DDS
+    # discovery, the longest part of a short run) goes on while it is.
     sim = start_child([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
                        "--params-file", str(sim_file), "-r", f"cmd_vel:={SIM_CMD_VEL}"],
                       ros_env)
+    process = StackProcess(stack, ros_env, cwd)
+    env: StackEnv | None = None
     outcomes: list[str] = []
-    action = np.zeros(env.action_space.shape, dtype=np.float32)
     try:
+        process.start()
+        env = StackEnv(env_config, stack=stack, failure=process.failure)
+        action = np.zeros(env.action_space.shape, dtype=np.float32)
+        fresh = True  # a stack started and not yet seen ready
         for episode in range(episodes):
             if process.proc is None:
                 process.start()
+                fresh = True
+            if fresh:
                 _wait_ready(env, process)
+                fresh = False
             elif stack.reset_service:
                 _call(env, stack.reset_service, "the stack's reset")
             env.reset(seed=seed if episode == 0 else None)
@@ -247,6 +257,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                 _wait_gone(env)
     finally:
         process.stop()
-        env.close()
+        if env is not None:
+            env.close()
         stop_group(sim, 10.0)
     return outcomes

@@ -121,7 +121,7 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
            domain: int) -> None:
     """Run the episodes, with the cell's own sim node (in its own ROS domain) when the cell
     drives sim nodes."""
-    from pic4rl_agents.simproc import start_sim, stop_group
+    from pic4rl_agents.launch.simproc import start_sim, stop_group
     from pic4rl_agents.testing.tester import drive_agent
 
     if cell.stack is not None:  # the stack's driver starts the sim and the stack
@@ -162,7 +162,7 @@ def preload(cell: Cell) -> None:
 def drive_cell(cell: Cell, root: Path) -> str:
     """Drive what is missing of ``cell`` and mark it done; ``"skipped"`` when it was done
     already, else ``"done"``. Errors propagate (the caller retries)."""
-    from pic4rl_agents.simproc import domain_lease
+    from pic4rl_agents.launch.simproc import domain_lease
 
     current = state(root, cell)
     if current.done:
@@ -198,7 +198,7 @@ def _drive_from(cell: Cell, root: Path, folder: Path, *, first: int, total: int,
 def _stack_agent(cell: Cell, plan: TestPlan) -> AgentSpec:
     """A stack's row in the env a plugin gets (``plan``'s params files alone, the cell's
     world, variant and robot), set up for testing as the tester sets up every agent's."""
-    from pic4rl_agents.config import ENV_NODE, NODES
+    from pic4rl_agents.runs.config import ENV_NODE, NODES
     from pic4rl_agents.testing.plan import _free_env, _test_env
 
     files = params_file.load(plan.params_files, NODES)

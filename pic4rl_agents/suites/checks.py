@@ -123,7 +123,7 @@ def check_worlds(env: str, worlds: list[tuple[str, int | None, str]], robots: li
     """Every robot, world and variant of the task built as its cells will build them (the
     env file's sim section with the cell's world, variant and robot), before any cell runs:
     ``ConfigError`` naming the robot or the world (``WORLD:VARIANT``) otherwise."""
-    from pic4rl_agents.config import NODES, run_config
+    from pic4rl_agents.runs.config import NODES, run_config
     from pic4rl_bridge.scenario import Scenario
 
     test = run_config(params_file.load([env], NODES), [env]).env.replace(**{

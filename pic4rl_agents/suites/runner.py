@@ -123,7 +123,7 @@ class RayPool:
     def __init__(self, root: Path, workers: int, address: str | None) -> None:
         import ray
 
-        from pic4rl_agents import raycluster
+        from pic4rl_agents.launch import raycluster
 
         self._ray = ray
         raycluster.init(address, num_cpus=None if address else workers,
@@ -280,7 +280,7 @@ def build_parser() -> argparse.ArgumentParser:
              interrupted="interrupted; finished episodes are kept, a rerun resumes")
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the suite; print its table (markdown); exit 1 if a cell failed, 2 for bad input."""
-    from pic4rl_agents.console import console_logging
+    from pic4rl_agents.runs.console import console_logging
 
     args = build_parser().parse_args(argv)
     if args.workers < 1:

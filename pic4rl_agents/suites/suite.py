@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pic4rl_agents.config import SIM_NODE
+from pic4rl_agents.runs.config import SIM_NODE
 from pic4rl_agents.stack.spec import StackSpec
 from pic4rl_agents.testing.plan import DEFAULT_PAIRS
 from pic4rl_base import params_file

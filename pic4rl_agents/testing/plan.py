@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from pic4rl_agents import rundir
-from pic4rl_agents.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
+from pic4rl_agents.runs import rundir
+from pic4rl_agents.runs.config import ENV_NODE, NODES, SIM_NODE, RunConfig, run_config
 from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 from pic4rl_base import params_file
 from pic4rl_bridge.baselines import BASELINES, check_fits

@@ -40,10 +40,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from pic4rl_agents.config import ENV_NODE, SIM_NODE
-from pic4rl_agents.console import console_logging
-from pic4rl_agents.overrides import check_overrides, parse_overrides
-from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_agents.runs.config import ENV_NODE, SIM_NODE
+from pic4rl_agents.runs.console import console_logging
+from pic4rl_agents.runs.overrides import check_overrides, parse_overrides
+from pic4rl_agents.launch.rosargs import RosArgs, no_sim_hint, split_ros_args
 from pic4rl_base import atomic
 from pic4rl_base.entry import entry_point
 from pic4rl_bridge.baselines import BASELINES
@@ -79,20 +79,22 @@ def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) ->
     from tqdm import tqdm
 
     from pic4rl_bridge.env import NavEnv
+    from pic4rl_bridge.recording import record_from_config
 
-    env = NavEnv(spec.run.env)
+    nav = NavEnv(spec.run.env)  # what the policy sees; ``env`` records it
+    env = record_from_config(nav) if spec.run.env.record.enabled else nav
     outcomes: list[str] = []
     headline, words = TASK_TABLE[spec.run.env.task].headline
     try:
-        policy = Driver(spec, env)
+        policy = Driver(spec, nav)
         bar = tqdm(range(episodes), desc=spec.name, unit="episode", disable=not progress)
         for episode in bar:
             obs, _ = env.reset(seed=seed if episode == 0 else None)
             done, info = False, {}
             try:
-                policy.begin(env)
+                policy.begin(nav)
                 while not done:
-                    obs, _, terminated, truncated, info = env.step(policy.act(obs, env))
+                    obs, _, terminated, truncated, info = env.step(policy.act(obs, nav))
                     done = terminated or truncated
             except PolicyFailure as err:  # that episode ends aborted; the next one runs
                 log.error("%s: episode %d aborted: %s", spec.name, episode, err)

@@ -7,11 +7,11 @@ import argparse
 import dataclasses
 from typing import Any
 
-from pic4rl_agents import rundir
-from pic4rl_agents.config import (ENV_NODE, NODES, SIM_NODE, TRAINER_NODE, RunConfig, TrainConfig,
+from pic4rl_agents.runs import rundir
+from pic4rl_agents.runs.config import (ENV_NODE, NODES, SIM_NODE, TRAINER_NODE, RunConfig, TrainConfig,
                                   run_config)
-from pic4rl_agents.overrides import check_overrides, parse_overrides
-from pic4rl_agents.rosargs import RosArgs
+from pic4rl_agents.runs.overrides import check_overrides, parse_overrides
+from pic4rl_agents.launch.rosargs import RosArgs
 from pic4rl_base import params_file
 from pic4rl_base.schema import help_text, param_names, specs
 from pic4rl_bridge.config import EnvConfig

@@ -20,7 +20,7 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback, EvalCallback
 from stable_baselines3.common.vec_env import VecEnv
 
-from pic4rl_agents.rundir import EVALUATIONS
+from pic4rl_agents.runs.rundir import EVALUATIONS
 from pic4rl_base import atomic
 from pic4rl_metrics.contract import OUTCOMES, Outcome
 

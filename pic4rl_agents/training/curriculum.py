@@ -15,7 +15,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from pic4rl_agents.config import CurriculumConfig
+from pic4rl_agents.runs.config import CurriculumConfig
 
 log = logging.getLogger(__name__)
 

@@ -18,7 +18,7 @@ from typing import Any
 import pandas as pd
 from stable_baselines3.common.monitor import LoadMonitorResultsError, load_results
 
-from pic4rl_agents import rundir
+from pic4rl_agents.runs import rundir
 from pic4rl_base import atomic
 from pic4rl_bridge.errors import ConfigError
 

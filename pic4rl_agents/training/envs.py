@@ -17,10 +17,10 @@ import gymnasium as gym
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 
-from pic4rl_agents.config import CurriculumConfig, EvalConfig
+from pic4rl_agents.runs.config import CurriculumConfig, EvalConfig
 from pic4rl_base.schema import to_params
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
-from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 from pic4rl_bridge.errors import ConfigError
 
 from .curriculum import STAGE_KEY, Curriculum
@@ -117,10 +117,11 @@ def check_no_test_world(config: EnvConfig) -> None:
 
 def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
           reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None) -> gym.Env:
-    """A monitored ``NavEnv``, its pairs from ``curriculum``'s stage when one is given: the
-    monitor logs the env's own (the paper's) rewards, and the learner sees them times
-    ``reward_scale`` (rewards of order 1 suit SB3's defaults)."""
-    env: gym.Env = NavEnv(config, node=node)
+    """A monitored ``NavEnv`` (recorded when its ``record.enabled``), its pairs from
+    ``curriculum``'s stage when one is given: the monitor logs the env's own (the paper's)
+    rewards, and the learner sees them times ``reward_scale`` (rewards of order 1 suit SB3's
+    defaults)."""
+    env: gym.Env = make_env(config, node=node)
     keywords = INFO_KEYWORDS
     if curriculum is not None and curriculum.enabled:
         env, keywords = Curriculum(env, curriculum), (*INFO_KEYWORDS, STAGE_KEY)

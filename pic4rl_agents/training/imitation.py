@@ -32,7 +32,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.utils import obs_as_tensor
 from stable_baselines3.common.vec_env import VecEnv
 
-from pic4rl_agents.config import NODES, ImitationConfig
+from pic4rl_agents.runs.config import NODES, ImitationConfig
 from pic4rl_base import params_file
 from pic4rl_bridge.baselines.registry import Baseline
 from pic4rl_bridge.baselines.registry import make_expert as baseline_expert

@@ -18,7 +18,7 @@ import pandas as pd
 from .envs import DRIVER_KEY, DRIVERS
 
 if TYPE_CHECKING:
-    from pic4rl_agents.config import RunConfig
+    from pic4rl_agents.runs.config import RunConfig
 
 #: The drivers whose episodes are the agent's own: its actor drove them.
 AGENT_DRIVERS = ("student", "rl")

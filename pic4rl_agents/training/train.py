@@ -6,7 +6,7 @@ trains an SB3 agent on it, with checkpoints, resume, evaluation, logs and a rewa
         --env-kwargs transport:ros --ros-args --params-file config/train_goto_lidar_td3.yaml
     pic4rl-train --resume runs/td3_lidar            # the run's newest checkpoint that loads
 
-A run lives in ``<runs_dir>/<run>/`` (``pic4rl_agents.rundir`` has its layout). A new run with a
+A run lives in ``<runs_dir>/<run>/`` (``pic4rl_agents.runs.rundir`` has its layout). A new run with a
 taken name gets ``<run>-2``; a resume continues the run's model, replay buffer, curriculum and
 curve, as a new session. The command line is read by ``pic4rl_agents.training.args``.
 """
@@ -25,10 +25,10 @@ from typing import Any
 
 import yaml
 
-from pic4rl_agents import rundir
-from pic4rl_agents.config import RunConfig
-from pic4rl_agents.console import console_logging
-from pic4rl_agents.rosargs import RosArgs, no_sim_hint, split_ros_args
+from pic4rl_agents.runs import rundir
+from pic4rl_agents.runs.config import RunConfig
+from pic4rl_agents.runs.console import console_logging
+from pic4rl_agents.launch.rosargs import RosArgs, no_sim_hint, split_ros_args
 from pic4rl_base import atomic
 from pic4rl_base.entry import entry_point
 from pic4rl_bridge.config import EnvConfig

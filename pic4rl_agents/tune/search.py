@@ -32,10 +32,10 @@ import optuna
 from sqlalchemy.engine import URL
 from stable_baselines3.common.callbacks import BaseCallback
 
-from pic4rl_agents.config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
-from pic4rl_agents.console import console_logging
+from pic4rl_agents.runs.config import ENV_NODE, TRAINER_NODE, RunConfig, load_run_config
+from pic4rl_agents.runs.console import console_logging
 from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.overrides import check_overrides, parse_overrides
+from pic4rl_agents.runs.overrides import check_overrides, parse_overrides
 from pic4rl_agents.training.callbacks import SeededEvalCallback
 from pic4rl_base.entry import Interrupted, entry_point
 from pic4rl_bridge.errors import BridgeError, ConfigError
@@ -170,7 +170,7 @@ def _optimize_on_ray(settings: TuneSettings, n_jobs: int, options: dict[str, Any
     except ImportError as err:
         raise ConfigError("--address: Ray is not installed (pip install 'pic4rl[cluster]')") \
             from err
-    from pic4rl_agents import raycluster
+    from pic4rl_agents.launch import raycluster
 
     shares = _shares(settings, n_jobs, options)
     raycluster.init(address, num_cpus=n_jobs if address == "local" else None,

@@ -15,7 +15,7 @@ from typing import Any
 import optuna
 
 from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.config import RunConfig
+from pic4rl_agents.runs.config import RunConfig
 
 log = logging.getLogger(__name__)
 

@@ -38,7 +38,7 @@ EVAL_STEPS = 150
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 #: ``pic4rl-run``, as ``python -m`` (the console script runs the same ``main``).
-LAUNCHER = [sys.executable, "-m", "pic4rl_agents.run"]
+LAUNCHER = [sys.executable, "-m", "pic4rl_agents.launch.run"]
 #: Generous ROS waits: sims and trainers start slowly on a loaded machine.
 ROS_TIMEOUT_S = 60.0
 ROS_ARGS = ["-p", f"ros.timeout_s:={ROS_TIMEOUT_S}"]

@@ -13,9 +13,9 @@ import pytest
 import yaml
 from agents_helpers import CONFIG, LIDAR_TD3
 
-from pic4rl_agents.config import RunConfig, TrainConfig, load_run_config, train_config_from_params
-from pic4rl_agents.overrides import parse_overrides
-from pic4rl_agents.rosargs import RosArgs, split_ros_args
+from pic4rl_agents.runs.config import RunConfig, TrainConfig, load_run_config, train_config_from_params
+from pic4rl_agents.runs.overrides import parse_overrides
+from pic4rl_agents.launch.rosargs import RosArgs, split_ros_args
 from pic4rl_agents.training.args import route_params
 from pic4rl_bridge.errors import ConfigError
 

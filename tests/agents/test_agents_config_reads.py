@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 from agents_helpers import ROOT
 
-from pic4rl_agents.rosargs import split_ros_args
+from pic4rl_agents.launch.rosargs import split_ros_args
 from pic4rl_agents.testing import tester
 from pic4rl_agents.training import args as trainargs
 from pic4rl_base import params_file
@@ -80,7 +80,7 @@ def test_pic4rl_train_resume_reads_the_run_config_once(tmp_path: Path,
 def test_the_latest_of_a_runs_configs_is_found_by_the_recorders_naming(tmp_path: Path) -> None:
     """``config.yaml``, ``config-2.yaml``, ...: one naming rule (``atomic.numbered``) for the
     recorder that writes them and the runs that read the newest back."""
-    from pic4rl_agents.rundir import run_config_file
+    from pic4rl_agents.runs.rundir import run_config_file
     from pic4rl_bridge.recorder import RunRecorder
 
     written = [RunRecorder(tmp_path, "run", config={"n": n}).config_path for n in range(11)]

@@ -27,7 +27,7 @@ def test_every_exported_name_is_there(room: str) -> None:
 
 def test_the_rooms_and_the_config_import_no_torch_sb3_or_optuna() -> None:
     rooms = "; ".join(f"import pic4rl_agents.{room}" for room in ROOMS)
-    code = (f"import sys, json; {rooms}; import pic4rl_agents.config; "
+    code = (f"import sys, json; {rooms}; import pic4rl_agents.runs.config; "
             "import pic4rl_agents.models.algorithm_table; import pic4rl_agents.tune.space; "
             f"print(json.dumps(sorted(m for m in {HEAVY!r} if m in sys.modules)))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

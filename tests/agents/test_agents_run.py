@@ -12,8 +12,8 @@ import uuid
 import pytest
 from agents_helpers import LIDAR_TD3, ROOT, processes_with
 
-from pic4rl_agents import run as pic4rl_run
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.launch import run as pic4rl_run
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_agents.training.envs import env_for_rank, env_namespace
 
 
@@ -60,7 +60,7 @@ def test_an_argparse_error_of_the_child_command_exits_2(
 
 
 def test_python_m_runs_the_launcher() -> None:
-    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.run"], cwd=ROOT,
+    done = subprocess.run([sys.executable, "-m", "pic4rl_agents.launch.run"], cwd=ROOT,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "usage: pic4rl-run" in done.stdout
 

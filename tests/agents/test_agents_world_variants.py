@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from pic4rl_agents.config import EvalConfig
+from pic4rl_agents.runs.config import EvalConfig
 from pic4rl_agents.training.envs import check_no_test_world, eval_env_config, make_vec_env
 from pic4rl_agents.testing import plan as testplan
 from pic4rl_bridge.config import load_env_config
@@ -72,7 +72,7 @@ def test_the_experts_drive_with_the_params_files_baselines_section(tmp_path: Pat
     from stable_baselines3.common.logger import configure
 
     from pic4rl_agents.models.algorithms import new_model
-    from pic4rl_agents.config import ImitationConfig, load_run_config
+    from pic4rl_agents.runs.config import ImitationConfig, load_run_config
     from pic4rl_agents.training.imitation import Imitation
     from pic4rl_bridge.settings.baselines import ExplorerConfig
 

@@ -31,7 +31,7 @@ from pic4rl_agents.training import train
 
 from pic4rl_agents.tune import search as tune
 from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
-from pic4rl_agents.config import ALGORITHM_NAMES, TrainConfig, load_run_config
+from pic4rl_agents.runs.config import ALGORITHM_NAMES, TrainConfig, load_run_config
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "agents.md"

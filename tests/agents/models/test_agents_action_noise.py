@@ -17,8 +17,8 @@ from stable_baselines3.common.logger import configure
 
 from pic4rl_agents.models.algorithm_table import ALGORITHM_TABLE
 from pic4rl_agents.models.algorithms import ALGORITHMS, new_model
-from pic4rl_agents.config import load_run_config
-from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.runs.config import load_run_config
+from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.models.action_noise import EpsilonGreedy, epsilon_at
 

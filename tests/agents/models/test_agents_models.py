@@ -29,8 +29,8 @@ from pic4rl_agents.models.algorithms import (
     new_model,
     load_model,
 )
-from pic4rl_agents.config import load_run_config
-from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.runs.config import load_run_config
+from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.models.action_noise import EpsilonGreedy
 from pic4rl_agents.models.extractors import DepthGoalExtractor

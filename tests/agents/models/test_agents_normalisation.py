@@ -27,9 +27,9 @@ from pic4rl_agents.testing import policies, tester
 from pic4rl_agents.testing import plan as testplan
 
 from pic4rl_agents.training import train
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_agents.training.envs import make_vec_env
-from pic4rl_agents.rosargs import split_ros_args
+from pic4rl_agents.launch.rosargs import split_ros_args
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.perception.observations import NORMALIZED_GOAL_DISTANCE_M
 

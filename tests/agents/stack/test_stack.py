@@ -150,7 +150,7 @@ def test_stack_key_defaults() -> None:
 def test_pic4rl_run_stack_drives_the_example_node(tmp_path: Path, domain: int,
                                                   monkeypatch: pytest.MonkeyPatch,
                                                   capfd: pytest.CaptureFixture[str]) -> None:
-    from pic4rl_agents import run
+    from pic4rl_agents.launch import run
 
     monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))  # the lease takes one after it
     code = run.main(["stack", "--command", f"{sys.executable} {NODE}", "--name", "cli_node",
@@ -164,7 +164,7 @@ def test_pic4rl_run_stack_drives_the_example_node(tmp_path: Path, domain: int,
 
 def test_pic4rl_run_stack_refuses_a_bad_key_in_one_line(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from pic4rl_agents import run
+    from pic4rl_agents.launch import run
 
     code = run.main(["stack", "--command", "x 'y", "--params-file", "env.yaml"])
     assert code == 2

@@ -119,7 +119,7 @@ sys.exit(max(p.wait() for p in procs))
 def test_a_tf2_style_consumer_composes_odom_base_link_and_the_scans_frame(
         tmp_path: Path, domain: int, monkeypatch: pytest.MonkeyPatch,
         capfd: pytest.CaptureFixture[str]) -> None:
-    from pic4rl_agents import run
+    from pic4rl_agents.launch import run
 
     (tmp_path / "consumer.py").write_text(CONSUMER)
     (tmp_path / "launch.py").write_text(LAUNCHER)

@@ -72,7 +72,7 @@ def test_a_wrong_address_or_bags_folder_is_one_line_and_exit_2(
         "(NotADirectoryError: Not a directory)\n")
 
     # A port that takes the connection and never answers: Ray would retry for minutes.
-    code = ("import sys; from pic4rl_agents import raycluster; "
+    code = ("import sys; from pic4rl_agents.launch import raycluster; "
             "from pic4rl_agents.suites import runner as bench; raycluster.JOIN_S = 3; "
             f"sys.exit(bench.main([{str(suite)!r}, '--address', '127.0.0.1:{silent_port}']))")
     start = time.monotonic()

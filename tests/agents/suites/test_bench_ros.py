@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from pic4rl_agents import simproc
+from pic4rl_agents.launch import simproc
 
 pytestmark = pytest.mark.integration
 REPO = Path(__file__).resolve().parents[3]

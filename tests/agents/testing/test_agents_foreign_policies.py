@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pic4rl_agents.rosargs import RosArgs
+from pic4rl_agents.launch.rosargs import RosArgs
 from pic4rl_agents.testing import policies
 from pic4rl_agents.testing.plan import TestPlan, resolve_agents
 from pic4rl_agents.testing.tester import drive_and_judge
@@ -169,7 +169,7 @@ def test_an_unknown_algorithm_is_named(tmp_path: Path) -> None:
 
 def test_pic4rl_run_takes_a_plugin_reference(tmp_path: Path) -> None:
     """``pic4rl-run test --agent FILE.py:NAME``: the env its sim node is started for."""
-    from pic4rl_agents import run
+    from pic4rl_agents.launch import run
 
     env, n_envs = run._resolve("test", ["--agent", f"{REPO}/examples/gap_follower.py:"
                                                    "GapFollower"],

@@ -22,8 +22,8 @@ import pytest
 import yaml
 from agents_helpers import CONFIG, LIDAR_TD3, TrainedRun
 
-from pic4rl_agents.config import load_run_config
-from pic4rl_agents.rosargs import split_ros_args
+from pic4rl_agents.runs.config import load_run_config
+from pic4rl_agents.launch.rosargs import split_ros_args
 from pic4rl_agents.testing import tester
 from pic4rl_agents.testing.plan import DEFAULT_PAIRS, AgentSpec, resolve_agents
 from pic4rl_base.atomic import claim_dir
@@ -207,8 +207,12 @@ def test_bad_arguments_exit_2(tmp_path: Path, argv: list[str], message: str) -> 
     (["--ros-args", "-p", "episode_max_steps:=abc"],
      "-p parameters: episode_max_steps: 'abc' is invalid; expected an integer"),
     (["--ros-args", "-p", "batch_size:=32"], "-p parameters: unknown key 'batch_size'; "),
-    (["--env-kwargs", "lidar.beams:abc"],
-     "--env-kwargs: lidar.beams: 'abc' is invalid; expected an integer"),
+    (["--env-kwargs", "lidar.sectors:abc"],
+     "--env-kwargs: lidar.sectors: 'abc' is invalid; expected an integer"),
+    (["--env-kwargs", "lidar.beams:24"], "--env-kwargs: key 'lidar.beams' is renamed "
+                                         "'lidar.sectors'"),
+    (["--ros-args", "-p", "depth.max_depth_m:=4.0"],
+     "-p parameters: key 'depth.max_depth_m' is renamed 'depth.clip_m'"),
     (["--ros-args", "-p", "baselines.dwa.horizon_s:=-1.0"],
      "-p parameters: baselines.dwa.horizon_s: -1.0 is invalid; expected a positive number"),
     (["--sim-kwargs", "lidar.beems:36"],

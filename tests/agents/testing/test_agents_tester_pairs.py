@@ -67,7 +67,7 @@ def test_pairs_without_random_is_refused_when_a_file_gives_the_pairs(tmp_path: P
 
 def test_a_baseline_drives_the_robot_full_speed_range(tmp_path):
     """An agent's speed floor (min_linear_m_s) is not imposed on the baselines beside it."""
-    from pic4rl_agents.rosargs import split_ros_args
+    from pic4rl_agents.launch.rosargs import split_ros_args
     from pic4rl_agents.testing.tester import build_parser, build_plan
     from pic4rl_agents.testing.plan import resolve_agents
 

@@ -22,7 +22,7 @@ from agents_helpers import LIDAR_TD3, ROOT, SHORT_EPISODES, TINY, TRAINED_STEPS,
 from stable_baselines3.common.save_util import load_from_pkl
 
 from pic4rl_agents.models.algorithms import load_model
-from pic4rl_agents.rundir import find_resume
+from pic4rl_agents.runs.rundir import find_resume
 from pic4rl_agents.training import train
 from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
@@ -150,7 +150,7 @@ def test_bad_arguments_a_resume_whose_model_does_not_fit_its_env_is_one_line_and
     both shapes, the sensors and the configs they came from; no config-2.yaml is left."""
     run = trained_run.copy_to(tmp_path)
     code, err = run_main(["--resume", str(run), "-n", "400", "--no-progress",
-                          "--env-kwargs", "lidar.beams:24"])
+                          "--env-kwargs", "lidar.sectors:24"])
     assert code == 2
     *info, line = err.splitlines()
     assert info == ["pic4rl-train: resuming from model.zip (300 steps) with its replay buffer "

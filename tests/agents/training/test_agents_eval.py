@@ -19,7 +19,7 @@ from pic4rl_agents.training import curves
 
 from pic4rl_agents.training import train
 from pic4rl_agents.training.callbacks import CSV_COLUMNS, OUTCOME_COLUMNS
-from pic4rl_agents.config import EvalConfig, load_run_config
+from pic4rl_agents.runs.config import EvalConfig, load_run_config
 from pic4rl_agents.training.envs import eval_env_config
 from pic4rl_bridge.config import EpisodesConfig
 from pic4rl_bridge.errors import ConfigError

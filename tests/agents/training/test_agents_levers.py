@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from agents_helpers import CONFIG
 
-from pic4rl_agents.config import CurriculumConfig, TrainConfig, load_run_config
+from pic4rl_agents.runs.config import CurriculumConfig, TrainConfig, load_run_config
 from pic4rl_agents.training.curriculum import STAGE_KEY, Curriculum
 from pic4rl_bridge.errors import ConfigError
 

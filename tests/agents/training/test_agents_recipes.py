@@ -24,7 +24,7 @@ from agents_helpers import CONFIG, ROS_ARGS, ROS_TIMEOUT_S, SHORT_EPISODES, Laun
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import load_model
 from pic4rl_agents.training.callbacks import CSV_COLUMNS
-from pic4rl_agents.config import RunConfig, load_run_config
+from pic4rl_agents.runs.config import RunConfig, load_run_config
 from pic4rl_agents.training.curriculum import STAGE_KEY
 from pic4rl_agents.training.curves import episode_table
 

@@ -16,7 +16,7 @@ import yaml
 from agents_helpers import LIDAR_TD3, TINY, label_error
 from stable_baselines3.common.evaluation import evaluate_policy
 
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_agents.models.algorithms import load_model, new_model
 from pic4rl_agents.training import train
 from pic4rl_agents.training.callbacks import evaluation_line

@@ -37,9 +37,9 @@ from agents_helpers import (
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import load_model
 from pic4rl_agents.training.callbacks import StopWhenSet, stop_on_signal, stopped_by_signal
-from pic4rl_agents.config import load_run_config
+from pic4rl_agents.runs.config import load_run_config
 from pic4rl_agents.models.action_noise import epsilon_at
-from pic4rl_agents.rundir import find_resume
+from pic4rl_agents.runs.rundir import find_resume
 from pic4rl_bridge.errors import ConfigError
 
 

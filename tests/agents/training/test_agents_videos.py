@@ -17,7 +17,7 @@ from tensorboard.backend.event_processing.event_accumulator import EventAccumula
 from pic4rl_agents.testing import tester
 
 from pic4rl_agents.training import train
-from pic4rl_agents.config import EvalConfig
+from pic4rl_agents.runs.config import EvalConfig
 from pic4rl_metrics import read_episode
 
 

@@ -22,8 +22,8 @@ from stable_baselines3.common.utils import obs_as_tensor
 
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
-from pic4rl_agents.config import ImitationConfig, load_run_config
-from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.runs.config import ImitationConfig, load_run_config
+from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.training.callbacks import WallClockLimit
 from pic4rl_agents.training.imitation import EXPERT, STUDENT, Imitation, actor_loss

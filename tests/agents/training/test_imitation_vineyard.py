@@ -15,10 +15,10 @@ from stable_baselines3.common.logger import configure
 
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
-from pic4rl_agents.config import ImitationConfig, load_run_config
+from pic4rl_agents.runs.config import ImitationConfig, load_run_config
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.training.imitation import EXPERT, Imitation, make_expert
-from pic4rl_agents.overrides import parse_overrides
+from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.baselines.row_followers import CenterlineFollower
 

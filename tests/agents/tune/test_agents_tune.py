@@ -24,7 +24,7 @@ from pic4rl_agents.tune import search as tune
 
 from pic4rl_agents.tune import space as tune_space
 from pic4rl_agents.tune.summary import write_summary
-from pic4rl_agents.config import ALGORITHM_NAMES, load_run_config
+from pic4rl_agents.runs.config import ALGORITHM_NAMES, load_run_config
 
 #: Trials of seconds: tiny nets, 200 steps, 2 evaluations of 1 episode each. Episodes of 30
 #: steps (3 s at 0.5 m/s: 1.5 m) never reach a test pair's goal (4-8 m away): success is 0.
@@ -203,8 +203,8 @@ def test_bad_arguments_exit_2_naming_the_flag(tmp_path: Path,
 @pytest.mark.parametrize(("argv", "line"), [
     (["--hyperparams", "batch_size:abc"],
      "--hyperparams: batch_size: 'abc' is invalid; expected an integer"),
-    (["--env-kwargs", "lidar.beams:0"],
-     "--env-kwargs: lidar.beams: 0 is invalid; expected a positive number"),
+    (["--env-kwargs", "lidar.sectors:0"],
+     "--env-kwargs: lidar.sectors: 0 is invalid; expected a positive number"),
 ])
 def test_bad_arguments_name_the_flag_not_the_base_file(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], line: str) -> None:
