@@ -1,12 +1,13 @@
-"""``NavEnv``: the Gymnasium navigation env, over ROS 2 or in process, recording episodes.
+"""``NavEnv``: the Gymnasium navigation env, over ROS 2 or in process.
 
 One config file (``sim:`` and ``nav_env:`` sections) says which task, robot, world and transport;
 the task turns decoded sensor frames into observations, rewards and outcomes; the transport
-moves the robot; the recorder, when on, writes each episode to its own bag under
-``<bags_dir>/<run>/<episode>/``. ``terminated`` is goal or collision, ``truncated`` the time
-limit (``episode_max_steps``), a simulator whose physics diverged (outcome ``diverged``) or a
-needed topic gone silent (``aborted``, the robot stopped; ``ros.max_sensor_age_s``):
-``info["reason"]`` and the bag say why. ``info["reward_terms"]`` holds each scaled term.
+moves the robot. It records nothing: it offers what a recorder needs (``tap``, ``stamp_ns``,
+``episode_facts``, ...) and ``pic4rl_bridge.recording.RecordEpisodes`` wraps it. ``terminated``
+is goal or collision, ``truncated`` the time limit (``episode_max_steps``), a simulator whose
+physics diverged (outcome ``diverged``) or a needed topic gone silent (``aborted``, the robot
+stopped; ``ros.max_sensor_age_s``): ``info["reason"]`` says why. ``info["reward_terms"]``
+holds each scaled term.
 
 ``reset(seed=s)`` restarts the episode sequence: the same seed gives the same episodes (world,
 start, goal, sensor noise) and, with the same actions, the same observations and rewards
@@ -30,7 +31,7 @@ from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
-from .env_recording import EnvRecording, episode_facts
+from .env_facts import episode_facts
 from .episodes import EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses
 from .episodes import resolve_pair_kind
 from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
@@ -39,7 +40,7 @@ from .tasks.base import EpisodeContext, make_task
 from .settings.tasks import task_spec
 from .readings.frame import SensorFrame
 from .readings.sensor_table import BY_NAME
-from .transports.transport import EpisodeRequest, Transport
+from .transports.transport import EpisodeRequest, OfferedQos, Tap, Transport
 
 log = logging.getLogger(__name__)
 
@@ -144,13 +145,11 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.task = make_task(self.config, self.scenario.robot, world)
         self.observation_space = self.task.observation_space
         self.action_space = self.task.action_space
-        file = self.config.episodes.file
-        self._pairs = load_goals_and_poses(file) if file else None
-        if self._pairs is not None:  # drawn in this world, every start free for this robot
-            check_pairs(self._pairs, file, self.scenario)
-        self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs,
-                                         ordered=self.config.episodes.ordered)
         e = self.config.episodes
+        self._pairs = load_goals_and_poses(e.file) if e.file else None
+        if self._pairs is not None:  # drawn in this world, every start free for this robot
+            check_pairs(self._pairs, e.file, self.scenario)
+        self._schedule = EpisodeSchedule(e, pairs=self._pairs, ordered=e.ordered)
         self._kind = resolve_pair_kind(e.pair_kind, min_distance_m=e.min_distance_m,
                                        max_distance_m=e.max_distance_m, max_detour=e.max_detour)
         self._sampler = PairSampler.for_scenario(self.scenario)
@@ -165,12 +164,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.metadata = {**self.metadata,
                          "render_fps": round(1.0 / self.scenario.robot.control_dt_s, 6)}
         self._view = self._make_view(render_view, sensors) if render_mode is not None else None
-        self._recording = EnvRecording(self.config) if self.config.record.enabled else None
         self._episode = 0
-        self._facts = EpisodeFacts()
         self._frame: SensorFrame | None = None
         self._context: EpisodeContext | None = None
-        self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = self._steps = 0
         self._seed_used = 0  # the simulator seed of the current episode
         self._done = True
@@ -210,7 +206,6 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             self._episode = 0
             self._schedule = EpisodeSchedule(self.config.episodes, pairs=self._pairs,
                                              ordered=self.config.episodes.ordered)
-        self._end_bag(None)
         given = _parse_options(options or {})
         request = self._schedule.next_request(self._episode, self.np_random)
         request = dataclasses.replace(request, **{k: given[k] for k in ("seed", "start", "goal")
@@ -220,24 +215,13 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         kind = self._kind if "pairs" not in given else self._pair_kind(given["pairs"])
         if "pairs" in given:  # the drawn pair replaces the schedule's
             request = EpisodeRequest(request.seed, world_variant=request.world_variant)
-        recording = self._recording
-        held = recording.hold(self.transport) if recording is not None else []
-        try:
-            frame = self._start(request, kind,
-                                redraw="start" not in given and "goal" not in given)
-        finally:
-            self.transport.tap = None
+        frame = self._start(request, kind, redraw="start" not in given and "goal" not in given)
         self._frame, self._context = frame, self.task.begin(frame)
-        if recording is not None:
-            recording.open(self.transport, held, goal=self._context.goal is not None)
         self._last_action = np.zeros(self.action_space.shape, dtype=np.float32)
         self._streak = self._steps = 0
         self._done = False
-        self._facts = self._episode_facts(frame, self._context, self._seed_used)
         if self._view is not None:
             self._view.begin(frame, self._context)
-        if recording is not None and recording.bag is not None:
-            recording.bag.facts(self._facts, frame.stamp_ns)
         self._episode += 1
         obs = self.task.observe(frame, self._context, self._last_action)
         info = {"episode": self._episode - 1, "seed": self._seed_used,
@@ -310,9 +294,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             info["reason"] = fault
             log.error("episode %d %s: %s", self._episode - 1,
                       "aborted, the robot stopped" if stale else "ended", fault)
-        if outcome is not None:
-            self._done = True
-            self._end_bag(outcome, stale)
+        self._done = outcome is not None
         return obs, judgement.reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
@@ -324,7 +306,6 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         return self._view.render(self._frame, self._context)
 
     def close(self) -> None:
-        self._end_bag(None)
         view = getattr(self, "_view", None)
         if view is not None:
             view.close()
@@ -333,18 +314,37 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             transport.close()
 
     def abort(self, reason: str) -> None:
-        """End the episode now, ``aborted``: its bag closed with ``reason`` (a policy failed)."""
+        """End the episode now, ``aborted``; ``reason`` (a policy failed) is a recorder's."""
         self._done = True
-        self._end_bag(Outcome.ABORTED, reason)
 
-    def _episode_facts(self, frame: SensorFrame, ctx: EpisodeContext, seed: int) -> EpisodeFacts:
+    @property
+    def tap(self) -> Tap | None:
+        """Gets each message of the episode from its reset on, as on the wire (``RawMessage``)."""
+        return self.transport.tap
+
+    @tap.setter
+    def tap(self, tap: Tap | None) -> None:
+        self.transport.tap = tap
+
+    @property
+    def stamp_ns(self) -> int:
+        """The bag time (ns) of the latest frame; 0 before the first reset."""
+        return self._frame.stamp_ns if self._frame is not None else 0
+
+    def offered_qos(self, topic: str) -> OfferedQos | None:
+        """How ``topic`` (absolute) was offered by its publisher; ``None`` when not known."""
+        return self.transport.offered_qos(topic)
+
+    def flush(self) -> None:
+        """Deliver to ``tap`` every message stamped up to the latest frame."""
+        self.transport.flush()
+
+    def episode_facts(self) -> EpisodeFacts:
+        """The current episode's bag facts, with its start-goal path lengths (searched now)."""
+        if self._frame is None or self._context is None:
+            raise BridgeError("episode_facts() before the first reset()")
         return episode_facts(
-            self.config, self.scenario.robot, frame, ctx, seed=seed,
+            self.config, self.scenario.robot, self._frame, self._context, seed=self._seed_used,
             task=self._task_spec.fact_name(self.config.sensor), world=self.transport.world_name,
-            recording=self._recording, index=self._episode, sampler=self._sampler,
-            task_facts=self.task.facts(ctx))
-
-    def _end_bag(self, outcome: Outcome | None, reason: str | None = None) -> None:
-        if getattr(self, "_recording", None) is not None:
-            stamp = self._frame.stamp_ns if self._frame is not None else 0
-            self._recording.end(self.transport, outcome, stamp, reason)
+            index=self._episode - 1, sampler=self._sampler,
+            task_facts=self.task.facts(self._context))

@@ -20,8 +20,8 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv
 from pic4rl_agents.runs.config import CurriculumConfig, EvalConfig
 from pic4rl_base.schema import to_params
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
-from pic4rl_bridge.recording import make_env
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.recording import make_env
 
 from .curriculum import STAGE_KEY, Curriculum
 

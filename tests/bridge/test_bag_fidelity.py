@@ -11,7 +11,7 @@ import pytest
 from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2 import Reader, ReaderError
 
-from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
@@ -19,9 +19,9 @@ STOP = np.array([-1.0, 0.0], np.float32)
 
 
 def record(tmp_path: Path, storage: str, **overrides) -> Path:
-    env = NavEnv(CONFIG, overrides={"record.enabled": True, "record.bags_dir": str(tmp_path),
-                                    "record.run": "r", "record.storage": storage,
-                                    "episode_max_steps": 3, **overrides})
+    env = make_env(CONFIG, overrides={"record.enabled": True, "record.bags_dir": str(tmp_path),
+                                      "record.run": "r", "record.storage": storage,
+                                      "episode_max_steps": 3, **overrides})
     try:
         env.reset(seed=0)
         for _ in range(3):

@@ -26,7 +26,7 @@ import pytest
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
-from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 
 ROOT = Path(__file__).resolve().parents[2]
 GOLDEN = Path(__file__).with_name("data") / "golden_episodes.json"
@@ -58,9 +58,9 @@ def rounded(msg: object) -> object:
 def episode_digest(config: str, steps: int) -> dict[str, dict[str, object]]:
     """Per topic: message type, count and the SHA-256 of (receive time, canonical CDR)."""
     with tempfile.TemporaryDirectory() as bags:
-        env = NavEnv(ROOT / "config" / config,
-                     overrides={"record.enabled": True, "record.bags_dir": bags, "record.run": "r",
-                                "record.storage": "sqlite3", "episode_max_steps": steps})
+        env = make_env(ROOT / "config" / config,
+                       overrides={"record.enabled": True, "record.bags_dir": bags, "record.run": "r",
+                                  "record.storage": "sqlite3", "episode_max_steps": steps})
         try:
             env.reset(seed=3)
             for i in range(steps):

@@ -28,8 +28,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("baselines and planners", ("pic4rl_bridge.baselines",)),
     ("tasks", ("pic4rl_bridge.tasks",)),
     ("transports", ("pic4rl_bridge.transports",)),
-    ("env", ("pic4rl_bridge", "pic4rl_bridge.env", "pic4rl_bridge.env_recording",
-             "pic4rl_bridge.recorder", "pic4rl_bridge.episodes", "pic4rl_bridge.render")),
+    ("env", ("pic4rl_bridge", "pic4rl_bridge.env", "pic4rl_bridge.env_facts",
+             "pic4rl_bridge.recording", "pic4rl_bridge.recorder", "pic4rl_bridge.episodes",
+             "pic4rl_bridge.render")),
 )
 
 
