@@ -5,9 +5,10 @@ piece in the group of its table::
     [project.entry-points."pic4rl.baselines"]
     mine = "my_package.my_baseline:SPEC"
 
-The groups: ``pic4rl.metrics`` (``METRIC_TABLE``), ``pic4rl.policies`` (``--agent NAME``) and
-``pic4rl.baselines`` (``BASELINE_TABLE``). A table reads its group once, when its module is
-imported, so that everything derived from it (choices, ids, sections) sees the new entry.
+The groups: ``pic4rl.metrics`` (``METRIC_TABLE``), ``pic4rl.policies`` (``--agent NAME``),
+``pic4rl.baselines`` (``BASELINE_TABLE``) and ``pic4rl.tasks`` (``TASK_TABLE``). A table
+reads its group once, when its module is imported, so that everything derived from it
+(choices, ids, sections) sees the new entry.
 """
 
 from __future__ import annotations
@@ -54,5 +55,8 @@ def load_group(group: str, kind: type, *, taken: Collection[str]) -> dict[str, A
         if not isinstance(obj, kind):
             raise ConfigError(f"{where}: it names a {type(obj).__name__}; expected a "
                               f"{kind.__name__}")
+        if getattr(obj, "name", point.name) != point.name:
+            raise ConfigError(f"{where}: it names {kind.__name__} {obj.name!r}; expected the "
+                              f"entry point's name {point.name!r}")
         loaded[point.name] = obj
     return loaded

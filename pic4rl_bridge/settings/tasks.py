@@ -6,7 +6,9 @@ its states for imitation (the baselines name the tasks they drive in their own t
 ``TaskName``, ``SensorName``, ``make_task``, ``pic4rl_bridge.ENV_IDS``, imitation's experts and
 the env's per-task choices derive from ``TASK_TABLE``. Pure dataclasses (no numpy, no ROS), so that
 ``import pic4rl_bridge`` registers the ids without importing a task's code, which
-``TaskSpec.build`` names by string, as Gymnasium's entry points do.
+``TaskSpec.build`` names by string, as Gymnasium's entry points do. A user's package adds a
+task without editing this table: its ``TaskSpec`` named in the entry-point group
+``pic4rl.tasks`` (``pic4rl_base.plugins``), its code named by the spec's ``build``.
 
 A params file keeps one ``reward:`` section: ``RewardConfig`` is every task's reward class
 at once (each a subclass of ``CommonReward``), and a task reads only its own class's scales.
@@ -19,6 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pic4rl_base.plugins import load_group
 from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
 from ..errors import ConfigError, require
@@ -189,6 +192,10 @@ TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
              experts=("heading",), section=("person", PersonConfig),
              headline=("timeout", "full runs")),
 )}
+#: A user's tasks: each a ``TaskSpec`` that its package names in this entry-point group under
+#: the task's name; read before anything below derives from the table.
+TASK_GROUP = "pic4rl.tasks"
+TASK_TABLE.update(load_group(TASK_GROUP, TaskSpec, taken=TASK_TABLE))
 
 #: The task choice of ``nav_env``'s ``task`` key, one value per registered task.
 TaskName = ParamEnum("TaskName", {name: name for name in TASK_TABLE})  # type: ignore[misc]

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 DOC = ROOT / "docs" / "architecture.md"
 #: Each piece's folder under ``tests/places/`` → its row in the places table.
-ROWS = {"metric": "a metric", "baseline": "a baseline"}
+ROWS = {"metric": "a metric", "baseline": "a baseline", "task": "a task"}
 GOTO = ROOT / "config" / "env_goto_lidar.yaml"
 
 
@@ -122,6 +122,7 @@ def test_a_bad_entry_point_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch
     from pic4rl_base import plugins
     from pic4rl_base.errors import ConfigError
     from pic4rl_bridge.baselines.registry import BASELINE_GROUP, BASELINE_TABLE, BaselineSpec
+    from pic4rl_bridge.settings.tasks import TASK_GROUP, TASK_TABLE, TaskSpec
 
     def points(name: str, value: str) -> None:
         monkeypatch.setattr(plugins, "entry_points", lambda group: [
@@ -137,3 +138,57 @@ def test_a_bad_entry_point_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch
     points("mine", "no_such_module_xyz:SPEC")
     with pytest.raises(ConfigError, match="ModuleNotFoundError"):
         plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)
+    monkeypatch.syspath_prepend(str(HERE / "task"))
+    monkeypatch.delitem(sys.modules, "escape_entry", raising=False)
+    points("flee", "escape_entry:SPEC")
+    with pytest.raises(ConfigError, match="it names TaskSpec 'escape'; expected the entry "
+                                          "point's name 'flee'"):
+        plugins.load_group(TASK_GROUP, TaskSpec, taken=TASK_TABLE)
+
+
+# -- a task: its table entry, its code and its entry point --------------------------------------
+
+#: A user's program: the task's Gymnasium id, made and driven for one recorded episode by
+#: pic4rl's DWA toward the episode's goal (the task itself has none).
+DRIVE = """
+import json, sys
+import gymnasium as gym
+import numpy as np
+import pic4rl_bridge  # registers the ids, the user's among them
+from pic4rl_bridge.baselines.dwa import DwaController
+from pic4rl_bridge.settings.baselines import BaselinesConfig
+env = gym.make("places/Escape-v0", config=sys.argv[1], overrides={
+    "episode_max_steps": 150, "record.enabled": True, "record.bags_dir": sys.argv[2],
+    "record.run": "r"})
+obs, info = env.reset(seed=0)
+dwa = DwaController(env.unwrapped.scenario.robot, BaselinesConfig().dwa)
+first, done, terms = obs, False, set()
+while not done:
+    action = dwa.action(env.unwrapped.frame)
+    obs, reward, terminated, truncated, info = env.step(action)
+    terms |= set(info["reward_terms"])
+    done = terminated or truncated
+env.close()
+print(json.dumps({"first": first.tolist(), "last": obs.tolist(), "terms": sorted(terms),
+                  "outcome": info["outcome"]}))
+"""
+
+
+def test_a_task_from_outside_gets_an_env_id_an_episode_and_a_judged_bag(tmp_path: Path) -> None:
+    import json
+
+    from pic4rl_metrics import compute
+
+    env = _install("task", tmp_path / "site")
+    done = subprocess.run([sys.executable, "-c", DRIVE, str(GOTO), str(tmp_path / "bags")],
+                          env=env, capture_output=True, text=True, timeout=500, check=False)
+    assert done.returncode == 0, done.stderr
+    episode = json.loads(done.stdout.splitlines()[-1])
+    assert episode["terms"] == ["away", "collision", "escaped", "step"]
+    assert episode["first"][0] == pytest.approx(0.0, abs=1e-6)  # its own observation
+    result = compute([tmp_path / "bags" / "r"])
+    assert len(result.results) == 1 and not result.failed
+    row = result.frame.iloc[0]
+    assert row["task"] == "escape" and row["outcome"] == episode["outcome"]
+    assert episode["outcome"] == "goal" and episode["last"][0] >= 1.0
+    assert row["path_length_m"] >= 1.0  # it got 1 m away, as the bag shows
