@@ -35,10 +35,23 @@ def require(ok: bool, key: str, value: Any, expected: str) -> None:
         raise ConfigError(msg)
 
 
+#: Keys given a new name, old → new: refused with the new name wherever the new one is a key.
+#: The env's LiDAR and depth observation keys, renamed apart from the sim's sensor keys of the
+#: same spelling (the sim's ``lidar.beams`` are rays, the env's sectors; the sim's
+#: ``depth.max_depth_m`` is the camera's range, the env's the observation's clip).
+RENAMED_KEYS = {"lidar.beams": "lidar.sectors", "lidar.max_range_m": "lidar.clip_m",
+                "depth.max_depth_m": "depth.clip_m", "depth.width": "depth.obs_width",
+                "depth.height": "depth.obs_height"}
+
+
 def unknown_key(key: str, known: Iterable[str], *, where: str) -> ConfigError:
     """An error for an unknown ``key`` in ``where`` (no prefix when empty: the caller adds
-    one), with a "did you mean" when one is close."""
+    one): its new name when it was renamed (``RENAMED_KEYS``), else a "did you mean" when one
+    is close."""
     known = sorted(known)
+    prefix = f"{where}: " if where else ""
+    if RENAMED_KEYS.get(key) in known:
+        return ConfigError(f"{prefix}key {key!r} is renamed {RENAMED_KEYS[key]!r}")
     close = difflib.get_close_matches(key, known, n=1)
     hint = f"; did you mean {close[0]!r}?" if close else f"; known keys: {', '.join(known)}"
-    return ConfigError(f"{f'{where}: ' if where else ''}unknown key {key!r}{hint}")
+    return ConfigError(f"{prefix}unknown key {key!r}{hint}")

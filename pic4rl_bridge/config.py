@@ -70,12 +70,15 @@ class DepthEncoding(ParamEnum):
 
 @dataclass(frozen=True)
 class LidarObsConfig:
-    """The LiDAR observation: ``beams`` sectors of equal width over ``fov_deg`` centred on the
-    robot's forward axis, each the minimum range of the beams pointing into it, clipped."""
+    """The LiDAR observation: ``sectors`` of equal width over ``fov_deg`` centred on the
+    robot's forward axis, each the minimum range of the sim's rays (its ``lidar.beams``)
+    pointing into it, clipped at ``clip_m`` (the sensor's own range is the sim's
+    ``lidar.range_max_m``)."""
 
-    beams: int = param(36, doc="sectors of the observation, each the minimum range in it",
-                       range=POSITIVE)
-    max_range_m: float = param(10.0, doc="ranges clipped here", unit="m", range=POSITIVE)
+    sectors: int = param(36, doc="sectors of the observation, each the minimum range of the "
+                         "scan's rays in it", range=POSITIVE)
+    clip_m: float = param(10.0, doc="the observation's ranges clipped here", unit="m",
+                          range=POSITIVE)
     fov_deg: float = param(360.0, doc="the sectors' span, centred on the robot's forward axis "
                            "(sector 0 starts at -fov_deg / 2)", unit="deg",
                            range=Range(0.0, 360.0, lo_open=True))
@@ -85,12 +88,16 @@ class LidarObsConfig:
 
 @dataclass(frozen=True)
 class DepthObsConfig:
-    """The depth observation: resized to ``width`` × ``height``, clipped at ``max_depth_m``;
-    ``uint8`` scales [0, max_depth_m] to [0, 255] so SB3's CNN treats it as an image."""
+    """The depth observation: the camera's image (the sim's ``depth.width`` × ``depth.height``)
+    resized to ``obs_width`` × ``obs_height``, clipped at ``clip_m``; ``uint8`` scales
+    [0, clip_m] to [0, 255] so SB3's CNN treats it as an image."""
 
-    width: int = param(80, doc="observation width", unit="px", range=POSITIVE)
-    height: int = param(60, doc="observation height", unit="px", range=POSITIVE)
-    max_depth_m: float = param(5.0, doc="depths clipped here", unit="m", range=POSITIVE)
+    obs_width: int = param(80, doc="the observation's width (the image resized)", unit="px",
+                           range=POSITIVE)
+    obs_height: int = param(60, doc="the observation's height (the image resized)", unit="px",
+                            range=POSITIVE)
+    clip_m: float = param(5.0, doc="the observation's depths clipped here", unit="m",
+                          range=POSITIVE)
     encoding: DepthEncoding = param(DepthEncoding.UINT8, doc="uint8 (an image for SB3's CNN) or "
                                     "float32 (metres)")
 

@@ -75,14 +75,14 @@ def _sectors(scan: ScanData, beams: int, fov_deg: float) -> _Sectors:
 def _layout(scan: ScanData, beams: int, fov_deg: float) -> _Sectors:
     n, step = len(scan.ranges), abs(scan.angle_increment_rad)
     if n == 0:
-        raise ConfigError("scan: a LaserScan without ranges; lidar.beams needs a beam each")
+        raise ConfigError("scan: a LaserScan without ranges; lidar.sectors needs a beam each")
     index = sector_index(scan.base_angles(), beams, fov_deg)
     counts = np.bincount(index[index >= 0], minlength=beams)
     blind = [k for k in np.flatnonzero(counts == 0) if _in_view(scan, k, beams, fov_deg)]
     if blind:
         listed = ", ".join(str(k) for k in blind[:8]) + (", ..." if len(blind) > 8 else "")
         raise ConfigError(
-            f"lidar.beams: {beams} sectors of {fov_deg / beams:.3g} deg (lidar.fov_deg "
+            f"lidar.sectors: {beams} sectors of {fov_deg / beams:.3g} deg (lidar.fov_deg "
             f"{fov_deg:g}) need a beam each, but the scan's {n} beams "
             f"{math.degrees(step):.3g} deg apart leave sector(s) {listed} without one "
             "inside its field of view; use fewer sectors or a finer scan")
@@ -111,16 +111,16 @@ def _in_view(scan: ScanData, sector: int, beams: int, fov_deg: float) -> bool:
 
 
 def lidar_sectors(scan: ScanData, lidar: LidarObsConfig) -> np.ndarray:
-    """``lidar.beams`` sector minima (m, float32, in [0, lidar.max_range_m]) of ``scan``, by
+    """``lidar.sectors`` sector minima (m, float32, in [0, lidar.clip_m]) of ``scan``, by
     each beam's direction in the base frame over the layout of ``sector_index``.
 
-    NaN and ``+inf`` (no return) read as ``max_range_m``, ``-inf`` (too close) as 0; a sector
+    NaN and ``+inf`` (no return) read as ``clip_m``, ``-inf`` (too close) as 0; a sector
     outside the scan's field of view reads as no return. A scan that leaves a sector inside its
     field of view without a beam is refused (``ConfigError``). For the built-in LiDARs (beams
     from -pi, evenly round the circle) the sectors are the scan's beams split in order into
     equal runs.
     """
-    beams, far = lidar.beams, lidar.max_range_m
+    beams, far = lidar.sectors, lidar.clip_m
     layout = _sectors(scan, beams, lidar.fov_deg)
     r = np.nan_to_num(np.asarray(scan.ranges, dtype=np.float64), nan=far, posinf=far,
                       neginf=0.0)
@@ -145,21 +145,21 @@ def _resize(image: np.ndarray, width: int, height: int) -> np.ndarray:
     return image[np.ix_(rows, cols)]
 
 
-def depth_observation(image: np.ndarray, width: int, height: int, max_depth_m: float,
+def depth_observation(image: np.ndarray, width: int, height: int, clip_m: float,
                       encoding: str) -> np.ndarray:
     """A depth image (H × W, m) as a (1, height, width) observation.
 
-    NaN and ``+inf`` read as ``max_depth_m``, ``-inf`` as 0; depths are clipped to
-    [0, max_depth_m] before resizing (so a far pixel weighs as ``max_depth_m`` in a block
-    mean). ``uint8``: ``round(d / max_depth_m * 255)``; ``float32``: metres.
+    NaN and ``+inf`` read as ``clip_m``, ``-inf`` as 0; depths are clipped to [0, clip_m]
+    before resizing (so a far pixel weighs as ``clip_m`` in a block mean). ``uint8``:
+    ``round(d / clip_m * 255)``; ``float32``: metres.
     """
     d = np.asarray(image, dtype=np.float64)
     if d.ndim != 2:
         raise ValueError(f"depth_observation: expected an H x W image, got shape {d.shape}")
-    d = np.nan_to_num(d, nan=max_depth_m, posinf=max_depth_m, neginf=0.0)
-    d = _resize(np.clip(d, 0.0, max_depth_m), width, height)[None]
+    d = np.nan_to_num(d, nan=clip_m, posinf=clip_m, neginf=0.0)
+    d = _resize(np.clip(d, 0.0, clip_m), width, height)[None]
     if encoding == "uint8":
-        return np.round(d / max_depth_m * 255.0).astype(np.uint8)
+        return np.round(d / clip_m * 255.0).astype(np.uint8)
     if encoding == "float32":
         return d.astype(np.float32)
     raise ValueError(f"depth.encoding: {encoding!r} is invalid; expected uint8 or float32")
@@ -167,10 +167,10 @@ def depth_observation(image: np.ndarray, width: int, height: int, max_depth_m: f
 
 def depth_space(depth: DepthObsConfig) -> gym.spaces.Box:
     """The space of ``depth_observation`` under ``depth`` (the config's ``depth`` section)."""
-    shape = (1, depth.height, depth.width)
+    shape = (1, depth.obs_height, depth.obs_width)
     if depth.encoding == "uint8":
         return gym.spaces.Box(0, 255, shape, np.uint8)
-    return gym.spaces.Box(0.0, depth.max_depth_m, shape, np.float32)
+    return gym.spaces.Box(0.0, depth.clip_m, shape, np.float32)
 
 
 #: Observed target distances are clipped here (m): a finite bound for the observation space.

@@ -166,7 +166,7 @@ def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> _GoToPos
 
 class GoToPoseLidar(_GoToPose):
     """goToPose from LiDAR: a flat vector [sectors (m), goal distance (m), goal angle (rad),
-    last action (2)]; normalised, sectors / ``lidar.max_range_m`` and the goal as above. With
+    last action (2)]; normalised, sectors / ``lidar.clip_m`` and the goal as above. With
     ``lidar.history`` N > 1 the sectors are the last N scans', newest first (a frame stack,
     the episode's context's: the memory study's alternative to the occupancy crop)."""
 
@@ -174,8 +174,8 @@ class GoToPoseLidar(_GoToPose):
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        beams, goal = config.lidar.beams * config.lidar.history, self._goal_space()
-        far = 1.0 if config.normalize_observations else config.lidar.max_range_m
+        beams, goal = config.lidar.sectors * config.lidar.history, self._goal_space()
+        far = 1.0 if config.normalize_observations else config.lidar.clip_m
         low = np.concatenate((np.zeros(beams, np.float32), goal.low))
         high = np.concatenate((np.full(beams, far, np.float32), goal.high))
         self.observation_space = self._memory_space(gym.spaces.Box(low, high, dtype=np.float32))
@@ -187,7 +187,7 @@ class GoToPoseLidar(_GoToPose):
         lidar = self.config.lidar
         sectors = lidar_sectors(frame.scan, lidar)
         if self.config.normalize_observations:
-            sectors /= np.float32(lidar.max_range_m)
+            sectors /= np.float32(lidar.clip_m)
         if lidar.history > 1:  # the frame stack: the episode's first scan fills it
             stack = context.extra["scan_history"]
             stack.extendleft([sectors] * (lidar.history if not stack else 1))
@@ -212,7 +212,7 @@ class GoToPoseDepth(_GoToPose):
         if frame.depth is None:
             raise ValueError("goToPose (depth): the frame has no depth image")
         c = self.config.depth
-        image = depth_observation(frame.depth, c.width, c.height, c.max_depth_m, c.encoding)
+        image = depth_observation(frame.depth, c.obs_width, c.obs_height, c.clip_m, c.encoding)
         return self._remember({"depth": image,
                                "goal": self._goal_vector(frame, context, last_action)},
                               frame, context)

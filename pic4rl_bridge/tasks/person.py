@@ -50,9 +50,9 @@ class PersonMonitoringTask(Task):
                                            collision_tolerance_m=config.collision_tolerance_m)
         size = 1 if self.follower is not None else 3
         self.action_space = gym.spaces.Box(-1.0, 1.0, (size,), np.float32)
-        beams = config.lidar.beams
+        beams = config.lidar.sectors
         low = np.concatenate((np.zeros(beams), [0.0, -math.pi, -math.pi], -np.ones(size)))
-        high = np.concatenate((np.full(beams, config.lidar.max_range_m),
+        high = np.concatenate((np.full(beams, config.lidar.clip_m),
                                [MAX_TARGET_DISTANCE_M, math.pi, math.pi], np.ones(size)))
         self.observation_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32),
                                                 dtype=np.float32)

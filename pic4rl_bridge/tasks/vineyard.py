@@ -61,7 +61,7 @@ class VineyardTask(Task):
         if frame.depth is None:
             raise ValueError("vineyard: the frame has no depth image")
         c = self.config.depth
-        return depth_observation(frame.depth, c.width, c.height, c.max_depth_m, c.encoding)
+        return depth_observation(frame.depth, c.obs_width, c.obs_height, c.clip_m, c.encoding)
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:

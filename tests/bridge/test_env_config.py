@@ -98,11 +98,11 @@ def test_nested_and_dotted_names_are_the_same(tmp_path: Path) -> None:
     """``reward: {goal: 5}`` and ``reward.collision: -3`` both set reward fields; ints
     become floats where a float is wanted."""
     path = env_file(tmp_path, {"reward": {"goal": 5}, "reward.collision": -3,
-                               "lidar": {"beams": 12}, "record.topics": ["scan", "odom"]})
+                               "lidar": {"sectors": 12}, "record.topics": ["scan", "odom"]})
     config = load_env_config(path)
     assert config.reward.goal == 5.0 and isinstance(config.reward.goal, float)
     assert config.reward.collision == -3.0
-    assert config.lidar.beams == 12
+    assert config.lidar.sectors == 12
     assert config.record.topics == ("scan", "odom")
 
 
@@ -132,6 +132,24 @@ def test_unknown_keys_are_named(tmp_path: Path, params: dict[str, Any], message:
     with pytest.raises(ConfigError, match=message) as err:
         load_env_config(path)
     assert str(err.value).startswith(f"{path}: nav_env parameters:")
+
+
+@pytest.mark.parametrize(("old", "new"), [
+    ("lidar.beams", "lidar.sectors"), ("lidar.max_range_m", "lidar.clip_m"),
+    ("depth.max_depth_m", "depth.clip_m"), ("depth.width", "depth.obs_width"),
+    ("depth.height", "depth.obs_height"),
+])
+def test_the_envs_old_sensor_keys_are_refused_with_their_new_names(
+        tmp_path: Path, old: str, new: str) -> None:
+    """The env's observation keys once spelled as the sim's sensor keys (rays vs sectors, the
+    sensor's range vs the observation's clip): the old key in the env's section is one line
+    naming the new one, while the sim's section keeps it."""
+    path = env_file(tmp_path, {old: 12}, sim={"ros__parameters": {old: 12}})
+    with pytest.raises(ConfigError) as err:
+        load_env_config(path)
+    assert str(err.value) == f"{path}: nav_env parameters: key {old!r} is renamed {new!r}"
+    config = load_env_config(env_file(tmp_path, {new: 12}, sim={"ros__parameters": {old: 12}}))
+    assert config.to_params()[new] == 12 and config.sim_params == {old: 12}
 
 
 @pytest.mark.parametrize(("params", "message"), [
@@ -173,8 +191,8 @@ def test_bad_choices_list_the_valid_ones(tmp_path: Path, key: str, value: str,
 
 @pytest.mark.parametrize(("key", "value"), [
     ("episode_max_steps", 0), ("episode_max_steps", -3), ("goal_tolerance_m", 0.0),
-    ("goal_tolerance_m", -0.4), ("lidar.beams", 0), ("lidar.max_range_m", float("nan")),
-    ("collision_steps", 0), ("ros.timeout_s", float("inf")), ("depth.width", 0),
+    ("goal_tolerance_m", -0.4), ("lidar.sectors", 0), ("lidar.clip_m", float("nan")),
+    ("collision_steps", 0), ("ros.timeout_s", float("inf")), ("depth.obs_width", 0),
 ])
 def test_non_positive_values_are_refused(tmp_path: Path, key: str, value: float) -> None:
     """Counts, tolerances and ranges must be positive and finite."""

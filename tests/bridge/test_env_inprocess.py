@@ -30,7 +30,7 @@ from pic4rl_bridge.errors import BridgeError, ConfigError, EpisodeRejected
 from pic4rl_metrics import compute
 from bridge_helpers import ENV_CONFIGS, LIDAR_CONFIG, REPO
 
-BEAMS = 36  # lidar.beams of env_goto_lidar.yaml: obs[BEAMS] is the goal distance (m)
+BEAMS = 36  # lidar.sectors of env_goto_lidar.yaml: obs[BEAMS] is the goal distance (m)
 STOP = np.array([-1.0, 0.0], np.float32)  # v = min_linear = 0, no turn
 START, GOAL = [-2.0, 0.0, 0.0], [0.0, 0.0]  # 2 m of free floor along +x
 NEAR_WALL = [3.5, 0.0, 0.0]  # 1.5 m from the east wall, facing it

@@ -157,7 +157,7 @@ def test_a_second_sim_node_is_refused_at_reset_naming_both(domain: int, start_si
 def _go_to_goal(env: gym.Env, max_steps: int = 300) -> dict:
     """A proportional go-to-goal controller: turn to the goal, drive when facing it."""
     obs, info = env.reset(options={"start": [-3.0, -2.0, 0.3], "goal": [2.0, 1.0]})
-    beams = env.unwrapped.config.lidar.beams
+    beams = env.unwrapped.config.lidar.sectors
     for _ in range(max_steps):
         distance, angle = float(obs[beams]), float(obs[beams + 1])
         turn = float(np.clip(2.0 * angle, -1.0, 1.0))

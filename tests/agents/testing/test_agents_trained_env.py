@@ -37,21 +37,21 @@ def test_the_declared_keys_are_env_parameters_and_follow_the_sensor() -> None:
     for key in AGENT_KEYS:
         assert key in params or any(p.startswith(key) for p in params), key
     lidar, depth = agent_keys(EnvConfig()), agent_keys(EnvConfig(sensor="depth"))
-    assert {"lidar.max_range_m", "lidar.beams", "min_linear_m_s"} <= set(lidar)
+    assert {"lidar.clip_m", "lidar.sectors", "min_linear_m_s"} <= set(lidar)
     assert not any(k.startswith("depth.") for k in lidar)
-    assert {"depth.width", "depth.max_depth_m", "depth.encoding"} <= set(depth)
+    assert {"depth.obs_width", "depth.clip_m", "depth.encoding"} <= set(depth)
     assert "episode_max_steps" not in lidar and "reward.goal" not in lidar
 
 
 @pytest.mark.bad_input
 def test_an_override_that_changes_the_agents_range_is_refused(tmp_path: Path) -> None:
     code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path), "--no-progress",
-                          "--env-kwargs", "lidar.max_range_m:10.0"])
+                          "--env-kwargs", "lidar.clip_m:10.0"])
     assert code == 2
     assert err.splitlines() == [
-        f"pic4rl-test: --agent {TD3_LIDAR}: lidar.max_range_m: -p/--env-kwargs gives 10.0 but "
+        f"pic4rl-test: --agent {TD3_LIDAR}: lidar.clip_m: -p/--env-kwargs gives 10.0 but "
         f"the agent was trained with 3.5 ({TD3_LIDAR / 'config.yaml'}); a test env must not "
-        "change what an agent observes or how it acts: remove lidar.max_range_m there or set "
+        "change what an agent observes or how it acts: remove lidar.clip_m there or set "
         "it to 3.5"]
     assert not list(tmp_path.iterdir())  # nothing driven, no run folder
 
@@ -61,24 +61,24 @@ def test_a_params_file_that_changes_the_agents_settings_is_refused_naming_it(
         tmp_path: Path) -> None:
     env = tmp_path / "env.yaml"
     env.write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
-        "episode_max_steps": 50, "min_linear_m_s": 0.0, "lidar": {"max_range_m": 10.0}}}}))
+        "episode_max_steps": 50, "min_linear_m_s": 0.0, "lidar": {"clip_m": 10.0}}}}))
     code, err = run_main(["--agent", str(TD3_LIDAR), "--bags", str(tmp_path / "bags"),
                           "--ros-args", "--params-file", str(env)])
     assert code == 2
     line, = err.splitlines()
     assert line.startswith(f"pic4rl-test: --agent {TD3_LIDAR}: min_linear_m_s: {env} gives 0.0 "
                            "but the agent was trained with 0.1")
-    assert "(also lidar.max_range_m)" in line
+    assert "(also lidar.clip_m)" in line
 
 
 def test_a_test_env_that_agrees_or_is_silent_keeps_the_agents_settings(tmp_path: Path) -> None:
     env = tmp_path / "env.yaml"
     env.write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
-        "episode_max_steps": 50, "lidar": {"max_range_m": 3.5}}}}))
+        "episode_max_steps": 50, "lidar": {"clip_m": 3.5}}}}))
     plain, ros = tester.split_ros_args(["--agent", str(TD3_LIDAR), "--ros-args",
                                         "--params-file", str(env)])
     spec, = resolve_agents(tester.build_plan(tester.build_parser().parse_args(plain), ros))
-    assert (spec.run.env.lidar.max_range_m, spec.run.env.min_linear_m_s) == (3.5, 0.1)
+    assert (spec.run.env.lidar.clip_m, spec.run.env.min_linear_m_s) == (3.5, 0.1)
     assert spec.run.env.episode_max_steps == 50  # the test env's own keys still apply
 
 
@@ -86,12 +86,12 @@ def test_a_test_env_that_agrees_or_is_silent_keeps_the_agents_settings(tmp_path:
 def test_a_suite_whose_env_contradicts_an_agent_is_refused_before_any_cell(
         tmp_path: Path) -> None:
     (tmp_path / "env.yaml").write_text(yaml.safe_dump({"nav_env": {"ros__parameters": {
-        "lidar": {"max_range_m": 10.0}}}}))
+        "lidar": {"clip_m": 10.0}}}}))
     (tmp_path / "suite.yaml").write_text(yaml.safe_dump({
         "suite": "s", "tasks": [{"name": "goto", "env": "env.yaml",
                                  "agents": {"td3": str(TD3_LIDAR)}}]}))
     with pytest.raises(ConfigError, match=r"^\S+suite.yaml: tasks\[0\].agents.td3: --agent "
-                       r"\S+: lidar.max_range_m: \S+env.yaml gives 10.0 but the agent was "
+                       r"\S+: lidar.clip_m: \S+env.yaml gives 10.0 but the agent was "
                        r"trained with 3.5"):
         load_suite(tmp_path / "suite.yaml")
 
@@ -107,12 +107,12 @@ def test_the_table1_suite_gives_each_agent_its_trained_observation(tmp_path: Pat
                             "sac_person_hybrid", "td3_person_hybrid"}
     for name in ("td3_lidar", "sac_lidar"):
         env = trained[name]
-        assert (env.lidar.max_range_m, env.lidar.beams, env.min_linear_m_s) == (3.5, 36, 0.1)
+        assert (env.lidar.clip_m, env.lidar.sectors, env.min_linear_m_s) == (3.5, 36, 0.1)
         assert env.max_linear_m_s == 0.5 and env.normalize_observations
     for name in ("td3_depth", "sac_depth"):
-        assert (trained[name].depth.width, trained[name].depth.height) == (40, 30)
+        assert (trained[name].depth.obs_width, trained[name].depth.obs_height) == (40, 30)
     for name in ("sac_person_hybrid", "td3_person_hybrid"):
-        assert trained[name].lidar.max_range_m == 5.0 and trained[name].person.control == "hybrid"
+        assert trained[name].lidar.clip_m == 5.0 and trained[name].person.control == "hybrid"
 
 
 @pytest.mark.bad_input

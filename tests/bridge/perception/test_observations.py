@@ -26,8 +26,8 @@ def scan(ranges, angle_min: float, increment: float, yaw: float = 0.0) -> ScanDa
                     float(np.float32(increment)), 0.1, 30.0, Pose2D(0.1, 0.0, yaw))
 
 
-def lidar(beams: int = 36, max_range_m: float = 10.0, fov_deg: float = 360.0):
-    return EnvConfig().replace(**{"lidar.beams": beams, "lidar.max_range_m": max_range_m,
+def lidar(sectors: int = 36, clip_m: float = 10.0, fov_deg: float = 360.0):
+    return EnvConfig().replace(**{"lidar.sectors": sectors, "lidar.clip_m": clip_m,
                                   "lidar.fov_deg": fov_deg}).lidar
 
 
@@ -134,13 +134,13 @@ def test_a_layout_narrower_than_the_scan_drops_the_beams_outside_it():
     (20, -0.75 * math.pi, 1.5 * math.pi / 19),  # 270 deg, 14 deg apart
 ])
 def test_a_scan_too_coarse_for_the_sectors_is_refused(n, angle_min, increment):
-    with pytest.raises(ConfigError, match=r"^lidar\.beams: 36 sectors of 10 deg .* need a beam "
+    with pytest.raises(ConfigError, match=r"^lidar\.sectors: 36 sectors of 10 deg .* need a beam "
                        r"each, but the scan's \d+ beams .* leave sector\(s\) \d"):
         lidar_sectors(scan(np.ones(n), angle_min, increment), lidar())
 
 
 def test_a_scan_just_fine_enough_is_accepted():
-    out = lidar_sectors(scan(np.arange(36.0), -math.pi, 2 * math.pi / 36), lidar(max_range_m=40))
+    out = lidar_sectors(scan(np.arange(36.0), -math.pi, 2 * math.pi / 36), lidar(clip_m=40))
     np.testing.assert_array_equal(out, np.arange(36.0))
     narrow = scan(np.ones(28), -0.75 * math.pi, math.radians(10.0))  # 270 deg, 10 deg apart
     assert np.count_nonzero(lidar_sectors(narrow, lidar()) == 1.0) == 28
@@ -186,14 +186,14 @@ def test_depth_special_values_clipping_and_uint8():
 
 @pytest.mark.parametrize("encoding", ["uint8", "float32"])
 def test_depth_space_contains_observations(encoding):
-    config = EnvConfig().replace(**{"depth.encoding": encoding, "depth.width": 16,
-                                    "depth.height": 12})
+    config = EnvConfig().replace(**{"depth.encoding": encoding, "depth.obs_width": 16,
+                                    "depth.obs_height": 12})
     space = depth_space(config.depth)
     assert space.shape == (1, 12, 16)
     rng = np.random.default_rng(0)
     image = rng.uniform(-1.0, 20.0, (48, 64)).astype(np.float32)
     image[0, :5] = [np.inf, -np.inf, np.nan, 0.0, 5.0]
-    obs = depth_observation(image, 16, 12, config.depth.max_depth_m, encoding)
+    obs = depth_observation(image, 16, 12, config.depth.clip_m, encoding)
     assert space.contains(obs)
     assert not space.contains(obs[0])
 

@@ -58,8 +58,8 @@ def test_lidar_observation_values_and_space():
     context = task.begin(start)
     assert context.goal == (1.0, 0.0) and context.start == start.pose
     obs = task.observe(start, context, np.array([0.5, -2.0]))
-    assert obs.shape == (config.lidar.beams + 4,) and task.observation_space.contains(obs)
-    assert obs[config.lidar.beams // 2] == 2.0 and obs[0] == config.lidar.max_range_m
+    assert obs.shape == (config.lidar.sectors + 4,) and task.observation_space.contains(obs)
+    assert obs[config.lidar.sectors // 2] == 2.0 and obs[0] == config.lidar.clip_m
     np.testing.assert_allclose(obs[-4:], [1.0, -math.pi / 2, 0.5, -1.0], rtol=1e-6)
     behind = task.observe(frame(4.0, goal=(1.0, 0.0)), context, np.zeros(2))
     assert task.observation_space.contains(behind) and abs(abs(behind[-3]) - math.pi) < 1e-6
@@ -68,7 +68,7 @@ def test_lidar_observation_values_and_space():
 def test_normalized_lidar_observation_is_the_raw_one_scaled():
     raw_task = GoToPoseLidar(EnvConfig(), robot())
     task = GoToPoseLidar(EnvConfig(normalize_observations=True), robot())
-    beams, max_range = task.config.lidar.beams, task.config.lidar.max_range_m
+    beams, max_range = task.config.lidar.sectors, task.config.lidar.clip_m
     for goal, ahead in (((1.0, 0.0), 2.0), ((30.0, -4.0), 0.3)):
         start = frame(0.0, yaw=math.pi / 2, goal=goal, ahead_m=ahead)
         raw = raw_task.observe(start, raw_task.begin(start), np.array([0.5, -2.0]))
@@ -285,7 +285,7 @@ def test_the_scan_history_stacks_the_last_scans_newest_first_and_resets():
     episode's context starts empty; the goal vector stays at the end."""
     config = EnvConfig().replace(**{"lidar.history": 3})
     task = GoToPoseLidar(config, robot())
-    beams = config.lidar.beams
+    beams = config.lidar.sectors
     assert task.observation_space.shape == (3 * beams + 4,)
     context = task.begin(frame(0.0, ahead_m=2.0))
     obs = [task.observe(frame(0.1 * i, ahead_m=a), context, np.zeros(2))

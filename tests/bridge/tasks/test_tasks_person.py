@@ -58,11 +58,11 @@ def test_observation_in_space():
     f = frame(Pose2D(0.0, -3.0), ahead_m=1.5)
     f = dataclasses.replace(f, person=Pose2D(0.0, -3.0, math.pi))  # walking toward -x
     obs = task.observe(f, task.begin(f), np.array([0.1, 2.0, -0.3]))
-    assert obs.shape == (CONFIG.lidar.beams + 6,) and task.observation_space.contains(obs)
+    assert obs.shape == (CONFIG.lidar.sectors + 6,) and task.observation_space.contains(obs)
     np.testing.assert_allclose(np.abs(obs[-4]), math.pi, rtol=1e-6)  # walking at the robot's back
     np.testing.assert_allclose(obs[[-6, -5, -3, -2, -1]], [3.0, -math.pi / 2, 0.1, 1.0, -0.3],
                                rtol=1e-6)
-    assert obs[CONFIG.lidar.beams // 2] == 1.5
+    assert obs[CONFIG.lidar.sectors // 2] == 1.5
     assert task.required == {"scan", "person"}
 
 
