@@ -42,6 +42,18 @@ def require(ok: bool, key: str, value: Any, expected: str) -> None:
 RENAMED_KEYS = {"lidar.beams": "lidar.sectors", "lidar.max_range_m": "lidar.clip_m",
                 "depth.max_depth_m": "depth.clip_m", "depth.width": "depth.obs_width",
                 "depth.height": "depth.obs_height"}
+#: Values given a new name, (key, old) → new: refused with the new name (``require_choice``).
+#: Imitation's person-following expert is the ``dwa_heading`` baseline, by its name.
+RENAMED_VALUES = {("imitation.expert", "heading"): "dwa_heading"}
+
+
+def require_choice(key: str, value: Any, choices: Iterable[str]) -> None:
+    """Raise ``ConfigError`` naming ``key`` unless ``value`` is one of ``choices``; a value
+    that was renamed (``RENAMED_VALUES``) is told its new name."""
+    choices = tuple(choices)
+    new = RENAMED_VALUES.get((key, value)) if isinstance(value, str) else None
+    require(value in choices, key, value,
+            f"its new name {new!r}" if new in choices else f"one of {', '.join(choices)}")
 
 
 def unknown_key(key: str, known: Iterable[str], *, where: str) -> ConfigError:

@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 
 import yaml
 
-from .errors import ConfigError, require, unknown_key
+from .errors import ConfigError, require, require_choice, unknown_key
 from .param_types import (FRACTION, NON_NEGATIVE, POSITIVE, PROBABILITY, TYPE_NAMES, ParamEnum,
                           ParamType, Range, coerce, literal, param_type)
 
@@ -81,7 +81,7 @@ class ParamSpec:
             lo, hi = self.range
             require(lo <= value <= hi, self.name, value, f"a value in [{lo}, {hi}]")
         if self.choices:
-            require(value in self.choices, self.name, value, f"one of {', '.join(self.choices)}")
+            require_choice(self.name, value, self.choices)
         return value
 
 
@@ -200,16 +200,14 @@ def check(obj: Any, prefix: str = "") -> None:
             object.__setattr__(obj, f.name, typed)
             value = typed
         if f.metadata.get("choices"):
-            choices = f.metadata["choices"]
-            require(value in choices, key, value, f"one of {', '.join(choices)}")
+            require_choice(key, value, f.metadata["choices"])
         if bounds is not None:
             require(value in bounds, key, value, bounds.expected())
 
 
 def _choice(key: str, enum: type[Enum], value: Any) -> Enum:
     """``enum(value)``, or ``ConfigError`` listing the values."""
-    names = [m.value for m in enum]
-    require(value in names, key, value, f"one of {', '.join(names)}")
+    require_choice(key, value, [m.value for m in enum])
     return enum(value)
 
 

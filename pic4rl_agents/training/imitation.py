@@ -62,10 +62,10 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
     (``pic4rl_bridge.baselines.registry.EXPERT_BASELINES``), labelling with the env's action
     ranges (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
     mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
-    ``heading``: ``dwa_heading``, DWA with a proportional heading law, personMonitoring, either
-    control; ``centerline``: the row's centre-line follower, vineyard). The planner and the
-    explorer drive with ``settings``, the params files' ``baselines:`` section (defaults when
-    ``None``), as their baselines do."""
+    ``dwa_heading``: DWA with a proportional heading law, personMonitoring, either control;
+    ``centerline``: the row's centre-line follower, vineyard). The planner and the explorer
+    drive with ``settings``, the params files' ``baselines:`` section (defaults when ``None``),
+    as their baselines do."""
     settings = settings or BaselinesConfig()
     if name not in EXPERTS:
         raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "

@@ -152,7 +152,7 @@ BASELINE_TABLE: dict[str, BaselineSpec] = {
     "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True,
                                expert="centerline"),
     "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),
-    "dwa_heading": BaselineSpec(("personMonitoring",), _heading, expert="heading"),
+    "dwa_heading": BaselineSpec(("personMonitoring",), _heading, expert="dwa_heading"),
 }
 #: A user's baselines: each a ``BaselineSpec`` that its package names in this entry-point group.
 BASELINE_GROUP = "pic4rl.baselines"

@@ -189,7 +189,7 @@ TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
              (EnvId("pic4rl/PersonMonitoring-v0", "lidar", {"robot": "omni", "world": "person"}),),
              sensors=("lidar",), reward=PersonReward,
              build="pic4rl_bridge.tasks.person:build",
-             experts=("heading",), section=("person", PersonConfig),
+             experts=("dwa_heading",), section=("person", PersonConfig),
              headline=("timeout", "full runs")),
 )}
 #: A user's tasks: each a ``TaskSpec`` that its package names in this entry-point group under

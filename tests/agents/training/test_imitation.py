@@ -22,7 +22,8 @@ from stable_baselines3.common.utils import obs_as_tensor
 
 from pic4rl_agents.training import train
 from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
-from pic4rl_agents.runs.config import ImitationConfig, load_run_config
+from pic4rl_agents.runs.config import (ImitationConfig, load_run_config,
+                                        train_config_from_params)
 from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_agents.training.envs import make_vec_env
 from pic4rl_agents.training.callbacks import WallClockLimit
@@ -349,14 +350,26 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
 
     person = load_env_config(CONFIG / "env_person_omni.yaml")
     for control, size in (("hybrid", 1), ("end_to_end", 3)):
-        expert = make_expert("heading", person.replace(**{"person.control": control}))
+        expert = make_expert("dwa_heading", person.replace(**{"person.control": control}))
         assert isinstance(expert, HeadingController) and expert.hybrid == (size == 1)
-    with pytest.raises(ConfigError, match="heading drives personMonitoring; the env's task is "
+    with pytest.raises(ConfigError, match="dwa_heading drives personMonitoring; the env's task is "
                                           "'goToPose' \\(use planner\\)"):
-        make_expert("heading", load_run_config([LIDAR_TD3]).env)
+        make_expert("dwa_heading", load_run_config([LIDAR_TD3]).env)
     with pytest.raises(ConfigError, match="planner drives goToPose; .*'personMonitoring' "
-                                          "\\(use heading\\)"):
+                                          "\\(use dwa_heading\\)"):
         make_expert("planner", person)
     with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
-                                          "explorer, centerline, heading"):
+                                          "explorer, centerline, dwa_heading"):
         make_expert("nobody", person)
+
+
+def test_the_old_spelling_of_the_heading_expert_is_refused_with_its_new_name() -> None:
+    """Imitation's person-following expert is named as its baseline, ``dwa_heading``: the old
+    ``heading`` in a params file or on the command line is one line naming the new name."""
+    for params in ({"imitation": {"expert": "heading"}}, {"imitation.expert": "heading"}):
+        with pytest.raises(ConfigError) as err:
+            train_config_from_params(params)
+        assert str(err.value) == ("imitation.expert: 'heading' is invalid; "
+                                  "expected its new name 'dwa_heading'")
+    config = train_config_from_params({"imitation.expert": "dwa_heading"})
+    assert config.imitation.expert == "dwa_heading"

@@ -177,13 +177,13 @@ def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
     from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 
     assert EXPERT_BASELINES == {"planner": "planner", "explorer": "explorer",
-                                "centerline": "centerline", "heading": "dwa_heading"}
+                                "centerline": "centerline", "dwa_heading": "dwa_heading"}
     assert set(EXPERT_BASELINES) == set(EXPERT_TASKS)
     for expert, baseline in EXPERT_BASELINES.items():
         assert EXPERT_TASKS[expert] in BASELINE_TASKS[baseline]
     person = EnvConfig().replace(task="personMonitoring")
-    assert isinstance(make_expert("heading", person, JACKAL, None), HeadingController)
+    assert isinstance(make_expert("dwa_heading", person, JACKAL, None), HeadingController)
     with pytest.raises(ConfigError, match="imitation.expert: 'dwa' is no baseline's expert; "
                                           "expected one of planner, explorer, centerline, "
-                                          "heading"):
+                                          "dwa_heading"):
         make_expert("dwa", EnvConfig(), JACKAL, None)
