@@ -29,12 +29,13 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from _sim import start_sim, stop_sim
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 from pic4rl_bridge.readings.frame import SensorFrame
 from pic4rl_sim.engine import paths
 
@@ -52,8 +53,9 @@ class Run(NamedTuple):
     frames: list[SensorFrame]
 
 
-def episodes(env: NavEnv, dwa: DwaController, count: int, seed: int) -> Run:
-    """Drive ``count`` episodes from a seeded reset, as ``pic4rl-test`` does."""
+def episodes(env: Any, dwa: DwaController, count: int, seed: int) -> Run:
+    """Drive ``count`` episodes of ``env`` (recorded) from a seeded reset, as ``pic4rl-test``
+    does."""
     run = Run(0.0, 0.0, [], [], [])
     step_s = 0.0
     start = time.perf_counter()
@@ -63,7 +65,7 @@ def episodes(env: NavEnv, dwa: DwaController, count: int, seed: int) -> Run:
         dwa.reset()
         done = False
         while not done:
-            frame = env.frame
+            frame = env.unwrapped.frame
             assert frame is not None
             action = dwa.action(frame)
             run.frames.append(frame)
@@ -120,9 +122,9 @@ def main(argv: list[str] | None = None) -> int:
     common = {"episode_max_steps": args.max_steps, "ros.domain_id": domain,
               "episodes.pair_kind": "paper", "record.enabled": True,
               "record.bags_dir": bags.name, "agent": "dwa"}
-    envs = {"inprocess": NavEnv(CONFIG, overrides={**common, "record.run": "inprocess"}),
-            "ros": NavEnv(CONFIG, transport="ros", overrides={**common, "record.run": "ros"})}
-    dwa = {name: make_baseline("dwa", env.config, env.scenario.robot)
+    envs = {"inprocess": make_env(CONFIG, overrides={**common, "record.run": "inprocess"}),
+            "ros": make_env(CONFIG, transport="ros", overrides={**common, "record.run": "ros"})}
+    dwa = {name: make_baseline("dwa", env.unwrapped.config, env.unwrapped.scenario.robot)
            for name, env in envs.items()}
     try:
         best = dict.fromkeys(envs, float("inf"))
@@ -137,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"{len(run.frames)} steps, outcomes {run.outcomes}", file=sys.stderr)
         frames = local.frames
         control_s = min(replay(dwa["inprocess"], frames) for _ in range(args.repeat))
-        cold_s, warm_s = path_times(envs["inprocess"], local.pairs, args.repeat)
+        cold_s, warm_s = path_times(envs["inprocess"].unwrapped, local.pairs, args.repeat)
     finally:
         for env in envs.values():
             env.close()

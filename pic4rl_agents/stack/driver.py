@@ -213,6 +213,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
     stack in ROS domain ``domain``, both stopped at the end; the episodes' outcomes in order."""
     from pic4rl_base import params_file
     from pic4rl_bridge.config import EnvConfig, load_env_config
+    from pic4rl_bridge.recording import record_from_config
 
     ros_env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
                os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
@@ -231,10 +232,12 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                       ros_env)
     process = StackProcess(stack, ros_env, cwd)
     env: StackEnv | None = None
+    recorded: Any = None  # the env, in RecordEpisodes when record.enabled
     outcomes: list[str] = []
     try:
         process.start()
         env = StackEnv(env_config, stack=stack, failure=process.failure)
+        recorded = record_from_config(env) if env_config.record.enabled else env
         action = np.zeros(env.action_space.shape, dtype=np.float32)
         fresh = True  # a stack started and not yet seen ready
         for episode in range(episodes):
@@ -246,10 +249,10 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                 fresh = False
             elif stack.reset_service:
                 _call(env, stack.reset_service, "the stack's reset")
-            env.reset(seed=seed if episode == 0 else None)
+            recorded.reset(seed=seed if episode == 0 else None)
             done, info = False, {}
             while not done:
-                _, _, terminated, truncated, info = env.step(action)
+                _, _, terminated, truncated, info = recorded.step(action)
                 done = terminated or truncated
             outcomes.append(str(info.get("outcome")))
             if stack.restart == "episode" or process.failure() is not None:
@@ -257,7 +260,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                 _wait_gone(env)
     finally:
         process.stop()
-        if env is not None:
-            env.close()
+        if recorded is not None:  # (a recorder that failed to start closed the env)
+            recorded.close()
         stop_group(sim, 10.0)
     return outcomes

@@ -14,23 +14,24 @@ from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_sim.engine.worlds.barn import barn_data
 
 from pic4rl_bridge.baselines.registry import make_baseline
-from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "env_barn.yaml"
 WORLD = 6
 
 
 def test_a_barn_episodes_bag_carries_the_reference_and_its_score(tmp_path: Path) -> None:
-    env = NavEnv(CONFIG, sim={"world_variant": WORLD},
-                 overrides={"record.enabled": True, "record.bags_dir": str(tmp_path),
-                            "record.run": "barn"})
+    env = make_env(CONFIG, sim={"world_variant": WORLD},
+                   overrides={"record.enabled": True, "record.bags_dir": str(tmp_path),
+                              "record.run": "barn"})
+    nav = env.unwrapped
     try:
-        planner = make_baseline("planner", env.config, env.scenario.robot, env.scenario.world)
+        planner = make_baseline("planner", nav.config, nav.scenario.robot, nav.scenario.world)
         _, info = env.reset(seed=1)
         assert info["start"] == pytest.approx([-2.25, 3.0, 1.57]) and info["goal"] == (-2.25, 13.0)
         planner.reset()
         while True:
-            *_, terminated, truncated, info = env.step(planner.action(env.frame))
+            *_, terminated, truncated, info = env.step(planner.action(nav.frame))
             if terminated or truncated:
                 break
     finally:

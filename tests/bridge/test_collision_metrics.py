@@ -31,12 +31,12 @@ def test_recorded_episodes_flag_the_steps_the_env_flagged(tmp_path: Path) -> Non
     records episodes driving into walls with a constant action; the scans the metrics judge in
     collision are exactly the steps whose ``info["collision"]`` is set (the reset scan is not
     judged by the env), and every collision outcome has a collision counted."""
-    from pic4rl_bridge.env import NavEnv  # heavy: MuJoCo
+    from pic4rl_bridge.recording import make_env  # heavy: MuJoCo
 
     world = tmp_path / "arena.xml"
     world.write_text(ARENA_MJCF)
     config = Path(__file__).resolve().parents[2] / "config" / "env_goto_lidar.yaml"
-    env = NavEnv(config, sim={"world": str(world)}, overrides={
+    env = make_env(config, sim={"world": str(world)}, overrides={
         "record.enabled": True, "record.bags_dir": str(tmp_path), "record.run": "crash",
         "collision_steps": 4, "collision_tolerance_m": 0.1, "episode_max_steps": 80,
     })

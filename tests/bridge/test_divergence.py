@@ -16,6 +16,7 @@ from rosbags.rosbag2 import Reader
 from world_helpers import walled_square_mjcf
 
 from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"
@@ -49,9 +50,9 @@ def _assert_diverged(step: tuple, bag: Path) -> None:
 
 
 def test_a_divergence_in_process_ends_the_episode_as_diverged(unstable, tmp_path, caplog):
-    env = NavEnv(CONFIG, sim={"world": str(unstable)},
-                 overrides={"record.enabled": True, "record.bags_dir": str(tmp_path / "bags"),
-                            "record.run": "r"})
+    env = make_env(CONFIG, sim={"world": str(unstable)},
+                   overrides={"record.enabled": True, "record.bags_dir": str(tmp_path / "bags"),
+                              "record.run": "r"})
     try:
         env.reset(seed=0, options=EPISODE)
         with caplog.at_level("ERROR"):
@@ -79,9 +80,9 @@ def test_a_stable_world_never_reports_a_fault(tmp_path):
 def test_a_divergence_in_the_sim_node_ends_the_ros_episode_as_diverged(
         domain, start_sim, unstable, tmp_path):
     sim = start_sim(domain, "--params-file", str(CONFIG), "-p", f"world:={unstable}")
-    env = NavEnv(CONFIG, transport="ros", sim={"world": str(unstable)},
-                 overrides={"ros.domain_id": domain, "record.enabled": True,
-                            "record.bags_dir": str(tmp_path / "bags"), "record.run": "r"})
+    env = make_env(CONFIG, transport="ros", sim={"world": str(unstable)},
+                   overrides={"ros.domain_id": domain, "record.enabled": True,
+                              "record.bags_dir": str(tmp_path / "bags"), "record.run": "r"})
     try:
         env.reset(seed=0, options=EPISODE)
         step = env.step(FORWARD)

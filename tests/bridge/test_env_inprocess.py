@@ -27,6 +27,7 @@ import pic4rl_bridge
 from pic4rl_bridge.config import load_env_config
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import BridgeError, ConfigError, EpisodeRejected
+from pic4rl_bridge.recording import make_env
 from pic4rl_metrics import compute
 from bridge_helpers import ENV_CONFIGS, LIDAR_CONFIG, REPO
 
@@ -43,9 +44,10 @@ def arena(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def arena_env(arena: Path, **overrides: Any) -> NavEnv:
-    """goToPose (LiDAR) from env_goto_lidar.yaml in the arena, with dotted ``overrides``."""
-    return NavEnv(LIDAR_CONFIG, sim={"world": str(arena)}, overrides=overrides)
+def arena_env(arena: Path, **overrides: Any) -> Any:
+    """goToPose (LiDAR) from env_goto_lidar.yaml in the arena, with dotted ``overrides``: a
+    ``NavEnv``, in ``RecordEpisodes`` when ``record.enabled``."""
+    return make_env(LIDAR_CONFIG, sim={"world": str(arena)}, overrides=overrides)
 
 
 def drive_to_goal(env: NavEnv, obs: np.ndarray) -> tuple[list[dict[str, Any]], list[float]]:
@@ -321,7 +323,8 @@ def test_recorded_episodes_are_bags_the_metrics_judge(arena: Path, tmp_path: Pat
 
     run = tmp_path / "r1"
     loaded = load_env_config(run / "config.yaml")
-    assert loaded == env.config and loaded.sim_params == env.config.sim_params
+    config = env.unwrapped.config
+    assert loaded == config and loaded.sim_params == config.sim_params
     assert loaded.goal_tolerance_m == 0.1 and loaded.record.run == "r1"
     bags = sorted(run.glob("episode_*"))
     assert [b.name for b in bags] == ["episode_0000", "episode_0001"]

@@ -21,6 +21,7 @@ from pic4rl_bridge.episodes import (
     save_goals_and_poses,
 )
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.recording import make_env
 from pic4rl_metrics.contract import parse_facts
 from pic4rl_sim.engine.paths import planner_for
 from pic4rl_sim.engine.sampling import PAIR_KINDS
@@ -59,7 +60,6 @@ def test_plain_any_leaves_sampling_to_the_simulator_and_searches_no_path() -> No
         for i in range(3):
             env.reset(seed=1 if i == 0 else None)
         assert env._sampler is not None and env._sampler._planner is None
-        assert "shortest_path_m" not in env._facts.values()
     finally:
         env.close()
 
@@ -134,7 +134,7 @@ def test_recorded_episodes_carry_the_shortest_path_and_the_straight_line(
         tmp_path: Path) -> None:
     """The facts' lengths are the planner's for the episode's start and goal; the metrics'
     reader takes them as known facts."""
-    env = NavEnv(LIDAR_CONFIG, overrides={
+    env = make_env(LIDAR_CONFIG, overrides={
         "episodes.pair_kind": "paper", "record.enabled": True, "episode_max_steps": 3,
         "record.bags_dir": str(tmp_path), "record.run": "r"})
     try:
@@ -146,7 +146,7 @@ def test_recorded_episodes_carry_the_shortest_path_and_the_straight_line(
     facts = recorded_facts(tmp_path / "r" / "episode_0000")
     start, goal = pair(info)
     assert facts["straight_line_m"] == pytest.approx(math.dist(start, goal))
-    assert facts["shortest_path_m"] == pytest.approx(detour(env, start, goal)
+    assert facts["shortest_path_m"] == pytest.approx(detour(env.unwrapped, start, goal)
                                                      * math.dist(start, goal), abs=1e-3)
     assert facts["straight_line_m"] <= facts["shortest_path_m"] <= 1.3 * facts["straight_line_m"]
     parsed, given = parse_facts(facts, source="test")

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 import pytest
 from nav_msgs.msg import Odometry
@@ -17,8 +18,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from ros_helpers import SimProcess
 from sensor_msgs.msg import LaserScan
 
-from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import TransportError
+from pic4rl_bridge.recording import make_env
 from pic4rl_metrics.tables.batch import compute
 
 pytestmark = pytest.mark.integration
@@ -47,14 +48,14 @@ def robot(tmp_path: Path):
             proc.stop()
 
 
-def real_robot_env(domain: int, **overrides: object) -> NavEnv:
+def real_robot_env(domain: int, **overrides: object) -> gym.Env:
     """goToPose from LiDAR on a real robot's terms: no sim node, no reset service (the
-    operator's goal starts an episode), rate stepping."""
-    return NavEnv({"task": "goToPose", "sensor": "lidar", "robot": "jackal"}, transport="ros",
-                  overrides={"ros.domain_id": domain, "ros.sim_node": "",
-                             "ros.reset_service": "", "ros.step_mode": "rate",
-                             "ros.timeout_s": 10.0, "ros.operator_timeout_s": 20.0,
-                             **overrides})
+    operator's goal starts an episode), rate stepping; recorded when ``record.enabled``."""
+    return make_env({"task": "goToPose", "sensor": "lidar", "robot": "jackal"}, transport="ros",
+                    overrides={"ros.domain_id": domain, "ros.sim_node": "",
+                               "ros.reset_service": "", "ros.step_mode": "rate",
+                               "ros.timeout_s": 10.0, "ros.operator_timeout_s": 20.0,
+                               **overrides})
 
 
 def test_scans_published_in_other_geometries_give_the_same_observation(domain, robot):

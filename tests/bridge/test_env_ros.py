@@ -271,26 +271,26 @@ def test_the_plan_is_published_recorded_and_observed_alike(domain: int, start_si
     """``goal_input: plan``: the sim node's ``plan`` reaches the ROS env's frame as the engine's
     plan reaches the in-process one (bit-identical observations through both), and each bag
     holds it as a ``nav_msgs/Path`` at the episode's first stamp."""
-    from pic4rl_bridge.env import NavEnv
+    from pic4rl_bridge.recording import make_env
     from pic4rl_metrics.contract import typestore
 
     config = ROOT / CONFIGS["pic4rl/GoToPoseLidar-v0"]
     start_sim(domain, "--params-file", str(config))
     common = {"goal_input": "plan", "episode_max_steps": 30, "record.enabled": True}
-    ros = NavEnv(config, transport="ros", overrides={
+    ros = make_env(config, transport="ros", overrides={
         **common, "ros.domain_id": domain, "record.bags_dir": str(tmp_path), "record.run": "ros"})
-    local = NavEnv(config, overrides={**common, "record.bags_dir": str(tmp_path),
-                                      "record.run": "local"})
+    local = make_env(config, overrides={**common, "record.bags_dir": str(tmp_path),
+                                        "record.run": "local"})
     rng = np.random.default_rng(3)
     plans = []
     try:
         for episode in range(2):
             seed = 5 if episode == 0 else None
             (obs_r, _), (obs_l, _) = ros.reset(seed=seed), local.reset(seed=seed)
-            assert ros.frame.plan is not None and len(ros.frame.plan) >= 2
-            assert np.array_equal(ros.frame.plan, local.frame.plan)
-            assert np.allclose(ros.frame.plan[-1], ros.frame.goal)
-            plans.append(ros.frame.plan)
+            assert ros.unwrapped.frame.plan is not None and len(ros.unwrapped.frame.plan) >= 2
+            assert np.array_equal(ros.unwrapped.frame.plan, local.unwrapped.frame.plan)
+            assert np.allclose(ros.unwrapped.frame.plan[-1], ros.unwrapped.frame.goal)
+            plans.append(ros.unwrapped.frame.plan)
             assert np.array_equal(obs_r, obs_l)
             done = False
             while not done:

@@ -19,6 +19,7 @@ from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
+from pic4rl_bridge.recording import record_from_config
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_metrics import compute
@@ -91,14 +92,15 @@ def test_dwa_with_heading_keeps_the_person_in_view_judged_from_its_bags(tmp_path
     the person in the 87 degree view nearly all the time, as its bags say."""
     overrides = {"person.control": control, "record.enabled": True, "record.run": control,
                  "record.bags_dir": str(tmp_path), "episode_max_steps": 150}
-    env = NavEnv(CONFIG, overrides=overrides, sim=OPEN)
+    nav = NavEnv(CONFIG, overrides=overrides, sim=OPEN)
+    env = record_from_config(nav)
     try:
-        controller = make_baseline("dwa_heading", env.config, env.scenario.robot)
+        controller = make_baseline("dwa_heading", nav.config, nav.scenario.robot)
         assert isinstance(controller, HeadingController)
         env.reset(seed=3)
         done, info = False, {}
         while not done:
-            action = controller.action(env.frame)
+            action = controller.action(nav.frame)
             assert action.shape == env.action_space.shape
             _, _, terminated, truncated, info = env.step(action)
             done = terminated or truncated

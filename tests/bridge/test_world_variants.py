@@ -14,6 +14,7 @@ from pic4rl_sim.engine.worlds.barn import barn_data
 
 from pic4rl_bridge.baselines import make_baseline
 from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.scenario import parse_variants
 
@@ -110,9 +111,9 @@ def test_ordered_walks_the_worlds_in_turn() -> None:
 def test_each_bag_records_its_episodes_world(tmp_path: Path) -> None:
     """Three short recorded episodes, each in its own BARN world: the bag's world fact and the
     reference path (BARN's score) are that world's, the start and goal the challenge's."""
-    env = NavEnv(BARN, overrides={"episodes.world_variants": "1,2,3", "episodes.ordered": True,
-                                  "episode_max_steps": 3, "record.enabled": True,
-                                  "record.bags_dir": str(tmp_path), "record.run": "worlds"})
+    env = make_env(BARN, overrides={"episodes.world_variants": "1,2,3", "episodes.ordered": True,
+                                    "episode_max_steps": 3, "record.enabled": True,
+                                    "record.bags_dir": str(tmp_path), "record.run": "worlds"})
     try:
         for i in range(3):
             env.reset(seed=0 if i == 0 else None)

@@ -16,7 +16,7 @@ import pytest
 from rosbags.rosbag2 import Reader
 from ros_helpers import ARENA_MJCF, SimProcess, next_domain, sim_command, sim_env
 
-from pic4rl_bridge.env import NavEnv
+from pic4rl_bridge.recording import make_env
 from pic4rl_metrics import compute_metrics, read_episode
 from pic4rl_metrics.bags import tf
 from pic4rl_metrics.bags.topics import TopicMap
@@ -90,10 +90,10 @@ def _bag_paths_agree(bag: Path) -> int:
 
 
 def test_a_recorded_bags_tf_gives_the_path_of_its_odom(tmp_path: Path) -> None:
-    env = NavEnv(ROOT / "config" / "env_goto_lidar.yaml",
-                 overrides={"transport": "inprocess", "record.enabled": True,
-                            "record.bags_dir": str(tmp_path), "record.run": "r",
-                            "episode_max_steps": 40})
+    env = make_env(ROOT / "config" / "env_goto_lidar.yaml",
+                   overrides={"transport": "inprocess", "record.enabled": True,
+                              "record.bags_dir": str(tmp_path), "record.run": "r",
+                              "episode_max_steps": 40})
     try:
         env.reset(seed=5)
         for i in range(40):
@@ -123,7 +123,7 @@ def test_the_ros_transport_records_tf_per_step_and_tf_static_per_episode(
     config = ROOT / "config" / "env_goto_lidar.yaml"
     domain = next_domain()
     start_sim(sim_command("--params-file", str(config)), domain)
-    env = NavEnv(config, transport="ros", overrides={
+    env = make_env(config, transport="ros", overrides={
         "ros.domain_id": domain, "record.enabled": True, "record.bags_dir": str(tmp_path),
         "record.run": "ros", "episode_max_steps": 12})
     rng = np.random.default_rng(2)
