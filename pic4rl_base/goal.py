@@ -1,4 +1,5 @@
-"""``Goal``: where an episode should end, one type from the sim's parameters to the bag's facts.
+"""``Goal``: where an episode should end, one type from the sim's parameters to the bag's facts,
+and ``GOAL_TOLERANCE_M``, how close counts as reaching it unless told otherwise.
 
 Its own small module so that every package may import it (the sim's door to the metrics names
 it beside ``errors`` and ``geometry``): it loads nothing but the standard library.
@@ -8,6 +9,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from typing import Any
+
+#: The goal tolerance (m) when none is given: the env's ``goal_tolerance_m`` default (the
+#: shipped agents' episodes end by it), and what the metrics assume for a bag whose facts give
+#: none.
+GOAL_TOLERANCE_M = 0.4
 
 
 class Goal(tuple[float, float]):

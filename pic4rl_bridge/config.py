@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_base import params_file
+from pic4rl_base.goal import GOAL_TOLERANCE_M
 from pic4rl_base.params_file import ENV_NODE, SIM_NODE
 from pic4rl_base.schema import (NON_NEGATIVE, POSITIVE, ParamEnum, Range, check, flatten,
                                 from_params, param, section, to_params)
@@ -232,8 +233,8 @@ class EnvConfig:
     plan_lookahead_m: float = param(1.5, doc="goal_input plan or explorer: the point this far "
                                     "along the plan beyond the robot's projection on it",
                                     unit="m", range=POSITIVE)
-    goal_tolerance_m: float = param(0.4, doc="the goal is reached this close", unit="m",
-                                    range=POSITIVE)
+    goal_tolerance_m: float = param(GOAL_TOLERANCE_M, doc="the goal is reached this close",
+                                    unit="m", range=POSITIVE)
     collision_tolerance_m: float = param(0.05, doc="a scan point this close to the footprint is "
                                          "a collision", unit="m", range=NON_NEGATIVE)
     warning_tolerance_m: float = param(0.1, doc="closer than this (beyond the collision "

@@ -28,7 +28,7 @@ from rosbags.typesys.store import Typestore
 
 from pic4rl_base.errors import ConfigError
 from pic4rl_base.geometry import Footprint, Mount
-from pic4rl_base.goal import Goal
+from pic4rl_base.goal import GOAL_TOLERANCE_M, Goal
 
 from . import fact_values as decode
 
@@ -118,9 +118,10 @@ def task_name(task: str | None) -> str | None:
     return str(task).split("/", 1)[0] or None if task else None
 
 
-#: What the metrics assume for a tolerance (m) the facts do not give.
-TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": 0.3, "collision_tolerance_m": 0.05,
-                        "safety_margin_m": 0.3}
+#: What the metrics assume for a tolerance (m) the facts do not give (the goal's: the env's
+#: default, ``pic4rl_base.goal.GOAL_TOLERANCE_M``).
+TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": GOAL_TOLERANCE_M,
+                        "collision_tolerance_m": 0.05, "safety_margin_m": 0.3}
 
 
 def _outcome(raw: Any, key: str, source: str) -> Outcome:

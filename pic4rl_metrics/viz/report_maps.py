@@ -77,7 +77,7 @@ def sketch(episode: Episode, outcome: str) -> Sketch:
     facts = episode.facts.with_defaults()
     start = (facts.start[0], facts.start[1]) if facts.start is not None else tuple(path[0])
     return Sketch(path, returns, outcome, (float(start[0]), float(start[1])), facts.goal,
-                  float(facts.goal_tolerance_m or 0.3))
+                  float(facts.goal_tolerance_m))
 
 
 def _bounds(sketches: Sequence[Sketch], with_returns: bool) -> tuple[float, float, float, float]:

@@ -98,7 +98,7 @@ def test_the_fact_keys_are_the_facts_fields_and_each_has_a_doc_row() -> None:
 def test_unknown_tolerances_are_not_written_and_read_as_the_defaults() -> None:
     facts = EpisodeFacts(agent="a")
     assert facts.custom_data() == {"agent": "a"}
-    assert facts.with_defaults().goal_tolerance_m == 0.3
+    assert facts.with_defaults().goal_tolerance_m == 0.4  # the env's default
     assert facts.with_defaults().collision_tolerance_m == 0.05
     assert facts.with_defaults().safety_margin_m == 0.3
 

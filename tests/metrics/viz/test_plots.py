@@ -114,7 +114,7 @@ def test_plot_trajectory_draws_path_markers_and_obstacles():
     assert path.get_label() == "dwa"
     assert by_gid["end"].get_marker() == "X"  # collision
     np.testing.assert_allclose(by_gid["goal"].get_xydata(), [[4.0, 0.0]])
-    assert by_gid["goal_region"].get_radius() == pytest.approx(0.3)
+    assert by_gid["goal_region"].get_radius() == pytest.approx(0.4)  # facts without: the default
     assert len(by_gid["obstacles"].get_offsets()) == len(scan_points_world(ep))
     assert ax.get_xlabel() == "x [m]" and ax.get_ylabel() == "y [m]"
     assert ax.get_aspect() == 1.0
