@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
+from pic4rl_base.plugins import load_group
+
 
 class Direction(str, Enum):
     """The node's side: it publishes, subscribes or serves."""
@@ -161,6 +163,14 @@ UNPAUSE_PHYSICS = Interface(
 INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, CAMERA_INFO,
               DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
+#: A user's sensors' topics: each an ``Interface`` that its package names in this entry-point
+#: group under the topic's name, published after the IMU's (so that the scan stays last).
+INTERFACE_GROUP = "pic4rl.interfaces"
+_AFTER_IMU = INTERFACE_TABLE.index(IMU) + 1
+INTERFACE_TABLE = (*INTERFACE_TABLE[:_AFTER_IMU],
+                   *load_group(INTERFACE_GROUP, Interface,
+                               taken={i.name for i in INTERFACE_TABLE}).values(),
+                   *INTERFACE_TABLE[_AFTER_IMU:])
 _BY_NAME = {i.name: i for i in INTERFACE_TABLE}
 #: A step's state topics, in publishing order.
 STEP_TOPICS = tuple(i for i in INTERFACE_TABLE if i.cadence is Cadence.STEP)

@@ -76,11 +76,14 @@ def test_the_bridge_imports_no_torch_sb3_or_agents(path: Path) -> None:
 
 # -- the places for a new piece -----------------------------------------------------------------
 
-#: The most places each piece may take (issue 31); every other piece takes one or two.
-MOST_PLACES = {"a sensor": 4, "a task": 3, "a metric": 1}
+#: The most places each piece may take (issue 39); every other piece takes one or two.
+MOST_PLACES = {"a sensor": 3, "a task": 3, "a metric": 1}
+#: The pieces added from outside the packages by ``tests/places/test_places.py``: their places
+#: are the files of their folder there.
+EXECUTED = {"a metric": "metric", "a baseline": "baseline", "a task": "task", "a sensor": "sensor"}
 #: A place: a backticked repository file, then optionally ``: `Symbol```.
 PLACE = re.compile(r"`([^`]+)`(?::\s*`([^`]+)`)?")
-FILE = re.compile(r"(?:pic4rl_\w+|config|scripts|tools|benchmarks)/[\w./<>-]*\.\w+")
+FILE = re.compile(r"(?:pic4rl_\w+|config|scripts|tools|benchmarks|tests/places)/[\w./<>-]*\.\w+")
 
 
 def _places_rows() -> dict[str, tuple[int, list[list[tuple[str, str | None]]], str]]:
@@ -132,6 +135,18 @@ def test_the_places_for_a_new_piece_are_counted_and_exist() -> None:
                 assert (ROOT / path).is_file(), f"{piece}: {path} does not exist"
                 assert symbol is None or _defines(ROOT / path, symbol), \
                     f"{piece}: {path} defines no {symbol}"
+
+
+def test_an_executed_piece_is_placed_in_the_files_its_test_wrote() -> None:
+    """A metric's, a baseline's, a task's and a sensor's places are exactly the files of its
+    folder under ``tests/places/`` (which ``tests/places/test_places.py`` installs and runs),
+    so that their counts are what adding one from outside took."""
+    rows = _places_rows()
+    for piece, folder in EXECUTED.items():
+        named = sorted(path for files in rows[piece][1] for path, _ in files)
+        written = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests" / "places" / folder)
+                         .rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+        assert named == written, f"{piece}: the table places {named}; the test wrote {written}"
 
 
 def test_a_place_with_several_files_names_them_as_alternatives() -> None:

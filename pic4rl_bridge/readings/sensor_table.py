@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from pic4rl_base.goal import Goal
+from pic4rl_base.plugins import load_group
 from pic4rl_sim.engine.geometry import Pose2D, Twist2D
 from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
 
@@ -113,6 +114,11 @@ READING_TABLE = (
                 topic_note=": the global plan of goal_input plan (the sim's, or any planner's, "
                 "e.g. nav2's /plan)"),
 )
+#: A user's readings, after pic4rl's: each a ``FrameSensor`` that its package names in this
+#: entry-point group under the reading's name (its sensor in ``pic4rl.sensors``).
+READING_GROUP = "pic4rl.readings"
+READING_TABLE += tuple(load_group(READING_GROUP, FrameSensor,
+                                  taken={s.name for s in READING_TABLE}).values())
 #: The frame's sensors by name, in the table's order.
 BY_NAME = {s.name: s for s in READING_TABLE}
 

@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from pic4rl_base.geometry import wrap_angle, yaw_to_quaternion
+from pic4rl_base.plugins import load_group
 from pic4rl_base.schema import FRACTION, Range, check, param
 
 from .geometry import Pose2D, Twist2D
@@ -181,6 +182,10 @@ class SensorKind:
     carried: bool = True
     label: str = ""
     publishes: str = ""
+    #: (engine, the step's stamp) → its step messages for the sim node (``held``: interface →
+    #: message, ``fill(engine)``), for a user's sensor; pic4rl's own are in
+    #: ``pic4rl_sim.node.messages.SENSOR_MESSAGES``.
+    messages: Callable[[Any, Any], Any] | None = None
 
 
 def _read_rays(sensor: Lidar | DepthCamera, engine: Any, rng: np.random.Generator) -> np.ndarray:
@@ -206,5 +211,11 @@ SENSOR_TABLE = (
     SensorKind("imu", ImuSpec, lambda model, spec, body: Imu(spec), _read_imu),
     SensorKind("odometry", OdometrySpec, lambda model, spec, body: WheelOdometry(spec)),
 )
+#: A user's sensors, after pic4rl's: each a ``SensorKind`` that its package names in this
+#: entry-point group under the kind's name (its topic in ``pic4rl.interfaces``, its reading
+#: in ``pic4rl.readings``).
+SENSOR_GROUP = "pic4rl.sensors"
+SENSOR_TABLE += tuple(load_group(SENSOR_GROUP, SensorKind,
+                                 taken={kind.name for kind in SENSOR_TABLE}).values())
 #: The kinds by name.
 KINDS_BY_NAME = {kind.name: kind for kind in SENSOR_TABLE}

@@ -32,7 +32,7 @@ from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
 from ..engine.geometry import Pose2D
-from ..engine.sensors import EXACT_VARIANCE
+from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
                           IMU, ODOM, PERSON_POSE, PLAN, SCAN, STEP_TOPICS, TF, TF_STATIC,
@@ -155,6 +155,8 @@ SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], 
     (lambda engine: engine.world.person is not None, _Person),
     (lambda engine: engine.depth is not None, _Depth),
     (lambda engine: engine.lidar is not None, _Scan),
+    *((lambda engine, name=kind.name: name in engine.sensors, kind.messages)
+      for kind in SENSOR_TABLE if kind.messages is not None),  # a user's sensors'
 )
 
 

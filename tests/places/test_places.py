@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 DOC = ROOT / "docs" / "architecture.md"
 #: Each piece's folder under ``tests/places/`` → its row in the places table.
-ROWS = {"metric": "a metric", "baseline": "a baseline", "task": "a task"}
+ROWS = {"metric": "a metric", "baseline": "a baseline", "task": "a task", "sensor": "a sensor"}
 GOTO = ROOT / "config" / "env_goto_lidar.yaml"
 
 
@@ -117,7 +117,7 @@ def test_a_baseline_from_outside_is_driven_by_pic4rl_test_and_judged(tmp_path: P
 
 
 def test_a_bad_entry_point_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch) -> None:
-    from importlib.metadata import EntryPoint
+    from importlib.metadata import EntryPoint, EntryPoints
 
     from pic4rl_base import plugins
     from pic4rl_base.errors import ConfigError
@@ -125,12 +125,16 @@ def test_a_bad_entry_point_is_one_line_naming_it(monkeypatch: pytest.MonkeyPatch
     from pic4rl_bridge.settings.tasks import TASK_GROUP, TASK_TABLE, TaskSpec
 
     def points(name: str, value: str) -> None:
-        monkeypatch.setattr(plugins, "entry_points", lambda group: [
-            EntryPoint(name, value, group)])
+        monkeypatch.setattr(plugins, "installed", lambda: EntryPoints([
+            EntryPoint(name, value, BASELINE_GROUP), EntryPoint(name, value, TASK_GROUP)]))
 
     points("mine", "math:pi")
     with pytest.raises(ConfigError, match=r"^entry point mine = math:pi \(group "
                        r"pic4rl.baselines\): it names a float; expected a BaselineSpec$"):
+        plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)
+    points("mine", "math:sqrt")  # a function that makes the entry, failing
+    with pytest.raises(ConfigError, match=r"^entry point mine = math:sqrt \(group "
+                       r"pic4rl.baselines\): calling it failed: TypeError"):
         plugins.load_group(BASELINE_GROUP, BaselineSpec, taken=BASELINE_TABLE)
     points("dwa", "math:pi")
     with pytest.raises(ConfigError, match="'dwa' is one of pic4rl's own"):
@@ -192,3 +196,74 @@ def test_a_task_from_outside_gets_an_env_id_an_episode_and_a_judged_bag(tmp_path
     assert row["task"] == "escape" and row["outcome"] == episode["outcome"]
     assert episode["outcome"] == "goal" and episode["last"][0] >= 1.0
     assert row["path_length_m"] >= 1.0  # it got 1 m away, as the bag shows
+
+
+# -- a sensor: its module and its entry points --------------------------------------------------
+
+#: A user's program: a goToPose env whose robot now carries the goal range finder (its sim
+#: parameter set like any other), one recorded episode of seeded random actions, then the
+#: engine's step messages decoded by the bridge's table.
+SENSE = """
+import json, math, sys
+import gymnasium as gym
+import pic4rl_bridge
+from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_bridge.readings.sensor_table import BY_NAME
+from pic4rl_sim.node.messages import StateMessages
+
+env = gym.make("pic4rl/GoToPoseLidar-v0", config=sys.argv[1], sim={"goal_range.noise_std_m": 0.0},
+               overrides={"episode_max_steps": 20, "record.enabled": True,
+                          "record.bags_dir": sys.argv[2], "record.run": "r"})
+env.reset(seed=3)
+env.action_space.seed(3)
+done = False
+while not done:
+    _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    done = terminated or truncated
+engine = env.unwrapped.transport.engine
+messages = StateMessages(engine)
+messages.fill(engine, 1)
+sensor = BY_NAME["goal_range"]
+origin = Pose2D(0.0, 0.0, 0.0)
+decoded = sensor.decode(dict(messages.published)[sensor.interface], origin, "goal_range")
+pose = engine.robot_pose()
+print(json.dumps({"decoded": decoded, "read": sensor.read(engine, origin),
+                  "true": math.hypot(engine.goal[0] - pose.x, engine.goal[1] - pose.y),
+                  "topic": env.unwrapped.config.topics.goal_range}))
+env.close()
+"""
+
+
+def _messages(bag: Path, topic: str) -> list[tuple[int, object]]:
+    from rosbags.highlevel import AnyReader
+
+    from pic4rl_metrics.contract import typestore
+
+    with AnyReader([bag], default_typestore=typestore()) as reader:
+        return [(reader.deserialize(raw, c.msgtype).header.stamp.sec * 10**9
+                 + reader.deserialize(raw, c.msgtype).header.stamp.nanosec,
+                 reader.deserialize(raw, c.msgtype))
+                for c, _, raw in reader.messages([c for c in reader.connections
+                                                  if c.topic == topic])]
+
+
+def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
+        tmp_path: Path) -> None:
+    import json
+
+    env = _install("sensor", tmp_path / "site")
+    done = subprocess.run([sys.executable, "-c", SENSE, str(GOTO), str(tmp_path / "bags")],
+                          env=env, capture_output=True, text=True, timeout=500, check=False)
+    assert done.returncode == 0, done.stderr
+    seen = json.loads(done.stdout.splitlines()[-1])
+    assert seen["topic"] == "goal_range"  # topics.goal_range, from the reading's entry
+    assert seen["decoded"] == pytest.approx(seen["true"], rel=1e-6)
+    assert seen["read"] == pytest.approx(seen["true"], rel=1e-6)  # in process, no message
+    bag = next((tmp_path / "bags" / "r").rglob("metadata.yaml")).parent
+    ranges = _messages(bag, "/goal_range")
+    poses = dict(_messages(bag, "/ground_truth"))
+    goal = _messages(bag, "/goal_pose")[0][1].pose.position
+    assert len(ranges) >= 20 and set(dict(ranges)) <= set(poses)
+    for stamp, msg in ranges:  # each step's range is the distance from that step's pose
+        p = poses[stamp].pose.pose.position
+        assert msg.range == pytest.approx(math.hypot(goal.x - p.x, goal.y - p.y), rel=1e-6)
