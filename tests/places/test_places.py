@@ -240,11 +240,22 @@ def _messages(bag: Path, topic: str) -> list[tuple[int, object]]:
     from pic4rl_metrics.contract import typestore
 
     with AnyReader([bag], default_typestore=typestore()) as reader:
-        return [(reader.deserialize(raw, c.msgtype).header.stamp.sec * 10**9
-                 + reader.deserialize(raw, c.msgtype).header.stamp.nanosec,
-                 reader.deserialize(raw, c.msgtype))
-                for c, _, raw in reader.messages([c for c in reader.connections
-                                                  if c.topic == topic])]
+        msgs = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(
+            [c for c in reader.connections if c.topic == topic])]
+    return [(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec, m) for m in msgs]
+
+
+def _ranges_are_the_goal_distance(bags: Path, steps: int) -> None:
+    """The recorded run's ``/goal_range`` holds a message a step, each the distance from that
+    step's ground-truth pose to the episode's goal."""
+    bag = next(bags.rglob("metadata.yaml")).parent
+    ranges = _messages(bag, "/goal_range")
+    poses = dict(_messages(bag, "/ground_truth"))
+    goal = _messages(bag, "/goal_pose")[0][1].pose.position
+    assert len(ranges) >= steps and set(dict(ranges)) <= set(poses)
+    for stamp, msg in ranges:
+        p = poses[stamp].pose.pose.position
+        assert msg.range == pytest.approx(math.hypot(goal.x - p.x, goal.y - p.y), rel=1e-6)
 
 
 def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
@@ -259,11 +270,42 @@ def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
     assert seen["topic"] == "goal_range"  # topics.goal_range, from the reading's entry
     assert seen["decoded"] == pytest.approx(seen["true"], rel=1e-6)
     assert seen["read"] == pytest.approx(seen["true"], rel=1e-6)  # in process, no message
-    bag = next((tmp_path / "bags" / "r").rglob("metadata.yaml")).parent
-    ranges = _messages(bag, "/goal_range")
-    poses = dict(_messages(bag, "/ground_truth"))
-    goal = _messages(bag, "/goal_pose")[0][1].pose.position
-    assert len(ranges) >= 20 and set(dict(ranges)) <= set(poses)
-    for stamp, msg in ranges:  # each step's range is the distance from that step's pose
-        p = poses[stamp].pose.pose.position
-        assert msg.range == pytest.approx(math.hypot(goal.x - p.x, goal.y - p.y), rel=1e-6)
+    _ranges_are_the_goal_distance(tmp_path / "bags" / "r", 20)
+
+
+#: The same over ROS 2: the sim node publishes the user's topic, the ROS transport records it.
+SENSE_ROS = """
+import sys
+import gymnasium as gym
+import pic4rl_bridge
+
+env = gym.make("pic4rl/GoToPoseLidar-v0", config=sys.argv[1], transport="ros",
+               overrides={"ros.domain_id": int(sys.argv[3]), "episode_max_steps": 15,
+                          "record.enabled": True, "record.bags_dir": sys.argv[2],
+                          "record.run": "r"})
+env.reset(seed=3)
+env.action_space.seed(3)
+done = False
+while not done:
+    _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    done = terminated or truncated
+env.close()
+"""
+
+
+@pytest.mark.integration
+def test_the_sensor_from_outside_goes_over_ros_too(tmp_path: Path) -> None:
+    from ros_helpers import SimProcess, next_domain, sim_command, sim_env
+
+    env = _install("sensor", tmp_path / "site")
+    domain, path = next_domain(), {"PYTHONPATH": env["PYTHONPATH"]}
+    sim = SimProcess(sim_command("--params-file", str(GOTO)), domain, tmp_path / "sim.log",
+                     env_extra=path)
+    try:
+        done = subprocess.run([sys.executable, "-c", SENSE_ROS, str(GOTO),
+                               str(tmp_path / "bags"), str(domain)], env=sim_env(domain, path),
+                              capture_output=True, text=True, timeout=300, check=False)
+    finally:
+        sim.stop()
+    assert done.returncode == 0, done.stderr
+    _ranges_are_the_goal_distance(tmp_path / "bags" / "r", 15)
