@@ -16,7 +16,7 @@ registries load on demand, read ``pic4rl.metrics`` and ``pic4rl.policies`` thems
 from __future__ import annotations
 
 import functools
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from importlib.metadata import EntryPoint, EntryPoints, entry_points
 from typing import Any
 
@@ -38,25 +38,11 @@ def group_points(group: str) -> list[EntryPoint]:
     return list(found.values())
 
 
-def entry_point(group: str, name: str) -> EntryPoint | None:
-    """The entry point ``name`` of ``group``, or ``None``."""
-    return next((p for p in group_points(group) if p.name == name), None)
-
-
-def load_point(point: EntryPoint, where: str) -> Any:
-    """What ``point`` names; ``ConfigError`` naming it (and ``where`` asked) when it fails."""
+def _attempt(action: Callable[[], Any], where: str, doing: str) -> Any:
     try:
-        return point.load()
+        return action()
     except Exception as err:
-        raise ConfigError(f"{where}: loading entry point {point.name} = {point.value} "
-                          f"(group {point.group}) failed: {type(err).__name__}: {err}") from err
-
-
-def _made(factory: Any, where: str) -> Any:
-    try:
-        return factory()
-    except Exception as err:
-        raise ConfigError(f"{where}: calling it failed: {type(err).__name__}: {err}") from err
+        raise ConfigError(f"{where}: {doing} failed: {type(err).__name__}: {err}") from err
 
 
 def load_group(group: str, kind: type, *, taken: Collection[str]) -> dict[str, Any]:
@@ -70,9 +56,9 @@ def load_group(group: str, kind: type, *, taken: Collection[str]) -> dict[str, A
         if point.name in taken:
             raise ConfigError(f"{where}: {point.name!r} is one of pic4rl's own; choose another "
                               "name")
-        obj = load_point(point, group)
+        obj = _attempt(point.load, where, "loading it")
         if not isinstance(obj, kind) and callable(obj):
-            obj = _made(obj, where)
+            obj = _attempt(obj, where, "calling it")
         if not isinstance(obj, kind):
             raise ConfigError(f"{where}: it names a {type(obj).__name__}; expected a "
                               f"{kind.__name__}")
