@@ -1,11 +1,13 @@
-"""Planar geometry the metrics, the sim and the bridge share: a robot's footprint and its
-distance to points, a sensor's mount and a scan's points, angle wrapping, a yaw as a quaternion
-and back, and the projection of points onto a polyline.
+"""Planar geometry the metrics, the sim and the bridge share: the one pose type, a robot's
+footprint and its distance to points, a scan's points from its sensor's mount, angle wrapping,
+a yaw as a quaternion and back, and the projection of points onto a polyline.
 
-``Footprint`` is the sim's robot specs' footprint and the value type of an ``EpisodeFacts``
-field, ``Mount`` another field's (the facts themselves, their encoding and decoding are the bag
-contract's, ``contract``). The sim and the bridge import them from here (pic4rl_metrics may
-import no other pic4rl package; this module loads only numpy), so each is written once:
+``Pose2D`` is every pose: the robot's, a start, a sensor's mount in the base frame (the
+``scan_mount`` of ``EpisodeFacts``). ``Footprint`` is the sim's robot specs' footprint and the
+value type of another ``EpisodeFacts`` field (the facts themselves, their encoding and decoding
+are the bag contract's, ``contract``). The sim and the bridge import them from here
+(pic4rl_metrics may import no other pic4rl package; this module loads only numpy), so each is
+written once:
 ``wrap_angle`` for every heading difference, ``yaw_to_quaternion`` for every published pose and
 ``yaw_from_quaternion`` for every decoded one, ``scan_points`` for the env's collisions, the
 renderer, the occupancy grid and the metrics' clearance, ``Footprint.signed_distance`` for the
@@ -24,6 +26,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .errors import ConfigError
+
+
+class Pose2D(NamedTuple):
+    """A planar pose: position (m) and heading (rad, counter-clockwise from +x)."""
+
+    x: float
+    y: float
+    yaw: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -115,17 +125,11 @@ class Footprint:
         return np.sqrt(ox * ox + oy * oy) + np.minimum(np.maximum(qx, qy), 0.0)
 
 
-class Mount(NamedTuple):
-    """A sensor's pose in the robot's base frame (m, rad)."""
-
-    x_m: float = 0.0
-    y_m: float = 0.0
-    yaw_rad: float = 0.0
 
 
 def sensor_to_base(forward: Any, left: Any, mount: Sequence[float]) -> tuple[Any, Any]:
     """Points ``forward`` and ``left`` (m, arrays of one shape) of a sensor mounted at ``mount``
-    (x, y, yaw in the base frame: a ``Mount`` or the sim's ``Pose2D``), as base-frame x, y."""
+    (x, y, yaw in the base frame: a ``Pose2D``), as base-frame x, y."""
     mx, my, myaw = mount
     c, s = math.cos(myaw), math.sin(myaw)
     return mx + c * forward - s * left, my + s * forward + c * left

@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_metrics.contract import EpisodeFacts, Outcome
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config

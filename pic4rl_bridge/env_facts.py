@@ -6,7 +6,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from pic4rl_base.geometry import Mount
 from pic4rl_metrics.contract import EpisodeFacts, parse_facts
 
 from .config import EnvConfig
@@ -39,7 +38,7 @@ def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,
         safety_margin_m=c.warning_tolerance_m, max_speed_mps=robot.max_linear_m_s,
         shortest_path_m=lengths[0], straight_line_m=lengths[1],
         reference_path_m=_reference_path_m(sampler),
-        scan_mount=None if mount is None else Mount(mount.x, mount.y, mount.yaw),
+        scan_mount=mount,
         time_budget_s=c.episode_max_steps * robot.control_dt_s,
     )
     parsed, given = parse_facts(task_facts, source=f"task {c.task}")

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pic4rl_base.goal import Goal
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.sampling import (PAIR_KINDS, PairKind, check_free, check_pair_filter,
                                         sample_pairs, sample_start_goal)
 from pic4rl_sim.errors import SimError

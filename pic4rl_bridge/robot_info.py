@@ -7,8 +7,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from pic4rl_base.geometry import Footprint
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_sim.engine.robot_specs import DepthCameraSpec, Drive, RobotSpec
 
 from .config import EnvConfig

@@ -27,7 +27,7 @@ from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
 from pic4rl_base.errors import ConfigError
-from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_base.goal import GOAL_TOLERANCE_M, Goal
 
 from . import fact_values as decode
@@ -128,10 +128,11 @@ def _outcome(raw: Any, key: str, source: str) -> Outcome:
     return Outcome.parse(str(raw), source=f"{source}: {key}")
 
 
-def _fact(decoder: decode.Decoder) -> Any:
+def _fact(decoder: decode.Decoder, encoder: Any = None) -> Any:
     """An ``EpisodeFacts`` field that is a fact: unknown (``None``) by default, read by
-    ``decoder``; its key in ``custom_data`` and the facts JSON is the field's name."""
-    return field(default=None, metadata={"decode": decoder})
+    ``decoder`` and written by ``encoder`` (``plain`` when ``None``); its key in
+    ``custom_data`` and the facts JSON is the field's name."""
+    return field(default=None, metadata={"decode": decoder, "encode": encoder})
 
 
 @dataclass(frozen=True)
@@ -174,7 +175,7 @@ class EpisodeFacts:
     reference_path_m: float | None = _fact(decode.positive)
     #: The LiDAR's pose in the base frame, ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``;
     #: ``None``: not recorded (see ``reader`` for tf).
-    scan_mount: Mount | None = _fact(decode.mount)
+    scan_mount: Pose2D | None = _fact(decode.mount, decode.mount_json)
     #: The episode's time budget (s): an unrecorded end before it is ``ABORTED``, not a timeout.
     time_budget_s: float | None = _fact(decode.positive)
     #: Person monitoring: the desired distance to the person (m).
@@ -199,7 +200,7 @@ class EpisodeFacts:
 
     def values(self) -> dict[str, Any]:
         """The known facts as plain JSON values, in ``FACT_KEYS`` order, then ``extra``."""
-        known = {key: plain(getattr(self, key)) for key in FACT_KEYS}
+        known = {key: plain(_ENCODERS[key](getattr(self, key))) for key in FACT_KEYS}
         return {k: v for k, v in known.items() if v is not None} | dict(self.extra)
 
     def custom_data(self) -> dict[str, str]:
@@ -224,8 +225,6 @@ def plain(value: Any) -> Any:
         return plain(value.value)
     if isinstance(value, Footprint):
         return {k: v for k, v in vars(value).items() if v is not None}
-    if isinstance(value, Mount):
-        return plain(value._asdict())
     if isinstance(value, Goal):
         return value.as_list()
     if isinstance(value, np.generic | np.ndarray):
@@ -237,6 +236,11 @@ def plain(value: Any) -> Any:
     return value
 
 
+#: How each fact is written: its field's encoder, else ``plain``.
+_ENCODERS: dict[str, Any] = {
+    f.name: f.metadata["encode"] or plain for f in fields(EpisodeFacts) if "decode" in f.metadata}
+
+
 def fact_text(value: Any) -> str:
     """A ``custom_data`` value: strings as they are, numbers as ``str``, the rest as JSON."""
     value = plain(value)
@@ -246,9 +250,10 @@ def fact_text(value: Any) -> str:
 
 
 def _ordered(values: Mapping[str, Any]) -> dict[str, Any]:
-    """``values`` in ``FACT_KEYS`` order, then other keys as given; ``None`` (unknown) left out."""
+    """``values`` in ``FACT_KEYS`` order, each as its fact is written, then other keys as
+    given; ``None`` (unknown) left out."""
     keys = [k for k in FACT_KEYS if k in values] + [k for k in values if k not in FACT_KEYS]
-    return {k: values[k] for k in keys if values[k] is not None}
+    return {k: _ENCODERS.get(k, plain)(values[k]) for k in keys if values[k] is not None}
 
 
 def encode_custom_data(values: Mapping[str, Any]) -> dict[str, str]:

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from pic4rl_base.errors import ConfigError
-from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_base.goal import Goal
 
 #: ``decode(raw, key, source) -> value``.
@@ -101,19 +101,29 @@ def polyline(raw: Any, key: str, source: str) -> tuple[tuple[float, float], ...]
     return line
 
 
-def mount(raw: Any, key: str, source: str) -> Mount:
+#: The ``scan_mount`` fact's keys: a sensor's pose in the base frame, ``Pose2D``'s x, y, yaw.
+MOUNT_KEYS = ("x_m", "y_m", "yaw_rad")
+
+
+def mount(raw: Any, key: str, source: str) -> Pose2D:
     """``{"x_m": x, "y_m": y, "yaw_rad": yaw}`` (or its JSON, or ``[x, y, yaw]``)."""
     try:
         value = json.loads(raw) if isinstance(raw, str) else raw
         if isinstance(value, Mapping):
-            unknown = set(value) - set(Mount._fields)
+            unknown = set(value) - set(MOUNT_KEYS)
             if unknown:
                 raise KeyError(sorted(unknown))
-            value = [value.get(name, 0.0) for name in Mount._fields]
+            value = [value.get(name, 0.0) for name in MOUNT_KEYS]
     except (ValueError, TypeError, KeyError) as err:
         msg = f"{source}: {key}={raw!r} is not {{'x_m': X, 'y_m': Y, 'yaw_rad': YAW}}"
         raise ConfigError(msg) from err
-    return Mount(*floats(value, (3,), key, source))
+    return Pose2D(*floats(value, (3,), key, source))
+
+
+def mount_json(value: Any) -> Any:
+    """A mount as its fact is written: a ``Pose2D`` as ``{"x_m": x, "y_m": y, "yaw_rad": yaw}``
+    (``MOUNT_KEYS``), any other value as it is."""
+    return dict(zip(MOUNT_KEYS, value)) if isinstance(value, Pose2D) else value
 
 
 def footprint(raw: Any, key: str, source: str) -> Footprint:

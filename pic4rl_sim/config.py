@@ -23,7 +23,7 @@ from pic4rl_base.schema import (ParamEnum, ParamSpec, ParamType, Range, check, f
                                 param_names, specs)
 
 from .engine.engine_config import EngineConfig
-from .engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from .engine.robot_specs import RobotSpec, load_robot
 from .engine.sensors import SENSOR_TABLE
 from .engine.worlds.generators import WORLD_TABLE, make_world

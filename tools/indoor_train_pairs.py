@@ -17,7 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pic4rl_bridge.episodes import PairSampler, save_goals_and_poses
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import load_robot
 from pic4rl_sim.engine.sampling import PairKind
 from pic4rl_sim.engine.worlds.generators import make_world

@@ -8,7 +8,7 @@ task's expert), beside the DWA that plans the translation.
 from __future__ import annotations
 
 import numpy as np
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 from ..perception.observations import target_polar
 from ..robot_info import RobotInfo

@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_sim.engine.geometry import Pose2D, point_along
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import point_along
 from pic4rl_sim.engine.taut_path import Visible
 
 from ..perception.observations import target_polar

@@ -17,8 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pic4rl_base.geometry import sensor_to_base
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D, sensor_to_base
 
 from ..config import EnvConfig
 from ..readings.frame import ScanData, SensorFrame

@@ -17,8 +17,7 @@ from typing import Any, NamedTuple
 import gymnasium as gym
 import numpy as np
 
-from pic4rl_base.geometry import wrap_angle
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D, wrap_angle
 
 from ..config import DepthObsConfig, LidarObsConfig
 from ..errors import ConfigError

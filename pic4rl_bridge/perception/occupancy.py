@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 from ..robot_info import RobotInfo
 from ..readings.frame import ScanData, SensorFrame

@@ -20,7 +20,8 @@ import struct
 from typing import NamedTuple
 
 import numpy as np
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from .frame import ScanData, yaw_from_quaternion
 

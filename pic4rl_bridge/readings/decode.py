@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 
 from pic4rl_base.goal import Goal
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from ..errors import TransportError
 from .frame import ScanData, yaw_from_quaternion

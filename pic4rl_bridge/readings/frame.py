@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from pic4rl_base.geometry import scan_points, yaw_from_quaternion, yaw_to_quaternion
+from pic4rl_base.geometry import Pose2D, scan_points, yaw_from_quaternion, yaw_to_quaternion
 from pic4rl_base.goal import Goal
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 
 def as_published(pose: Pose2D) -> Pose2D:

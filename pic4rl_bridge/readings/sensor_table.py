@@ -17,7 +17,8 @@ import numpy as np
 
 from pic4rl_base.goal import Goal
 from pic4rl_base.plugins import load_group
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, Interface
 
 from . import cdr, decode

@@ -18,7 +18,8 @@ import numpy as np
 
 from pic4rl_base.goal import Goal
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 from ..config import EnvConfig
 from ..readings.frame import SensorFrame

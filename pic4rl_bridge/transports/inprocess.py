@@ -17,7 +17,8 @@ from typing import Any
 
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.errors import SimError
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import (
     CMD_VEL,
     EPISODE_TOPICS,

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 from pic4rl_base.goal import Goal
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.interfaces import QosSettings
 
 from ..readings.frame import SensorFrame

@@ -22,7 +22,7 @@ from rosbags.interfaces import Connection
 from tqdm import tqdm
 
 from pic4rl_base.errors import ConfigError
-from pic4rl_base.geometry import Mount
+from pic4rl_base.geometry import Pose2D
 
 from ..contract import TF_STATIC_TOPIC, EpisodeFacts, parse_facts, parse_outcome_event
 from ..core.plausibility import check_one_track
@@ -183,7 +183,7 @@ def _facts(
 BASE_FRAMES = ("base_link", "base_footprint")
 
 
-def _mount_from_tf(bag: _BagContents, warnings: list[str]) -> Mount | None:
+def _mount_from_tf(bag: _BagContents, warnings: list[str]) -> Pose2D | None:
     """The scan frame's pose in the base frame, chained through ``/tf_static`` (the last
     transform of each child wins, projected onto the plane); None with a warning when the
     tree does not join them."""
@@ -192,7 +192,7 @@ def _mount_from_tf(bag: _BagContents, warnings: list[str]) -> Mount | None:
     bases = [bag.topics["pose"].frame] if bag.topics["pose"].frame else list(BASE_FRAMES)
     for base in bases:
         try:
-            return Mount(*tf.static_pose(static, base, scan_frame))
+            return Pose2D(*tf.static_pose(static, base, scan_frame))
         except tf.ChainError:
             continue
     warnings.append(

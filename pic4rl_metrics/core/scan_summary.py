@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.geometry import Footprint, Pose2D
 
 from ..contract import EpisodeFacts
 from .crop_rows import lane_sides
@@ -74,7 +74,7 @@ class ScanSummary:
     margin_m: np.ndarray  # footprint margin (NaN without a footprint or a valid return)
     lanes: np.ndarray | None  # (n, 4) crop rows seen (``rows.lane_sides``), None: not fitted
     footprint: Footprint | None = None
-    mount: Mount | None = None
+    mount: Pose2D | None = None
     #: A few whole scans evenly spread over the episode (``ScanStream(sample=n)``), sorted by
     #: stamp, for drawing maps; not indexed like the arrays above. None: not kept.
     sample: ScanSeries | None = None
@@ -106,7 +106,7 @@ def summarize(scan: ScanSeries, facts: EpisodeFacts,
     """The summary of whole scans (``ranges``: their ``valid_ranges()`` when known already)."""
     ranges = scan.valid_ranges() if ranges is None else ranges
     valid = np.isfinite(ranges)
-    mount = facts.scan_mount or Mount()
+    mount = facts.scan_mount or Pose2D(0.0, 0.0)
     margin = np.full(len(scan), NAN)
     lanes = None
     if facts.footprint is not None or wants_lanes(facts):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pic4rl_base.geometry import Mount, scan_points
+from pic4rl_base.geometry import Pose2D, scan_points
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ class ScanSeries:
         out = np.where(in_range, ranges, np.nan)
         return np.where(too_close, np.broadcast_to(rmin, ranges.shape), out)
 
-    def points(self, mount: Mount, ranges: np.ndarray | None = None,
+    def points(self, mount: Pose2D, ranges: np.ndarray | None = None,
                ) -> tuple[np.ndarray, np.ndarray]:
         """Valid returns (``ranges``: ``valid_ranges()``) of a scanner at ``mount`` as points in
         the base frame (``geometry.scan_points``): x and y (n_scans, n_beams), NaN elsewhere."""

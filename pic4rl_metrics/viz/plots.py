@@ -20,7 +20,7 @@ from matplotlib.patches import Circle
 
 from pic4rl_base import atomic
 from pic4rl_base.errors import ConfigError
-from pic4rl_base.geometry import Mount
+from pic4rl_base.geometry import Pose2D
 from ..contract import EpisodeFacts, Outcome
 from ..core.kinematics import differentiate, seconds, velocity_series
 from ..core.registry import METRICS
@@ -84,7 +84,7 @@ def scan_hits_world(episode: Episode, *, every: int = 1) -> tuple[np.ndarray, np
     yaw = np.interp(ts, tp, np.unwrap(np.asarray(pose.yaw, float)))[:, None]
     some = ScanSeries(t_scan[rows], scan.ranges[rows], scan.angles[rows],
                       scan.range_min[rows], scan.range_max[rows])
-    bx, by = some.points(episode.facts.scan_mount or Mount())
+    bx, by = some.points(episode.facts.scan_mount or Pose2D(0.0, 0.0))
     return rows, x + np.cos(yaw) * bx - np.sin(yaw) * by, y + np.sin(yaw) * bx + np.cos(yaw) * by
 
 

@@ -9,7 +9,7 @@ from pic4rl_base.lazy import lazy_exports
 
 _EXPORTS = {
     "Engine": "core", "StepResult": "core", "limit_command": "core",
-    "EngineConfig": "engine_config", "Pose2D": "geometry", "Twist2D": "geometry",
+    "EngineConfig": "engine_config", "Twist2D": "geometry",
     "Drive": "robot_specs", "RobotSpec": "robot_specs", "load_robot": "robot_specs",
     "SENSOR_TABLE": "sensors", "sample_start_goal": "sampling",
 }

@@ -15,12 +15,12 @@ import mujoco
 import numpy as np
 
 from pic4rl_base.errors import require
-from pic4rl_base.geometry import wrap_angle
+from pic4rl_base.geometry import Pose2D, wrap_angle
 from pic4rl_base.goal import Goal
 
 from ..errors import WorldError
 from .engine_config import EngineConfig
-from .geometry import Pose2D, Twist2D
+from .geometry import Twist2D
 from .model import build_model
 from .paths import plan_path
 from .robot_specs import Drive, RobotSpec

@@ -1,21 +1,12 @@
-"""Planar poses: the few shapes every part of the sim shares (the robot's ``Footprint``, angle
-wrapping and a yaw's quaternion are ``pic4rl_base.geometry``'s, shared with the bridge and
-the metrics)."""
+"""Planar motion: the body-frame velocity and the polylines every part of the sim shares (the
+one pose type ``Pose2D``, the robot's ``Footprint``, angle wrapping and a yaw's quaternion are
+``pic4rl_base.geometry``'s, shared with the bridge and the metrics)."""
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
-
-
-class Pose2D(NamedTuple):
-    """A planar pose: position (m) and heading (rad, counter-clockwise from +x)."""
-
-    x: float
-    y: float
-    yaw: float = 0.0
 
 
 class Twist2D(NamedTuple):

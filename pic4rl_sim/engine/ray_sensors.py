@@ -17,7 +17,7 @@ import numpy as np
 from pic4rl_base.errors import require
 from pic4rl_base.schema import FRACTION, Range, check, param
 
-from .geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 if TYPE_CHECKING:
     import mujoco

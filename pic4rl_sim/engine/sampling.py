@@ -23,7 +23,7 @@ from pic4rl_base.errors import require
 
 from ..errors import WorldError
 from .engine_config import EngineConfig
-from .geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from .worlds.spec import PersonSpec, WorldSpec
 
 if TYPE_CHECKING:

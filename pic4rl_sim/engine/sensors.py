@@ -17,11 +17,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pic4rl_base.geometry import wrap_angle, yaw_to_quaternion
+from pic4rl_base.geometry import Pose2D, wrap_angle, yaw_to_quaternion
 from pic4rl_base.plugins import load_group
 from pic4rl_base.schema import FRACTION, Range, check, param
 
-from .geometry import Pose2D, Twist2D
+from .geometry import Twist2D
 from .ray_sensors import DepthCamera, DepthCameraSpec, Lidar, LidarSpec
 
 STANDARD_GRAVITY_M_S2 = 9.80665

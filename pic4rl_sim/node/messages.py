@@ -27,11 +27,10 @@ from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from pic4rl_base.geometry import yaw_to_quaternion
+from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
 from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
-from ..engine.geometry import Pose2D
 from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,

@@ -13,12 +13,11 @@ from typing import Any
 import pytest
 import yaml
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_base.schema import param_names
 from pic4rl_bridge.config import EnvConfig, env_config_from_params, load_env_config
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.scenario import Scenario
-from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.interfaces import RECORDED
 
 REPO = Path(__file__).resolve().parents[2]

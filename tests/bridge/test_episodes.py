@@ -14,7 +14,7 @@ from pic4rl_bridge.config import EpisodesConfig
 from pic4rl_bridge.episodes import EpisodeSchedule, GoalsAndPoses, load_goals_and_poses
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.transports.transport import EpisodeRequest
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 EXAMPLE = {"initial_pose": [5.0, -2.0, 0.0],
            "goals": [[4.0, 0.0], [8.5, 1.5], [-8.0, 1.0], [-5.0, -4.0], [8.5, 1.5]],

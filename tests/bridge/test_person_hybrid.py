@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.baselines.follow import HeadingController, PersonFollower
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
@@ -23,7 +23,7 @@ from pic4rl_bridge.recording import record_from_config
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_metrics import compute
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config" / "env_person_omni.yaml"

@@ -14,7 +14,7 @@ from contract_helpers import ENV_FACTS
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pic4rl_base.geometry import Footprint, Mount
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_base.goal import Goal
 from pic4rl_metrics import contract
 from pic4rl_metrics.contract import FACT_KEYS, EpisodeFacts, Outcome, parse_facts
@@ -50,7 +50,7 @@ FACTS = st.builds(
     shortest_path_m=_optional(st.one_of(POSITIVE, st.just(math.inf))),
     straight_line_m=_optional(POSITIVE),
     reference_path_m=_optional(POSITIVE),
-    scan_mount=_optional(st.builds(Mount, FINITE, FINITE, FINITE)),
+    scan_mount=_optional(st.builds(Pose2D, FINITE, FINITE, FINITE)),
     outcome=_optional(st.sampled_from(list(Outcome))),
     extra=st.dictionaries(TEXT.filter(lambda k: k not in FACT_KEYS), TEXT, max_size=3),
 )

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import (Footprint, Mount, scan_points, sensor_to_base, wrap_angle,
+from pic4rl_base.geometry import (Footprint, Pose2D, scan_points, sensor_to_base, wrap_angle,
                                   yaw_from_quaternion, yaw_to_quaternion)
 
 
@@ -32,7 +32,7 @@ def test_a_yaw_s_quaternion_and_back() -> None:
 def test_scan_points_place_each_beam_from_the_mount() -> None:
     """A scanner 0.2 m ahead and 0.1 m left of the base, turned 90° left: its beam at 0 rad
     points along base +y, its beam at -90° along base +x."""
-    mount = Mount(0.2, 0.1, math.pi / 2)
+    mount = Pose2D(0.2, 0.1, math.pi / 2)
     x, y = scan_points(np.array([1.0, 2.0, np.nan]), np.array([0.0, -math.pi / 2, 0.0]), mount)
     np.testing.assert_allclose(x[:2], [0.2, 2.2], atol=1e-12)
     np.testing.assert_allclose(y[:2], [1.1, 0.1], atol=1e-12)

@@ -207,7 +207,7 @@ SENSE = """
 import json, math, sys
 import gymnasium as gym
 import pic4rl_bridge
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from pic4rl_bridge.readings.sensor_table import BY_NAME
 from pic4rl_sim.node.messages import StateMessages
 

@@ -11,11 +11,10 @@ import sys
 import pytest
 
 from pic4rl_base.errors import ConfigError
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_base.schema import param_names
 from pic4rl_sim.config import (ROBOT, ClockMode, ParamType, build_config, parameter_table,
                                parse_goal, parse_start, resolve)
-from pic4rl_sim.engine.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import ROBOT_TABLE, BURGER, JACKAL, OMNI, robot_from_mapping
 from pic4rl_sim.engine.sensors import SENSOR_TABLE
 from pic4rl_sim.engine.worlds.generators import WORLD_TABLE

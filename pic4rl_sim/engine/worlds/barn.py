@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 from pic4rl_base.errors import require
 from pic4rl_base.schema import check
 
-from ..geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from .arena import walls
 from .spec import Cylinder, WorldSpec
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from pic4rl_base.errors import require
 
-from ..geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 
 @dataclass(frozen=True)

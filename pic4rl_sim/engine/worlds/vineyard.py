@@ -19,7 +19,7 @@ import numpy as np
 from pic4rl_base.errors import require
 from pic4rl_base.schema import FRACTION, NON_NEGATIVE, Range, check, param, to_params
 
-from ..geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from .arena import rng_for, walls
 from .spec import Box, Cylinder, WorldSpec
 

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from world_helpers import walled_square_mjcf
 
 from pic4rl_base import params_file
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.baselines.dwa import DwaController
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig, load_env_config
@@ -29,7 +29,7 @@ from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.settings.baselines import BASELINES_NODE, DwaConfig, baselines_config
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_goto_lidar.yaml"

@@ -11,14 +11,14 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.baselines.explorer import ExplorerController
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.settings.baselines import baselines_config_from_params
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 
 ROBOT = RobotInfo(name="disc", footprint=Footprint(radius_m=0.2), omni=False,

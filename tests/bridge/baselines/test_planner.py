@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.baselines.planner import PlannerController
 from pic4rl_bridge.control.actions import planar_command
 from pic4rl_bridge.readings.frame import SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.paths import PLAN_MARGINS_M, plan_path
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
 

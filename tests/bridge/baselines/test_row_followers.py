@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint, project
+from pic4rl_base.geometry import Footprint, Pose2D, project
 from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits, make_baseline
 from pic4rl_bridge.baselines.row_followers import RowFollower
 from pic4rl_bridge.config import EnvConfig
@@ -19,7 +19,7 @@ from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 ROOT = Path(__file__).resolve().parents[3]
 CONFIG = ROOT / "config" / "env_vineyard_depth.yaml"

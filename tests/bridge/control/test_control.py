@@ -10,11 +10,10 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.control import (heading_rate, normalized_action, planar_action_space,
                                    planar_command, pursuit_command)
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_sim.engine.geometry import Pose2D
 
 #: v in [-0.2, 0.5] m/s, |ω| <= 1 rad/s.
 ROBOT = RobotInfo(name="r", footprint=Footprint(length_m=0.5, width_m=0.4), omni=False,

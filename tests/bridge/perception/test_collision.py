@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.perception.collision import assess, depth_points, obstacle_distance
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 CIRCLE = Footprint(radius_m=0.3)
 RECT = Footprint(length_m=0.6, width_m=0.4)

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.perception.collision import FLOOR_M, depth_scan

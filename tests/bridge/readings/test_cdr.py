@@ -15,7 +15,7 @@ from sensor_msgs.msg import Image, LaserScan
 
 from pic4rl_bridge.readings import cdr, decode
 from pic4rl_bridge.readings.frame import ScanData
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 
 FRAME_IDS = ["", "o", "od", "odo", "odom", "base_link_x"]  # every string length mod 8
 MOUNT = Pose2D(0.12, -0.03, 0.1)

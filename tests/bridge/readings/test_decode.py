@@ -14,11 +14,11 @@ from nav_msgs.msg import Odometry
 from rclpy.serialization import deserialize_message, serialize_message
 from sensor_msgs.msg import Image, LaserScan
 
-from pic4rl_base.geometry import yaw_to_quaternion
+from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
 from pic4rl_bridge.errors import TransportError
 from pic4rl_bridge.readings import decode
 from pic4rl_bridge.readings.frame import ScanData, as_published, yaw_from_quaternion
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 YAWS = [0.0, 0.3, -0.3, 1.0, math.pi / 2, -math.pi / 2, 2.5, -2.5, 3.1, -3.1,
         math.pi, -math.pi, math.nextafter(math.pi, 0.0)]

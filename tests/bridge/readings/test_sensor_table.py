@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pic4rl_sim.engine.core import Engine
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
 from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.node.messages import StateMessages, plan_message

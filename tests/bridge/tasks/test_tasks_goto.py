@@ -11,14 +11,14 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 INC = 2 * math.pi / 360
 TERMS = {"distance", "heading", "step", "proximity", "goal", "collision"}

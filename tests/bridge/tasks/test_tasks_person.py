@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
@@ -16,7 +16,7 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.person import PersonMonitoringTask
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 
 OMNI = RobotInfo(name="omni", footprint=Footprint(length_m=0.6, width_m=0.4), omni=True,
                  min_linear_m_s=-0.8, max_linear_m_s=0.8, max_angular_rad_s=1.5,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import Footprint
+from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
@@ -15,7 +15,7 @@ from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
 from pic4rl_bridge.tasks.vineyard import VineyardTask, polyline_length, project
 from pic4rl_metrics.contract import Outcome
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 STRAIGHT = ((0.0, 0.0), (10.0, 0.0))

@@ -9,7 +9,8 @@ import pytest
 
 from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.core import Engine, EngineConfig, limit_command
-from pic4rl_sim.engine.geometry import Pose2D, Twist2D
+from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import BURGER, HUSKY, JACKAL, OMNI, LidarSpec
 from pic4rl_sim.engine.worlds.spec import Box, Cylinder, PersonSpec, WorldSpec
 from pic4rl_sim.errors import WorldError

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from pic4rl_base.errors import ConfigError
 from pic4rl_sim.engine.engine_config import EngineConfig
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.robot_specs import OMNI
 from pic4rl_sim.engine.sampling import check_free, sample_start_goal
 from pic4rl_sim.engine.worlds.generators import make_world

@@ -8,8 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from pic4rl_base.geometry import wrap_angle, yaw_to_quaternion
-from pic4rl_sim.engine.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D, wrap_angle, yaw_to_quaternion
 from pic4rl_sim.engine.robot_specs import DepthCameraSpec, ImuSpec, LidarSpec, OdometrySpec
 from pic4rl_sim.engine.sensors import (EXACT_VARIANCE, STANDARD_GRAVITY_M_S2, DepthCamera, Imu,
                                        Lidar, WheelOdometry)
