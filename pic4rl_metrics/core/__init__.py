@@ -4,7 +4,7 @@ The ``Episode`` (``series``, its series' kinds in ``series_kinds``), the input r
 (``roles``), the time base (``timebase``), what no robot does (``plausibility``: implausible
 speeds, a pose stream of two tracks) and per-scan summary (``scan_summary``), crop-lane
 fits (``crop_rows``), math on series (``kinematics``), what metrics share (``derived``), the
-metric registry (``registry``) and the built-in metrics (``metrics``, ``person_metrics``).
+metric registry (``registry``) and the built-in metrics (``metrics``, ``tasks.person``).
 Imports nothing of ``bags``, ``tables``, ``viz`` or ``cli`` (``tests/test_architecture.py``).
 """
 

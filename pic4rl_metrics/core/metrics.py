@@ -257,7 +257,7 @@ _register("row_reference", "", "row reference", text=True)(
 
 
 # The person-monitoring columns (follow_heading_*, person_*) come here, in table order.
-from . import person_metrics  # noqa: E402, F401
+from .tasks import person  # noqa: E402, F401
 
 _register("n_poses", "count", "poses")(lambda d: len(d.pose))
 _register("n_scans", "count", "scans")(lambda d: len(d.scan) if d.scan is not None else 0)

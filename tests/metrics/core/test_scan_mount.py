@@ -41,5 +41,5 @@ def test_the_mount_is_read_from_tf_static_in_a_real_bag() -> None:
         pytest.skip(f"real-robot bags not found in {REAL_BAGS} (see its README)")
     mount = read_episode(bag).facts.scan_mount
     assert mount is not None
-    assert mount.x_m == pytest.approx(-0.084, abs=1e-9) and mount.y_m == pytest.approx(0.0, abs=1e-9)
-    assert abs(abs(mount.yaw_rad) - math.pi) < 1e-9
+    assert mount.x == pytest.approx(-0.084, abs=1e-9) and mount.y == pytest.approx(0.0, abs=1e-9)
+    assert abs(abs(mount.yaw) - math.pi) < 1e-9

@@ -15,11 +15,11 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from .kinematics import bearing_in_body, interval_mean, seconds, time_mean
-from .registry import metric
+from ..kinematics import bearing_in_body, interval_mean, seconds, time_mean
+from ..registry import metric
 
 if TYPE_CHECKING:
-    from .derived import Derived
+    from ..derived import Derived
 
 NAN = float("nan")
 

@@ -1,0 +1,3 @@
+"""The metrics of one task each, beside the navigation metrics every episode gets: following a
+person (``person``). Each module registers its columns when ``core.metrics`` imports it, in
+table order, and reads only ``core`` (``Derived``, the kinematics, the registry)."""
