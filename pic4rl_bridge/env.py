@@ -43,28 +43,30 @@ from .readings.sensor_table import BY_NAME
 from .transports.transport import EpisodeRequest, OfferedQos, Tap, Transport
 
 log = logging.getLogger(__name__)
+Config = Scenario | EnvConfig | str | Path | Mapping[str, Any] | None
 
 
-def _as_config(config: EnvConfig | str | Path | Mapping[str, Any] | None,
-               overrides: Mapping[str, Any], sim: Mapping[str, Any],
-               sim_defaults: Mapping[str, Any]) -> EnvConfig:
-    if config is None:
-        base = EnvConfig()
-    elif isinstance(config, EnvConfig):
-        base = config
+def _scenario(config: Config, overrides: Mapping[str, Any], sim: Mapping[str, Any],
+              sim_defaults: Mapping[str, Any]) -> Scenario:
+    """The env's ``Scenario``: the one given (resolved at the edge), else resolved here."""
+    if isinstance(config, Scenario):
+        if not (overrides or sim or sim_defaults):
+            return config.for_env()
+        config = config.config
+    if config is None or isinstance(config, EnvConfig):
+        base = config or EnvConfig()
     elif isinstance(config, (str, Path)):
         base = load_env_config(config)
     else:
-        params = dict(config)
-        sim_params = params.pop("sim", {})
-        base = env_config_from_params(params, sim_params=sim_params)
+        params = dict(config)  # the sim's popped before the call: not an env parameter
+        base = env_config_from_params(params, sim_params=params.pop("sim", {}))
     merged = EnvConfig.replace(base, **overrides) if overrides else base
     if not (merged.sim_params or sim or merged.transport == TransportName.INPROCESS.value):
         sim_defaults = {}  # a real robot: no simulator for the registered env's defaults
     if sim or sim_defaults:
         merged = dataclasses.replace(merged,
                                      sim_params={**sim_defaults, **merged.sim_params, **sim})
-    return merged
+    return Scenario(merged)
 
 
 _PAIR_OPTIONS = ("pair_kind", "min_distance_m", "max_distance_m", "max_detour")
@@ -113,11 +115,12 @@ def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
 class NavEnv(gym.Env[Any, np.ndarray]):
     """A robot navigation task as a Gymnasium env.
 
-    ``config``: a config file path, an ``EnvConfig``, or a mapping of dotted env parameters
-    (the sim's under ``"sim"``). ``task``, ``sensor``, ``transport`` and then ``overrides``
-    (dotted: ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are
-    ``sim_defaults`` (the registered env's), then the config's, then ``sim``. ``node``: an
-    rclpy node for the ROS transport (default: its own, in its own context).
+    ``config``: a ``Scenario`` (resolved once, at the edge: used as it is when nothing below
+    is given), a config file path, an ``EnvConfig``, or a mapping of dotted env parameters (the
+    sim's under ``"sim"``). ``task``, ``sensor``, ``transport`` and then ``overrides`` (dotted:
+    ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are ``sim_defaults`` (the
+    registered env's), then the config's, then ``sim``. ``node``: an rclpy node for the ROS
+    transport (default: its own, in its own context).
     ``render_mode="rgb_array"``: ``render()`` returns a picture (``pic4rl_bridge.render``),
     the top-down view or, with ``render_view="mujoco"``, MuJoCo's camera; ``metadata``'s
     ``render_fps`` is one frame per control period.
@@ -125,9 +128,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - Gymnasium's way
 
-    def __init__(self, config: EnvConfig | str | Path | Mapping[str, Any] | None = None, *,
-                 task: str | None = None, sensor: str | None = None,
-                 transport: str | None = None, sim: Mapping[str, Any] | None = None,
+    def __init__(self, config: Config = None, *, task: str | None = None,
+                 sensor: str | None = None, transport: str | None = None,
+                 sim: Mapping[str, Any] | None = None,
                  sim_defaults: Mapping[str, Any] | None = None,
                  overrides: Mapping[str, Any] | None = None, render_mode: str | None = None,
                  render_view: str = "top", node: Any = None) -> None:
@@ -137,14 +140,14 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         self.render_mode = render_mode
         given = {k: v for k, v in (("task", task), ("sensor", sensor), ("transport", transport))
                  if v is not None}
-        self.config = _as_config(config, {**given, **(overrides or {})}, sim or {},
-                                 sim_defaults or {})
-        self.scenario = Scenario(self.config)
+        self.scenario = _scenario(config, {**given, **(overrides or {})}, sim or {},
+                                  sim_defaults or {})
+        self.config = self.scenario.config
         self._task_spec = task_spec(self.config.task)
         world = self.scenario.world if self._task_spec.uses_world else None
         self.task = make_task(self.config, self.scenario.robot, world)
-        self.observation_space = self.task.observation_space
-        self.action_space = self.task.action_space
+        self.observation_space, self.action_space = (self.task.observation_space,
+                                                     self.task.action_space)
         e = self.config.episodes
         self._pairs = load_goals_and_poses(e.file) if e.file else None
         if self._pairs is not None:  # drawn in this world, every start free for this robot
@@ -306,12 +309,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         return self._view.render(self._frame, self._context)
 
     def close(self) -> None:
-        view = getattr(self, "_view", None)
-        if view is not None:
-            view.close()
-        transport = getattr(self, "transport", None)
-        if transport is not None:
-            transport.close()
+        for part in (getattr(self, "_view", None), getattr(self, "transport", None)):
+            if part is not None:
+                part.close()
 
     def abort(self, reason: str) -> None:
         """End the episode now, ``aborted``; ``reason`` (a policy failed) is a recorder's."""

@@ -1,4 +1,6 @@
-"""The robot and world an env runs, from the config alone (``Scenario``).
+"""The robot and world an env runs, from the config alone (``Scenario``): the one place the
+config's sim section is resolved, once, at the edge (``make_vec_env``, ``make_env``, the tests'
+plan, imitation), and the layers below get its typed values.
 
 The sim section of the config (``sim_params``) names the robot, its sensors and the world, so
 the env knows the footprint, the LiDAR's mount and a vineyard's rows without asking the
@@ -6,12 +8,14 @@ simulator; a real robot's config names the robot in ``robot`` instead (a built-i
 robot YAML), and has no world. Defaults (the robot, the control period) are ``SimParams``'.
 With ``episodes.world_variants`` each episode runs one of several variants of the sim's world
 (``select``); every variant is built once, when the scenario is made, so a bad one fails then.
+``for_env`` hands one scenario to several envs: each selects its own world, the built ones shared.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pic4rl_sim.engine.robot_specs import RobotSpec, load_robot
 from pic4rl_sim.errors import SimError
@@ -35,6 +39,8 @@ class Scenario:
     def __init__(self, config: EnvConfig) -> None:
         self.config = config
         self.sim: SimConfig | None = None
+        #: The sim's parameters, its robot's defaults filled in (empty without a simulator).
+        self.values: dict[str, Any] = {}
         if config.transport == "inprocess" or (config.sim_params and config.simulated):
             from pic4rl_sim.config import SimParams, build_config, parameter_table, resolve
 
@@ -44,7 +50,7 @@ class Scenario:
                 values = resolve(parameter_table(robot), config.sim_params, where="")
                 if config.robot:
                     values["robot"] = config.robot
-                self.sim = build_config(values)
+                self.sim, self.values = build_config(values), values
             except (SimError, ConfigError) as err:
                 raise ConfigError(f"sim parameters: {err}") from err
             self.spec: RobotSpec = self.sim.robot
@@ -74,6 +80,20 @@ class Scenario:
                                   "pairs are in one world) and a task that knows no world's map")
             for variant in self.variants:
                 self.world_at(variant)
+
+    def for_env(self, config: EnvConfig | None = None) -> Scenario:
+        """This scenario for one more env: its own current world (``select``), the worlds built
+        so far shared (they are immutable); ``config``, when given, is that env's config, which
+        may differ from this one's in ``ros.*`` alone (each env's namespace)."""
+        if config is not None:
+            mine, theirs = self.config.to_params(), config.to_params()
+            changed = sorted(k for k in mine if mine[k] != theirs[k] and not k.startswith("ros."))
+            if changed or config.sim_params != self.config.sim_params:
+                raise ConfigError(f"{(changed or ['sim'])[0]}: differs from the scenario's "
+                                  "config; expected another ros.* setting alone")
+        twin = copy.copy(self)
+        twin.config, twin.variant = config or self.config, None
+        return twin
 
     def world_at(self, variant: int | None) -> WorldSpec | None:
         """Variant ``variant`` of the simulated world (``None``: the sim's own), built once."""

@@ -151,29 +151,27 @@ AGENT_SIM_KEYS = ("robot", "control_dt_s",
                   "depth.min_depth_m", "depth.max_depth_m")
 
 
-def sim_conflicts(trained: EnvConfig, test: EnvConfig) -> list[tuple[str, Any, Any]]:
+def sim_conflicts(trained: Scenario, test: Scenario) -> list[tuple[str, Any, Any]]:
     """``(key, trained value, test value)`` of every ``AGENT_SIM_KEYS`` setting of
-    ``trained``'s sensor that the simulator of ``test`` changes (both read with the sim's
-    defaults for their robot); none when ``test`` drives no pic4rl simulator."""
-    if not test.simulated:
+    ``trained``'s sensor that the simulator of ``test`` changes (both as their ``Scenario``
+    resolved them: the sim's defaults for their robot filled in); none when either drives no
+    pic4rl simulator."""
+    mine, theirs = trained.values, test.values
+    if not (mine and theirs):
         return []
-    mine, theirs = _sim_values(trained), _sim_values(test)
     keys = [k for k in AGENT_SIM_KEYS
-            if "." not in k or k.startswith(f"{trained.sensor}.")]
+            if "." not in k or k.startswith(f"{trained.config.sensor}.")]
     return [(k, mine[k], theirs[k]) for k in keys if mine[k] != theirs[k]]
 
 
-def _sim_values(env: EnvConfig) -> dict[str, Any]:
-    """Every sim parameter of ``env``'s sim section, defaults (its robot's sensors) filled in."""
-    from pic4rl_sim.config import SimParams, parameter_table, resolve
-    from pic4rl_sim.engine.robot_specs import load_robot
-    from pic4rl_sim.errors import SimError
-
-    try:
-        robot = load_robot(env.sim_params.get("robot", SimParams.robot))
-        return resolve(parameter_table(robot), env.sim_params, where="sim parameters")
-    except SimError as err:
-        raise ConfigError(f"sim parameters: {err}") from err
+def _resolved(env: EnvConfig) -> tuple[Scenario, Scenario]:
+    """``env`` resolved for ``check_trained``, without its training worlds (hundreds): its sim
+    section as written (its own robot's defaults; an env ``robot`` is a robot check's), and
+    the robot it drives: one ``Scenario`` for both unless an env ``robot`` overrides the sim's."""
+    env = env.replace(**{"episodes.world_variants": ""})
+    if not (env.robot and env.simulated):
+        return (scenario := Scenario(env)), scenario
+    return Scenario(env.replace(robot="")), Scenario(env)
 
 
 def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
@@ -183,12 +181,12 @@ def check_trained(agent: str, config: Path, trained: EnvConfig, test: EnvConfig,
     observes or what its actions do (``pic4rl_bridge.config.agent_keys``, the sim's
     ``AGENT_SIM_KEYS``): it names the key, the value the params file or override gives, and
     the agent's own (from ``config``)."""
-    conflicts = [(ENV_NODE, *c) for c in agent_conflicts(trained, test)] or [
-        (SIM_NODE, *c) for c in sim_conflicts(trained, test)]
+    conflicts = [(ENV_NODE, *c) for c in agent_conflicts(trained, test)]
     if not conflicts:
-        # The robots alone: not the hundreds of training worlds a Scenario would build.
-        mine, theirs = (_drive(Scenario(env.replace(**{"episodes.world_variants": ""})).robot)
-                        for env in (trained, test))
+        (mine_sim, mine_robot), (theirs_sim, theirs_robot) = _resolved(trained), _resolved(test)
+        conflicts = [(SIM_NODE, *c) for c in sim_conflicts(mine_sim, theirs_sim)]
+    if not conflicts:
+        mine, theirs = _drive(mine_robot.robot), _drive(theirs_robot.robot)
         if mine != theirs:  # the same keys, another robot or control period under them
             raise ConfigError(f"{agent}: its test robot drives {theirs} but the agent was "
                               f"trained on {mine} ({config}); an action must mean what it "

@@ -4,7 +4,8 @@ One env lives in the trainer's process (the paper's training(env(Node)) shape: t
 uses the trainer's node); ``n_envs > 1`` run in ``SubprocVecEnv`` workers (or all in this
 process, ``vec_env: dummy``), each with its own sim: through ROS the sims sit in namespaces
 ``env_0``, ``env_1``, ... (``pic4rl-run`` starts them), in process each env builds its own
-engine.
+engine. The config is resolved once, here (``pic4rl_bridge.scenario.Scenario``: the sim's
+typed config, the robot, the worlds), and every env is made from that one resolution.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pic4rl_base.schema import to_params
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.recording import make_env
+from pic4rl_bridge.scenario import Scenario, parse_variants
 
 from .curriculum import STAGE_KEY, Curriculum
 
@@ -99,7 +101,6 @@ def check_no_test_world(config: EnvConfig) -> None:
     """``ConfigError`` when a training or evaluation env would run one of a benchmark's test
     worlds (BARN's 50: docs/results.md; nothing is trained or chosen on them): its
     ``episodes.world_variants``, or without them the sim's ``world_variant``."""
-    from pic4rl_bridge.scenario import parse_variants
     from pic4rl_sim.engine.worlds.barn import challenge_test_worlds
 
     if config.sim_params.get("world") != "barn":
@@ -115,13 +116,13 @@ def check_no_test_world(config: EnvConfig) -> None:
                           "others (the test worlds are 0, 6, ..., 294)")
 
 
-def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
+def _make(scenario: Scenario, monitor_file: str | None, node: Any = None,
           reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None) -> gym.Env:
     """A monitored ``NavEnv`` (recorded when its ``record.enabled``), its pairs from
     ``curriculum``'s stage when one is given: the monitor logs the env's own (the paper's)
     rewards, and the learner sees them times ``reward_scale`` (rewards of order 1 suit SB3's
     defaults)."""
-    env: gym.Env = make_env(config, node=node)
+    env: gym.Env = make_env(scenario, node=node)
     keywords = INFO_KEYWORDS
     if curriculum is not None and curriculum.enabled:
         env, keywords = Curriculum(env, curriculum), (*INFO_KEYWORDS, STAGE_KEY)
@@ -131,7 +132,7 @@ def _make(config: EnvConfig, monitor_file: str | None, node: Any = None,
     return env
 
 
-def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
+def make_vec_env(config: EnvConfig | Scenario, *, n_envs: int = 1, seed: int = 0,
                  monitor_dir: Path | None = None, prefix: str = "", node: Any = None,
                  reward_scale: float = 1.0, curriculum: CurriculumConfig | None = None,
                  vec_env: str = "subproc") -> VecEnv:
@@ -142,14 +143,18 @@ def make_vec_env(config: EnvConfig, *, n_envs: int = 1, seed: int = 0,
     process, ``dummy`` all of them in this one (cheaper when an env step costs less than the
     workers' messages, as in process on two cores). Not SB3's ``make_vec_env``: it gives every
     rank the same env kwargs (ours differ by ROS namespace and node) and names monitor files
-    ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read)."""
-    check_no_test_world(config)  # training and its evaluations never see a test world
+    ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read).
+    ``config`` is resolved once (a ``Scenario`` given is used as it is), before any env."""
+    given = config if isinstance(config, Scenario) else None
+    check_no_test_world(given.config if given else config)  # no env ever sees a test world
+    scenario = given or Scenario(config)
+
     def factory(rank: int) -> Callable[[], gym.Env]:
-        cfg = env_for_rank(config, rank, n_envs)
+        mine = scenario.for_env(env_for_rank(scenario.config, rank, n_envs))
         file = str(monitor_dir / f"{prefix}{rank}") if monitor_dir is not None else None
 
         def make() -> gym.Env:
-            return _make(cfg, file, node if n_envs == 1 else None, reward_scale, curriculum)
+            return _make(mine, file, node if n_envs == 1 else None, reward_scale, curriculum)
         return make
 
     if monitor_dir is not None:

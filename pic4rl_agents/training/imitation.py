@@ -56,7 +56,7 @@ CUT_FIT_S = 30.0  # the longest fit of a round that a budget ended (``_fit_cut_r
 EXPERTS = EXPERT_TASKS
 
 
-def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = None
+def make_expert(name: str, env: EnvConfig | Scenario, settings: BaselinesConfig | None = None
                 ) -> Baseline:
     """The expert ``name`` for envs of ``env``: the baseline the baseline table names for it
     (``pic4rl_bridge.baselines.registry.EXPERT_BASELINES``), labelling with the env's action
@@ -65,8 +65,10 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
     ``dwa_heading``: DWA with a proportional heading law, personMonitoring, either control;
     ``centerline``: the row's centre-line follower, vineyard). The planner and the explorer
     drive with ``settings``, the params files' ``baselines:`` section (defaults when ``None``),
-    as their baselines do."""
-    settings = settings or BaselinesConfig()
+    as their baselines do. ``env``: its ``Scenario`` when resolved already (one for every
+    expert of a run), else its config, resolved here."""
+    given, settings = env, settings or BaselinesConfig()
+    env = given.config if isinstance(given, Scenario) else given
     if name not in EXPERTS:
         raise ConfigError(f"imitation.expert: {name!r} is invalid; expected one of "
                           f"{', '.join(EXPERTS)}")
@@ -74,7 +76,7 @@ def make_expert(name: str, env: EnvConfig, settings: BaselinesConfig | None = No
         fits = [e for e, task in EXPERTS.items() if task == env.task]
         raise ConfigError(f"imitation.expert: {name} drives {EXPERTS[name]}; the env's task is "
                           f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
-    scenario = Scenario(env)
+    scenario = given if isinstance(given, Scenario) else Scenario(env)
     if name == "explorer":
         if env.goal_input == "explorer":  # the student points along the plan the expert follows
             theirs = dataclasses.replace(env.explorer, max_linear_m_s=settings.explorer.max_linear_m_s)
@@ -148,7 +150,8 @@ class Imitation:
         self.max_steps = max_steps
         section = params_file.load(sources, (BASELINES_NODE, *NODES))[BASELINES_NODE]  # experts'
         settings = baselines_config(section, where=" + ".join(sources))  # tuning, as baselines'
-        self.experts = [make_expert(config.expert, env_config, settings)
+        scenario = Scenario(env_config)  # resolved once, for every env's expert
+        self.experts = [make_expert(config.expert, scenario, settings)
                         for _ in range(env.num_envs)]
         self.data = Demonstrations()
         self.batch_size = batch_size
