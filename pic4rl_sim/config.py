@@ -22,6 +22,7 @@ from pic4rl_base.goal import Goal
 from pic4rl_base.schema import (ParamEnum, ParamSpec, ParamType, Range, check, from_params, param,
                                 param_names, specs)
 
+from .engine.crowd.params import CrowdParams
 from .engine.engine_config import EngineConfig
 from pic4rl_base.geometry import Pose2D
 from .engine.robot_specs import RobotSpec, load_robot
@@ -109,9 +110,13 @@ def _sensor_params(robot: RobotSpec) -> tuple[ParamSpec, ...]:
     return (*switches, *(spec for group in fields for spec in group))
 
 
+_CROWD = specs(CrowdParams, prefix="crowd.")
+
+
 def parameter_table(robot: RobotSpec) -> tuple[ParamSpec, ...]:
-    """Every parameter of the node, ``robot`` first, with ``robot``'s sensors as defaults."""
-    return (*_CORE, *_world_params(), *_sensor_params(robot))
+    """Every parameter of the node, ``robot`` first, with ``robot``'s sensors as defaults,
+    then the crowd's (``crowd.*``)."""
+    return (*_CORE, *_world_params(), *_sensor_params(robot), *_CROWD)
 
 
 def resolve(table: Iterable[ParamSpec], overrides: Mapping[str, Any], *,
@@ -251,7 +256,10 @@ def build_config(values: Mapping[str, Any]) -> SimConfig:
     core = _core(values)
     engine = EngineConfig(physics_dt_s=core.physics_dt_s, control_dt_s=core.control_dt_s,
                           clearance_m=core.clearance_m,
-                          min_goal_distance_m=core.min_goal_distance_m)
+                          min_goal_distance_m=core.min_goal_distance_m,
+                          crowd=from_params(CrowdParams, {spec.name.removeprefix("crowd."):
+                                                          values[spec.name] for spec in _CROWD},
+                                            where="crowd parameters"))
     episode = EpisodeConfig(core.seed, parse_start(list(core.start_pose)),
                             parse_goal(list(core.goal)))
     return SimConfig(build_robot(values), build_world_choice(values), engine, episode,

@@ -124,6 +124,10 @@ IMU = Interface(
 PERSON_POSE = Interface(
     "person/pose", "geometry_msgs/msg/PoseStamped", Direction.PUB, QosKind.RELIABLE,
     "the person's pose", Cadence.STEP, "`person` worlds only", record_order=8)
+PEOPLE = Interface(
+    "people", "geometry_msgs/msg/PoseArray", Direction.PUB, QosKind.RELIABLE,
+    "the crowd's people: one pose each, yaw along its velocity, the array's order their "
+    "identity", Cadence.STEP, "with a crowd (`crowd.count` > 0)", record_order=12)
 CAMERA_INFO = Interface(
     "camera/depth/camera_info", "sensor_msgs/msg/CameraInfo", Direction.PUB,
     QosKind.SENSOR_DATA, "the depth camera's intrinsics", Cadence.STEP, "with a depth camera",
@@ -160,7 +164,7 @@ UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, CAMERA_INFO,
+INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, PEOPLE, CAMERA_INFO,
               DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
 #: A user's sensors' topics: each an ``Interface`` that its package names in this entry-point

@@ -19,6 +19,7 @@ from pic4rl_base.geometry import Pose2D, wrap_angle
 from pic4rl_base.goal import Goal
 
 from ..errors import WorldError
+from .crowd.crowd import Crowd
 from .engine_config import EngineConfig
 from .geometry import Twist2D
 from .model import build_model
@@ -34,15 +35,16 @@ _DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver doe
 _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQPOS),
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
 # Independent random streams per purpose: reading one sensor never shifts another's noise
-# (a sensor kind added at the end of SENSOR_TABLE leaves the others' streams as they were).
-_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE))
+# (a sensor kind added at the end of SENSOR_TABLE leaves the others' streams as they were;
+# the crowd's comes last, after a user's sensors', for the same reason).
+_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE), "crowd")
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 
 class StepResult(NamedTuple):
     """What happened in one control period."""
 
-    collided: bool  # the robot touches an obstacle at the period's end, or the person during it
+    collided: bool  # the robot touches an obstacle at the period's end, or a person during it
     diverged: bool  # the physics blew up; the episode was reset to its start
     reason: str = ""  # what diverged, when (empty otherwise)
 
@@ -76,7 +78,10 @@ class Engine:
         self.robot = robot
         self.world = world
         self.config = config or EngineConfig()
-        self.model, self.ids = build_model(robot, world, physics_dt_s=self.config.physics_dt_s)
+        self.model, self.ids = build_model(robot, world, physics_dt_s=self.config.physics_dt_s,
+                                           crowd=self.config.crowd)
+        #: The walking people (``config.crowd``), ``None`` without any.
+        self.crowd = Crowd(self.config.crowd, world) if self.config.crowd.count else None
         self.data = mujoco.MjData(self.model)
         body = self.ids.robot_body
         #: The robot's sensors by ``SENSOR_TABLE`` name (an optional one it lacks: absent).
@@ -153,6 +158,11 @@ class Engine:
         mujoco.mj_resetData(self.model, d)
         d.qpos[[ids.qpos_x, ids.qpos_y, ids.qpos_yaw]] = self.start
         self._move_person()
+        if self.crowd is not None:
+            self.crowd.reset(self._rng["crowd"], self.start[:2],
+                             self.robot.footprint.bounding_radius_m)
+            d.mocap_pos[list(self.ids.crowd_mocap), :2] = self.crowd.pos
+            self._turn_crowd()
         mujoco.mj_forward(self.model, d)
         self.odometry.reset(self.start)
         self._odom = (self.start, Twist2D())
@@ -167,13 +177,14 @@ class Engine:
         d.ctrl[ids.act_vx], d.ctrl[ids.act_vy], d.ctrl[ids.act_wz] = cmd
         before = self.robot_pose()
         warnings = d.warning.number[_BAD_STATE_WARNINGS].copy()
-        walk = self._person_walk()
+        walks = [w for w in (self._person_walk(), self._crowd_walk()) if w is not None]
         touched = False
-        if walk is None:  # a static world: contact with it lasts while the servos push
+        if not walks:  # a static world: contact with it lasts while the servos push
             mujoco.mj_step(m, d, nstep=self.config.substeps)
-        else:  # the person moves smoothly, and a bump that bounces the robot off still counts
+        else:  # people move smoothly, and a bump that bounces the robot off still counts
             for k in range(1, self.config.substeps + 1):
-                d.mocap_pos[ids.person_mocap] = walk[0] + walk[1] * k
+                for mocap, start, per_substep in walks:
+                    d.mocap_pos[mocap] = start + per_substep * k
                 mujoco.mj_step(m, d)
                 touched = touched or (d.ncon > 0 and self.in_collision())
         if self._diverged(warnings):
@@ -187,9 +198,9 @@ class Engine:
                                           self._rng["odometry"])
         return StepResult(collided=touched or self.in_collision(), diverged=False)
 
-    def _person_walk(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """The person's position now and its change per substep over this control period;
-        its heading is set for the period's end."""
+    def _person_walk(self) -> tuple[Any, np.ndarray, np.ndarray] | None:
+        """The person's mocap index, its position now and its change per substep over this
+        control period; its heading is set for the period's end."""
         if self.world.person is None:
             return None
         t = self.episode_time_s
@@ -198,7 +209,30 @@ class Engine:
         self.data.mocap_quat[self.ids.person_mocap] = (math.cos(end.yaw / 2), 0, 0,
                                                        math.sin(end.yaw / 2))
         start = np.array([now.x, now.y, 0.0])
-        return start, (np.array([end.x, end.y, 0.0]) - start) / self.config.substeps
+        return (self.ids.person_mocap, start,
+                (np.array([end.x, end.y, 0.0]) - start) / self.config.substeps)
+
+    def _crowd_walk(self) -> tuple[Any, np.ndarray, np.ndarray] | None:
+        """The crowd walked one control period ahead (the robot as it is now): the mocap
+        indices, the positions now and their change per substep (straight lines within the
+        period); headings are set for the period's end."""
+        if self.crowd is None:
+            return None
+        mocap = list(self.ids.crowd_mocap)
+        start = self.data.mocap_pos[mocap].copy()
+        pose, v = self.robot_pose(), self.data.qvel
+        self.crowd.advance(self.config.control_dt_s, (pose.x, pose.y),
+                           (float(v[self.ids.dof_x]), float(v[self.ids.dof_y])),
+                           self.robot.footprint.bounding_radius_m)
+        self._turn_crowd()
+        end = np.column_stack((self.crowd.pos, np.zeros(len(mocap))))
+        return mocap, start, (end - start) / self.config.substeps
+
+    def _turn_crowd(self) -> None:
+        assert self.crowd is not None
+        half = 0.5 * self.crowd.yaw
+        self.data.mocap_quat[list(self.ids.crowd_mocap)] = np.column_stack(
+            (np.cos(half), np.zeros_like(half), np.zeros_like(half), np.sin(half)))
 
     def _diverged(self, warnings_before: np.ndarray) -> bool:
         d = self.data
@@ -249,6 +283,13 @@ class Engine:
         if self.world.person is None:
             return None
         return self.world.person.pose_at(self.episode_time_s)
+
+    def people(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The crowd's positions (n × 2, m) and headings (n, rad, along each person's
+        velocity) now, in the crowd's order; ``None`` without a crowd."""
+        if self.crowd is None:
+            return None
+        return self.data.mocap_pos[list(self.ids.crowd_mocap), :2].copy(), self.crowd.yaw.copy()
 
     def read(self, sensor: str) -> Any:
         """The robot's ``sensor`` (a ``SENSOR_TABLE`` name) read now, with its own noise

@@ -7,17 +7,20 @@ from dataclasses import dataclass
 
 from pic4rl_base.errors import require
 
+from .crowd.params import CrowdParams
+
 __all__ = ["EngineConfig"]
 
 
 @dataclass(frozen=True)
 class EngineConfig:
-    """Timing and episode set-up rules (s, m)."""
+    """Timing and episode set-up rules (s, m), and the crowd."""
 
     physics_dt_s: float = 0.005
     control_dt_s: float = 0.1
     clearance_m: float = 0.2  # free space around the footprint for sampled starts and goals
     min_goal_distance_m: float = 1.0
+    crowd: CrowdParams = CrowdParams()  # the people walking in the world (none by default)
 
     def __post_init__(self) -> None:
         require(0 < self.physics_dt_s <= 0.05, "physics_dt_s", self.physics_dt_s,

@@ -15,12 +15,18 @@ from dataclasses import dataclass
 import mujoco
 
 from ..errors import WorldError
+from .crowd.params import CrowdParams
 from .robot_specs import Drive, RobotSpec
 from .sensors import STANDARD_GRAVITY_M_S2
 from .worlds.spec import WorldSpec
 
 ROBOT_BODY = "pic4rl_robot"
 PERSON_BODY = "pic4rl_person"
+CROWD_BODY = "pic4rl_crowd"  # + the person's index in the crowd
+# Collision bits: the robot's geom also accepts bit 2, which only the crowd's people carry, so
+# they touch the robot and nothing else (not the walls, not each other: the forces keep them
+# apart); the walls and the single person keep MuJoCo's default bit 1.
+_CROWD_CONTYPE = 2
 SERVO_TIME_CONSTANT_S = 0.01  # velocity servos settle this fast below their force caps
 GRIP_TIME_CONSTANT_S = 0.001  # a wheel's sideways grip is stiff: slip = v·ω·this on an arc
 WHEEL_GRIP = 1.0  # friction coefficient of the wheels on the floor (lateral force cap / weight)
@@ -53,6 +59,7 @@ class ModelIds:
     act_vy: int
     act_wz: int
     person_mocap: int  # -1 when the world has no person
+    crowd_mocap: tuple[int, ...] = ()  # the crowd's people, in the crowd's order
 
 
 def yaw_inertia_kg_m2(robot: RobotSpec) -> float:
@@ -94,6 +101,16 @@ def _add_world(spec: mujoco.MjSpec, world: WorldSpec) -> None:
                         rgba=_RGBA["person"])
 
 
+def _add_crowd(spec: mujoco.MjSpec, crowd: CrowdParams) -> None:
+    """The crowd's people: mocap cylinders that the engine moves (``crowd.Crowd``)."""
+    for i in range(crowd.count):
+        person = spec.worldbody.add_body(name=f"{CROWD_BODY}{i}", mocap=True)
+        person.add_geom(name=f"{CROWD_BODY}{i}_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                        size=[crowd.radius_m, crowd.height_m / 2, 0],
+                        pos=[0, 0, crowd.height_m / 2], rgba=_RGBA["person"],
+                        contype=_CROWD_CONTYPE, conaffinity=0)
+
+
 def _add_robot(spec: mujoco.MjSpec, robot: RobotSpec) -> None:
     fp = robot.footprint
     body = spec.worldbody.add_body(name=ROBOT_BODY, pos=[0, 0, 0])
@@ -109,7 +126,7 @@ def _add_robot(spec: mujoco.MjSpec, robot: RobotSpec) -> None:
         type=mujoco.mjtGeom.mjGEOM_CYLINDER if fp.is_circle else mujoco.mjtGeom.mjGEOM_BOX,
         size=([fp.radius_m, half_h, 0] if fp.is_circle
               else [fp.length_m / 2, fp.width_m / 2, half_h]),
-        pos=[0, 0, z], rgba=[0.15, 0.15, 0.15, 1], mass=0,
+        pos=[0, 0, z], rgba=[0.15, 0.15, 0.15, 1], mass=0, conaffinity=1 | _CROWD_CONTYPE,
     )
     body.mass = robot.mass_kg
     body.inertia = inertia
@@ -133,9 +150,10 @@ def _add_robot(spec: mujoco.MjSpec, robot: RobotSpec) -> None:
         act.forcerange = [-force_cap, force_cap]
 
 
-def build_model(robot: RobotSpec, world: WorldSpec, *,
-                physics_dt_s: float) -> tuple[mujoco.MjModel, ModelIds]:
-    """Compile ``robot`` in ``world`` (generated, or the user's MJCF file) at ``physics_dt_s``."""
+def build_model(robot: RobotSpec, world: WorldSpec, *, physics_dt_s: float,
+                crowd: CrowdParams = CrowdParams()) -> tuple[mujoco.MjModel, ModelIds]:
+    """Compile ``robot`` in ``world`` (generated, or the user's MJCF file) at ``physics_dt_s``,
+    with ``crowd``'s people."""
     if world.mjcf_path is not None:
         try:
             spec = mujoco.MjSpec.from_file(str(world.mjcf_path))
@@ -148,16 +166,17 @@ def build_model(robot: RobotSpec, world: WorldSpec, *,
     # Fully implicit: with the stiff wheel grip, implicitfast lets arcs drift by centimetres.
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICIT
     _add_world(spec, world)
+    _add_crowd(spec, crowd)
     _add_robot(spec, robot)
     try:
         model = spec.compile()
     except Exception as err:
         where = str(world.mjcf_path) if world.mjcf_path else f"world {world.name!r}"
         raise WorldError(f"{where}: the model does not compile with the robot: {err}") from err
-    return model, _ids(model, world)
+    return model, _ids(model, world, crowd.count)
 
 
-def _ids(model: mujoco.MjModel, world: WorldSpec) -> ModelIds:
+def _ids(model: mujoco.MjModel, world: WorldSpec, people: int) -> ModelIds:
     def joint(name: str) -> mujoco._structs._MjModelJointViews:
         return model.joint(f"{ROBOT_BODY}_{name}")
 
@@ -174,4 +193,6 @@ def _ids(model: mujoco.MjModel, world: WorldSpec) -> ModelIds:
         act_vx=model.actuator(f"{ROBOT_BODY}_vx").id, act_vy=model.actuator(f"{ROBOT_BODY}_vy").id,
         act_wz=model.actuator(f"{ROBOT_BODY}_wz").id,
         person_mocap=person,
+        crowd_mocap=tuple(int(model.body_mocapid[model.body(f"{CROWD_BODY}{i}").id])
+                          for i in range(people)),
     )

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Vector3
+from geometry_msgs.msg import Point, Pose, PoseArray, PoseStamped, Quaternion, Vector3
 from nav_msgs.msg import Odometry, Path
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, Imu, LaserScan
@@ -34,7 +34,7 @@ from ..engine.core import Engine
 from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
-                          IMU, ODOM, PERSON_POSE, PLAN, SCAN, STEP_TOPICS, TF, TF_STATIC,
+                          IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, STEP_TOPICS, TF, TF_STATIC,
                           WORLD_MARKERS, Interface)
 from .transforms import OdomTransform, static_transforms
 
@@ -105,6 +105,23 @@ class _Person:
             _set_pose(self.msg.pose, person[0])
 
 
+class _People:
+    """``people``: the crowd's poses, one ``Pose`` per person in the crowd's order (allocated
+    once; a person's velocity is the difference of its consecutive poses over the period)."""
+
+    def __init__(self, engine: Engine, stamp: Time) -> None:
+        count = engine.config.crowd.count
+        self.msg = PoseArray(header=Header(stamp=stamp, frame_id=WORLD_FRAME),
+                             poses=[Pose() for _ in range(count)])
+        self.held = {PEOPLE: self.msg}
+
+    def fill(self, engine: Engine) -> None:
+        people = engine.people()
+        assert people is not None
+        for pose, (x, y), yaw in zip(self.msg.poses, *people):
+            _set_pose(pose, Pose2D(float(x), float(y), float(yaw)))
+
+
 class _Depth:
     """``camera/depth/image_raw`` (pixels written in place) and its ``camera_info``."""
 
@@ -152,6 +169,7 @@ class _Scan:
 SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], Any]], ...] = (
     (lambda engine: True, _Imu),
     (lambda engine: engine.world.person is not None, _Person),
+    (lambda engine: engine.crowd is not None, _People),
     (lambda engine: engine.depth is not None, _Depth),
     (lambda engine: engine.lidar is not None, _Scan),
     *((lambda engine, name=kind.name: name in engine.sensors, kind.messages)
