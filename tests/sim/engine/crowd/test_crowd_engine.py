@@ -16,6 +16,7 @@ from rosbags.typesys import Stores, get_typestore
 from pic4rl_base.errors import ConfigError
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.core import Engine
+from pic4rl_sim.errors import WorldError
 from pic4rl_sim.engine.crowd.params import CrowdParams
 from pic4rl_sim.engine.engine_config import EngineConfig
 from pic4rl_sim.engine.geometry import Twist2D
@@ -85,9 +86,10 @@ def test_the_robot_driving_into_a_person_collides():
 
 
 def test_a_crowd_that_does_not_fit_is_a_one_line_error():
-    world = WorldSpec("tiny", (-0.6, -0.6, 0.6, 0.6))
-    with pytest.raises(Exception, match=r"crowd.count: 3 is invalid"):
-        _engine(3, world=world)
+    world = WorldSpec("small", (-1.5, -1.5, 1.5, 1.5))  # room for the robot, not for 12 more
+    with pytest.raises(WorldError, match=r"^crowd.count: 12 is invalid; expected a crowd that "
+                       r"fits world 'small'"):
+        _engine(12, world=world)
     with pytest.raises(ConfigError, match="crowd.max_group_size"):
         CrowdParams(count=2, max_group_size=3)
 
