@@ -42,7 +42,7 @@ def test_names_are_unique_relative_and_the_recording_order_is_the_bag_contracts(
     assert sorted(orders) == list(range(len(orders)))
     assert RECORDED == ("clock", "ground_truth", "odom", "scan", "cmd_vel", "goal_pose",
                         "camera/depth/image_raw", "camera/depth/camera_info", "person/pose",
-                        "plan", "tf", "tf_static")
+                        "plan", "tf", "tf_static", "people")
 
 
 def test_a_step_ends_with_the_scan_and_only_topics_have_a_qos() -> None:
