@@ -163,7 +163,9 @@ def record_from_config(env: NavEnv) -> RecordEpisodes:
 
 
 def make_env(config: Any = None, **kwargs: Any) -> gym.Env[Any, Any]:
-    """A ``NavEnv(config, **kwargs)``, recorded (``record_from_config``) when its ``record.enabled``."""
+    """A ``NavEnv(config, **kwargs)``, recorded (``record_from_config``) when its
+    ``record.enabled``; ``config``: a ``Scenario`` resolved at the edge (``make_vec_env``'s),
+    taken as it is, or anything else ``NavEnv`` takes."""
     env = NavEnv(config, **kwargs)
     return record_from_config(env) if env.config.record.enabled else env
 
