@@ -182,6 +182,8 @@ class EpisodeFacts:
     person_distance_m: float | None = _fact(decode.non_negative)
     #: Person monitoring: the camera's horizontal field of view (rad), centred on the heading.
     camera_fov_rad: float | None = _fact(decode.positive)
+    #: Exploration: the world's free floor area (m²), which coverage is the share of.
+    free_area_m2: float | None = _fact(decode.positive)
     outcome: Outcome | None = _fact(_outcome)
     #: Why the env cut the episode short (an ``aborted`` outcome), in words.
     end_reason: str | None = _fact(decode.text)

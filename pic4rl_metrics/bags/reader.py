@@ -29,6 +29,7 @@ from ..core.plausibility import check_one_track
 from ..core.roles import LASER_SCAN, ODOMETRY, ROLE_TABLE, SERIES_ROLES, TF_MESSAGE, has_header, pose_row
 from ..core.scan_summary import ScanStream
 from ..core.series import Episode, PoseSeries
+from ..core.tasks.seen import reader_stream
 from ..core.timebase import ONE_SOURCE_ROLES, Samples, one_source, pose_series
 from ..errors import CorruptBagError, EpisodeError
 from . import tf
@@ -79,11 +80,15 @@ class _BagContents:
         if self.topics["tf_static"].rows and self._scans:
             self._frames(bag, conns)
 
-    def read_scans(self, bag: OpenBag, facts: EpisodeFacts, full: bool, sample: int = 0) -> None:
+    def read_scans(self, bag: OpenBag, facts: EpisodeFacts, full: bool, sample: int,
+                   pose: PoseSeries, offset: int | None) -> None:
         """Read the scan topic, reduced to what the metrics use (``ScanStream``; whole scans
-        too when ``full``, at most ``sample`` of them when that is given)."""
+        too when ``full``, at most ``sample`` of them when that is given; an exploration's
+        area seen integrated on the way, placed by ``pose``)."""
         if self._scans:
-            self.topics["scan"].rows = ScanStream(facts, full=full, sample=sample)
+            raw = self.topics["scan"]
+            seen = None if full else reader_stream(facts, pose, raw, offset)
+            raw.rows = ScanStream(facts, full=full, sample=sample, seen=seen)
             self._read(bag, self._scans)
         self._bar.close()
 
@@ -252,7 +257,7 @@ def read_episode(
             merged = _facts(bag, offset, facts or EpisodeFacts(), given, warnings)
             check_one_track(pose, merged.max_speed_mps, bag.pose_topic)
             with bag_errors(path):
-                bag.read_scans(opened, merged, full_scans, scan_sample)
+                bag.read_scans(opened, merged, full_scans, scan_sample, pose, offset)
             inputs = {name: role.build(bag.topics[role.name], offset, warnings)  # type: ignore[misc]
                       for name, role in SERIES_ROLES.items()}
     except CorruptBagError as err:

@@ -22,6 +22,7 @@ from .kinematics import (Derivative, PathTurning, VelocitySeries, bearing_in_bod
 from .roles import SERIES_ROLES
 from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
 from .series import Episode
+from .tasks.seen import SeenCurve, seen_curve
 
 NAN = float("nan")
 #: Positions closer than this are merged before the path's turning is measured (m).
@@ -237,6 +238,12 @@ class Derived:
         if not seen.any():
             return None
         return seconds(self.scan.t_ns[seen], self.pose.t_ns[0]), offsets[seen], "scan"
+
+    @cached_property
+    def seen(self) -> SeenCurve | None:
+        """An exploration episode's area seen over time (``tasks.seen``): the reader's, else
+        integrated from the whole scans; None for another task or without scans."""
+        return seen_curve(self.scan, self.pose, self.facts)
 
     @cached_property
     def spl_weight(self) -> float:

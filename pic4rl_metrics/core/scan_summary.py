@@ -24,6 +24,7 @@ from pic4rl_base.geometry import Footprint, Pose2D
 from ..contract import EpisodeFacts
 from .crop_rows import lane_sides
 from .series_kinds import ScanSeries
+from .tasks.seen import SeenCurve, SeenStream
 
 NAN = float("nan")
 #: Scans decoded before they are reduced to their summary (a few MB of beams at a time).
@@ -78,6 +79,8 @@ class ScanSummary:
     #: A few whole scans evenly spread over the episode (``ScanStream(sample=n)``), sorted by
     #: stamp, for drawing maps; not indexed like the arrays above. None: not kept.
     sample: ScanSeries | None = None
+    #: An exploration episode's area seen over time (``tasks.seen``), integrated while read.
+    seen: SeenCurve | None = None
 
     def __len__(self) -> int:
         return len(self.t_ns)
@@ -149,10 +152,12 @@ class ScanStream:
     ``sample`` (and not ``full``), at most that many whole scans are kept beside the summary
     (``ScanSummary.sample``), evenly spread over the stream: every ``stride``-th payload is
     kept, and the stride doubles (every other kept one dropped) whenever more than twice
-    ``sample`` are held, so memory stays bounded whatever the log's length."""
+    ``sample`` are held, so memory stays bounded whatever the log's length. ``seen``: each
+    chunk is also integrated into the area seen (``ScanSummary.seen``)."""
 
-    def __init__(self, facts: EpisodeFacts, *, full: bool = False, sample: int = 0) -> None:
-        self.facts, self.full, self.sample = facts, full, max(0, sample)
+    def __init__(self, facts: EpisodeFacts, *, full: bool = False, sample: int = 0,
+                 seen: SeenStream | None = None) -> None:
+        self.facts, self.full, self.sample, self.seen = facts, full, max(0, sample), seen
         self._kept: list[tuple[int, Any]] = []  # (arrival index, payload) of the sample
         self._stride = 1
         self.width = 0  # the most beams of a scan
@@ -180,6 +185,8 @@ class ScanStream:
         block = scan_block(self._pending, np.zeros(len(self._pending), dtype=np.int64))
         self.width = max(self.width, block.ranges.shape[1])
         self._parts.append(summarize(block, self.facts))
+        if self.seen is not None:
+            self.seen.add(block, self._count - len(self._pending))
         if self.full:
             self._blocks.append(block)
         self._pending = []
@@ -201,7 +208,9 @@ class ScanStream:
             return ScanSeries(t_ns[keep], ranges[keep], angles[keep], rmin[keep], rmax[keep])
         summary = concat(self._parts)
         t_ns = np.asarray(t_ns, dtype=np.int64)
-        return replace(summary.take(keep), t_ns=t_ns[keep], sample=self._sample(t_ns, keep))
+        seen = None if self.seen is None else self.seen.curve(t_ns, keep)
+        return replace(summary.take(keep), t_ns=t_ns[keep], sample=self._sample(t_ns, keep),
+                       seen=seen)
 
     def _sample(self, t_ns: np.ndarray, keep: np.ndarray) -> ScanSeries | None:
         """The kept payloads among ``keep`` (in its order): every other one until at most

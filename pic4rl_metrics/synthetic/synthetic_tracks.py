@@ -106,6 +106,14 @@ def speed_ramp(jerk_mps3: float, duration_s: float, dt_s: float = 0.1) -> Track:
     return Track(t, jerk_mps3 * t**3 / 6, zeros, zeros, 0.5 * jerk_mps3 * t**2, zeros, zeros)
 
 
+def turn_in_place(rate_radps: float, duration_s: float, dt_s: float = 0.1) -> Track:
+    """At the origin, turning at a constant ``rate_radps`` from yaw 0: no path, heading
+    ``rate * t`` (an explorer's first look round)."""
+    t = _times(duration_s, dt_s)
+    zeros = np.zeros_like(t)
+    return Track(t, zeros, zeros, wrap_angle(rate_radps * t), zeros, zeros, zeros + rate_radps)
+
+
 def from_waypoints(
     points: Sequence[tuple[float, float]],
     speed_mps: float,
@@ -161,6 +169,26 @@ class Obstacles:
 
     circles: tuple[tuple[float, float, float], ...] = ()
     segments: tuple[tuple[float, float, float, float], ...] = ()
+
+
+def square_room(side_m: float) -> Obstacles:
+    """Four walls of a square room centred on the origin: free floor ``side_m²``."""
+    h = 0.5 * side_m
+    return Obstacles(segments=((-h, -h, h, -h), (h, -h, h, h), (h, h, -h, h), (-h, h, -h, -h)))
+
+
+def corridor(x0_m: float, x1_m: float, width_m: float) -> Obstacles:
+    """Two parallel walls from ``x0_m`` to ``x1_m`` at ``y = ±width_m / 2``, open at both ends."""
+    h = 0.5 * width_m
+    return Obstacles(segments=((x0_m, -h, x1_m, -h), (x0_m, h, x1_m, h)))
+
+
+def front_sector(ranges: np.ndarray, fov_rad: float) -> np.ndarray:
+    """A full-circle scan (``cast_scan``'s default bearings) seen through a sensor of field of
+    view ``fov_rad`` centred ahead: the beams outside it NaN (no reading)."""
+    n = len(ranges)
+    bearing = np.linspace(-math.pi, math.pi - 2 * math.pi / n, n)
+    return np.where(np.abs(bearing) <= 0.5 * fov_rad + 1e-9, ranges, np.nan).astype(np.float32)
 
 
 def cast_scan(

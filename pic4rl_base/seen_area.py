@@ -1,0 +1,116 @@
+"""The floor a range sensor has seen: its scans integrated into a world-fixed grid (pure numpy).
+
+Area seen is what an exploring robot is judged by, from its bags (``pic4rl_metrics``' coverage
+columns) and, for a reward of newly seen area, live; one routine serves both, so it lives in
+the base. A cell (``resolution_m`` wide, indices ``floor(xy / resolution_m)``) is seen by a scan
+when its centre lies inside the scan's outline: the ends of neighbouring beams joined by
+straight edges (a polygon, exact for walls), a beam without neighbours seen to half the scan's
+median beam spacing either side (so a sensor's field of view ends at its outer beams); or when
+the centre is within one cell of the sensor. The grid grows
+to hold what is seen; its memory is that of the area's bounding box (one byte a cell).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .geometry import wrap_angle
+
+
+#: Neighbouring beams at most this many median spacings apart are joined by a straight edge.
+GAP = 1.5
+
+
+class SeenGrid:
+    """Cells seen so far; ``add`` integrates one scan and returns how many cells it added."""
+
+    def __init__(self, resolution_m: float) -> None:
+        if not resolution_m > 0:
+            raise ValueError(f"SeenGrid: resolution_m={resolution_m!r}; expected > 0")
+        self.resolution_m = float(resolution_m)
+        self.count = 0
+        self._seen = np.zeros((0, 0), dtype=bool)  # [row = y index, col = x index]
+        self._origin = np.zeros(2, dtype=np.int64)  # (x, y) index of cell [0, 0]
+
+    @property
+    def area_m2(self) -> float:
+        return self.count * self.resolution_m**2
+
+    def add(self, x: float, y: float, yaw: float, bearing: np.ndarray, reach_m: np.ndarray) -> int:
+        """Integrate one scan from a sensor at ``(x, y)`` heading ``yaw`` (m, rad): per beam,
+        its bearing from the heading (rad) and how far it saw (m; NaN or <= 0: nothing)."""
+        bearing, reach = np.asarray(bearing, dtype=float), np.asarray(reach_m, dtype=float)
+        ok = np.isfinite(bearing) & np.isfinite(reach) & (reach > 0)
+        if not ok.any():
+            return 0
+        bearing, reach = wrap_angle(bearing[ok]), reach[ok]
+        order = np.argsort(bearing)
+        bearing, reach = bearing[order], reach[order]
+        res = self.resolution_m
+        ends_x, ends_y = x + reach * np.cos(yaw + bearing), y + reach * np.sin(yaw + bearing)
+        low = np.floor(np.array([min(ends_x.min(), x), min(ends_y.min(), y)]) / res)
+        high = np.floor(np.array([max(ends_x.max(), x), max(ends_y.max(), y)]) / res)
+        low, high = low.astype(np.int64), high.astype(np.int64)
+        self._fit(low, high)
+        cx = (np.arange(low[0], high[0] + 1) + 0.5) * res - x
+        cy = (np.arange(low[1], high[1] + 1) + 0.5) * res - y
+        dx, dy = np.meshgrid(cx, cy)
+        dist = np.hypot(dx, dy)
+        seen = dist <= res
+        rel = wrap_angle(np.arctan2(dy, dx) - yaw)
+        seen |= dist <= _limit(bearing, reach, rel)
+        r0, c0 = low[1] - self._origin[1], low[0] - self._origin[0]
+        window = self._seen[r0:r0 + seen.shape[0], c0:c0 + seen.shape[1]]
+        new = int(np.count_nonzero(seen & ~window))
+        window |= seen
+        self.count += new
+        return new
+
+    def _fit(self, low: np.ndarray, high: np.ndarray) -> None:
+        """Grow the grid (doubling, so growth costs little) to hold indices ``low..high``."""
+        rows, cols = self._seen.shape
+        top = self._origin + np.array([cols, rows])
+        if rows and (low >= self._origin).all() and (high < top).all():
+            return
+        if not rows:
+            new_low, new_top = low, high + 1
+        else:
+            size = top - self._origin
+            new_low = np.minimum(low, self._origin - np.where(low < self._origin, size, 0))
+            new_top = np.maximum(high + 1, top + np.where(high >= top, size, 0))
+        grown = np.zeros((int(new_top[1] - new_low[1]), int(new_top[0] - new_low[0])), dtype=bool)
+        r0, c0 = self._origin[1] - new_low[1], self._origin[0] - new_low[0]
+        grown[r0:r0 + rows, c0:c0 + cols] = self._seen
+        self._seen, self._origin = grown, new_low
+
+
+def _limit(bearing: np.ndarray, reach: np.ndarray, rel: np.ndarray) -> np.ndarray:
+    """How far a scan saw at bearings ``rel``: between two neighbouring beams (no farther
+    apart than ``GAP`` spacings), the straight edge joining their ends, so a wall is traced
+    exactly however slanted; else the nearest beam's reach within half a spacing of it, and
+    nothing (-1) beyond (outside the field of view, across a run of beams without a reading)."""
+    n, spacing = len(bearing), _spacing(bearing)
+    after = np.searchsorted(bearing, rel) % n
+    before = (after - 1) % n
+    span = (bearing[after] - bearing[before]) % (2 * np.pi)
+    into = (rel - bearing[before]) % (2 * np.pi)
+    near_before = into <= span - into
+    gap = np.where(near_before, into, span - into)
+    nearest = np.where(near_before, reach[before], reach[after])
+    limit = np.where(gap <= 0.5 * spacing + 1e-9, nearest, -1.0)
+    rb, ra = reach[before], reach[after]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        edge = rb * ra * np.sin(span) / (rb * np.sin(into) + ra * np.sin(span - into))
+    joined = (span > 0) & (span <= GAP * spacing)
+    return np.where(joined, edge, limit)
+
+
+def _spacing(bearing: np.ndarray) -> float:
+    """The median spacing (rad) of sorted bearings, counting the wrap round the circle only
+    for a scan that goes nearly all the way round; 0 for a single beam."""
+    if len(bearing) < 2:
+        return 0.0
+    steps = np.diff(bearing)
+    wrap = bearing[0] + 2 * np.pi - bearing[-1]
+    median = float(np.median(steps))
+    return max(median, float(wrap)) if wrap <= 1.5 * median else median
