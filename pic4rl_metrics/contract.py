@@ -39,6 +39,9 @@ SCAN_TOPIC = "/scan"
 CMD_VEL_TOPIC = "/cmd_vel"
 GOAL_TOPIC = "/goal_pose"
 PERSON_TOPIC = "/person/pose"
+#: ``geometry_msgs/msg/PoseArray`` of the people around the robot, in the pose topic's frame;
+#: the array's index is the person (docs/metrics.md, "Social metrics").
+PEOPLE_TOPIC = "/people"
 CLOCK_TOPIC = "/clock"
 
 #: ``std_msgs/msg/String`` whose ``data`` is a JSON object with the keys of ``FACT_KEYS``.

@@ -260,6 +260,8 @@ _register("row_reference", "", "row reference", text=True)(
 from .tasks import person  # noqa: E402, F401
 # The exploration columns (area_seen_m2, coverage_pct, ...): NaN unless the task explores.
 from .tasks import coverage  # noqa: E402, F401
+# The social columns (zone intrusions, people_*, ...) of an episode with people.
+from .tasks import crowd  # noqa: E402, F401
 
 _register("n_poses", "count", "poses")(lambda d: len(d.pose))
 _register("n_scans", "count", "scans")(lambda d: len(d.scan) if d.scan is not None else 0)

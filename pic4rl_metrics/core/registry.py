@@ -44,8 +44,9 @@ ENTRY_POINT_GROUP = "pic4rl.metrics"
 INPUTS: frozenset[str] = frozenset(INPUT_TESTS)
 
 #: The comparison tables' sections, in the order they are shown, and whether a section shows
-#: always (the paper's Table 1) or only when some episode has a value (the vineyard's rows).
-TABLE_SECTIONS: dict[str, bool] = {"paper": True, "row": False}
+#: always (the paper's Table 1) or only when some episode has a value (the vineyard's rows, the
+#: social columns of an episode with people).
+TABLE_SECTIONS: dict[str, bool] = {"paper": True, "row": False, "social": False}
 
 
 @dataclass(frozen=True)

@@ -20,11 +20,12 @@ from typing import Any
 from pic4rl_base.geometry import yaw_from_quaternion
 
 from .. import contract
-from .timebase import Samples, cmd_series, point_series, scan_series
+from .timebase import Samples, cmd_series, people_series, point_series, scan_series
 
 ODOMETRY = "nav_msgs/msg/Odometry"
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 POSE_COV = "geometry_msgs/msg/PoseWithCovarianceStamped"
+POSE_ARRAY = "geometry_msgs/msg/PoseArray"
 TWIST = "geometry_msgs/msg/Twist"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 LASER_SCAN = "sensor_msgs/msg/LaserScan"
@@ -53,6 +54,10 @@ def _cmd_row(msg: Any, msgtype: str) -> tuple[float, float, float]:
 
 def _scan_row(msg: Any, _msgtype: str) -> tuple[Any, ...]:
     return (msg.ranges, msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max)
+
+
+def _people_row(msg: Any, _msgtype: str) -> tuple[tuple[float, float], ...]:
+    return tuple((p.position.x, p.position.y) for p in msg.poses)
 
 
 def _text(msg: Any, _msgtype: str) -> str:
@@ -106,6 +111,9 @@ ROLE_TABLE: tuple[Role, ...] = (
     Role("person", contract.PERSON_TOPIC, SUPPORTED_POSE_MSGS, pose_row,
          series="person", build=point_series, flag="--person-topic",
          help="tracked person's pose topic"),
+    Role("people", contract.PEOPLE_TOPIC, frozenset({POSE_ARRAY}), _people_row,
+         series="people", build=people_series, flag="--people-topic",
+         help="PoseArray topic of the people around the robot"),
     Role("facts", contract.FACTS_TOPIC, frozenset({STRING}), _text, yaml_key="facts_topic"),
     Role("outcome", contract.OUTCOME_TOPIC, frozenset({STRING}), _text,
          yaml_key="outcome_topic"),

@@ -94,3 +94,17 @@ class PointSeries:
 
     def __len__(self) -> int:
         return len(self.t_ns)
+
+
+@dataclass(frozen=True)
+class PeopleSeries:
+    """Positions (m) of the people a tracker or the simulator reports: one row per message,
+    one column per person (``geometry_msgs/PoseArray``: the array's index is the person), NaN
+    where a message holds fewer people than the longest one."""
+
+    t_ns: np.ndarray
+    x: np.ndarray  # (n_messages, n_people)
+    y: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.t_ns)

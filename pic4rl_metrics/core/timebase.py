@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import CorruptBagError
 from .plausibility import PLAUSIBLE_SPEED_MPS
 from .scan_summary import ScanStream, ScanSummary
-from .series_kinds import CmdSeries, PointSeries, PoseSeries, ScanSeries
+from .series_kinds import CmdSeries, PeopleSeries, PointSeries, PoseSeries, ScanSeries
 
 #: A header stamp this far (ns) behind the one received before it is no reordered message:
 #: the topic's clock jumped back, or a second source publishes it.
@@ -232,3 +232,15 @@ def point_series(raw: Samples, offset: int, warnings: list[str]) -> PointSeries 
     t_ns, rows = _sorted(raw, offset, "person", warnings)
     p = np.asarray(rows, dtype=float)
     return PointSeries(t_ns, p[:, 0], p[:, 1])
+
+
+def people_series(raw: Samples, offset: int, warnings: list[str]) -> PeopleSeries | None:
+    """The people's positions, a message's i-th pose in column i (NaN-padded)."""
+    if not raw.rows:
+        return None
+    t_ns, rows = _sorted(raw, offset, "people", warnings)
+    width = max(map(len, rows), default=0)
+    xy = np.full((len(rows), width, 2), np.nan)
+    for i, row in enumerate(rows):
+        xy[i, :len(row)] = np.asarray(row, dtype=float).reshape(-1, 2)
+    return PeopleSeries(t_ns, xy[:, :, 0], xy[:, :, 1])

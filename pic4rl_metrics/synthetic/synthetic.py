@@ -21,6 +21,7 @@ import numpy as np
 from .. import contract
 from ..bags.bagwriter import BagWriter
 from ..contract import OUTCOMES, STORAGES, EpisodeFacts, typestore
+from .synthetic_crowd import people_records
 from .synthetic_tracks import (
     Obstacles,
     Track,
@@ -113,6 +114,7 @@ def write_episode_bag(
     cmd_stamped: bool = False,
     goal: tuple[float, float] | None = None,
     person: Track | None = None,
+    people: Sequence[Track] = (),
     facts: EpisodeFacts | Mapping[str, object] | None = None,
     outcome: str | None = None,
     t0_ns: int = DEFAULT_T0_NS,
@@ -124,8 +126,9 @@ def write_episode_bag(
 
     Header stamps are ``t0_ns + t_s`` (ns); bag log times add ``receive_offset_ns``, as a
     recorder's wall clock differs from sim time. Headerless ``Twist`` commands carry only the
-    log time. ``facts`` are typed, or plain values by key (a test's odd or broken facts, as
-    real robots' bags carry them). ``write_metadata=False`` leaves the bag as a killed recorder
+    log time. ``people``: the people topic's PoseArrays (``synthetic_crowd``). ``facts`` are
+    typed, or plain values by key (a test's odd or broken facts, as real robots' bags carry
+    them). ``write_metadata=False`` leaves the bag as a killed recorder
     does: no ``metadata.yaml``, only the storage file.
     """
     path, pose_topic = Path(path), normalize_topic(pose_topic)
@@ -148,6 +151,7 @@ def write_episode_bag(
                               scans, n_beams, cmd, cmd_stamped)
     if person is not None:
         records += _person_records(make, person, t0_ns)
+    records += people_records(people, t0_ns)
     if outcome is not None:
         event = contract.outcome_event(outcome, last)
         records.append((last, 9, contract.OUTCOME_TOPIC, make.string(event)))

@@ -38,9 +38,14 @@ EPISODE_VIEW: dict[str, str] = {
     "obstacle_dist_min_m": "min obst",
     "obstacle_dist_mean_m": "mean obst",
     "footprint_clearance_min_m": "min clearance",
+    "personal_intrusion_time_s": "personal zone",
+    "people_dist_min_m": "min person",
+    "people_collision_count": "people coll.",
 }
-#: View columns shown only when some episode has them (clearance needs a footprint).
-_WHERE_DEFINED = frozenset({"footprint_clearance_min_m"})
+#: View columns shown only when some episode has them (clearance needs a footprint, the
+#: social columns people).
+_WHERE_DEFINED = frozenset({"footprint_clearance_min_m", "personal_intrusion_time_s",
+                            "people_dist_min_m", "people_collision_count"})
 _TEXT_COLUMNS = frozenset({"bag", "outcome", "optimal_path_source", "success", ERROR_COLUMN})
 _SUPERSCRIPT = {"2": "²", "3": "³"}
 

@@ -15,6 +15,7 @@ from pic4rl_metrics.core.derived import INPUT_TESTS, Derived
 from pic4rl_metrics.core.roles import (
     LASER_SCAN,
     ODOMETRY,
+    POSE_ARRAY,
     POSE_COV,
     POSE_STAMPED,
     ROLE_TYPES,
@@ -64,7 +65,7 @@ def test_topic_map_yaml_keys_and_cli_options_come_from_the_table() -> None:
     assert {r.key for r in ROLE_TABLE} >= {"scan", "cmd_vel", "facts_topic", "outcome_topic"}
     flagged = [role for role in ROLE_TABLE if role.flag]
     assert [r.flag for r in flagged] == ["--scan-topic", "--cmd-topic", "--goal-topic",
-                                         "--person-topic"]
+                                         "--person-topic", "--people-topic"]
     argv = ["compute", "bag"] + [x for r in flagged for x in (r.flag, f"/cli/{r.name}")]
     from_cli, _, _ = _inputs(build_parser().parse_args(argv))
     assert all(getattr(from_cli, r.name) == f"/cli/{r.name}" for r in flagged)
@@ -75,7 +76,7 @@ def test_an_episode_has_every_series_role_as_an_attribute() -> None:
     cmd = CmdSeries(np.array([5], dtype=np.int64), np.ones(1), np.zeros(1), np.zeros(1))
     episode = Episode(Path("b"), EpisodeFacts(), _pose(), "/odom", cmd=cmd)
     assert {name: getattr(episode, name) for name in SERIES_ROLES} == {
-        "scan": None, "cmd": cmd, "person": None}
+        "scan": None, "cmd": cmd, "person": None, "people": None}
     assert dataclasses.replace(episode, cmd=None).cmd is None
     assert dataclasses.replace(episode, pose_topic="/x").cmd is cmd
     assert pickle.loads(pickle.dumps(episode)).cmd.vx.tolist() == [1.0]
@@ -87,7 +88,8 @@ def test_a_series_role_is_an_input_a_metric_can_need() -> None:
     assert set(SERIES_ROLES.values()) <= {r for r in ROLE_TABLE if r.name in INPUT_TESTS}
     cmd = CmdSeries(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), np.zeros(0))
     empty = Derived(Episode(Path("b"), EpisodeFacts(), _pose(), "/odom", cmd=cmd))
-    assert [name for name in ("scan", "cmd_vel", "person") if INPUT_TESTS[name](empty)] == []
+    assert [name for name in ("scan", "cmd_vel", "person", "people")
+            if INPUT_TESTS[name](empty)] == []
     cmd = dataclasses.replace(cmd, t_ns=np.array([1]), vx=np.ones(1), vy=np.ones(1),
                               wz=np.ones(1))
     assert INPUT_TESTS["cmd_vel"](Derived(Episode(Path("b"), EpisodeFacts(), _pose(), "/o",
@@ -97,7 +99,7 @@ def test_a_series_role_is_an_input_a_metric_can_need() -> None:
 def test_the_stamped_types_are_those_with_a_header() -> None:
     accepted = {t for types in ROLE_TYPES.values() for t in types} | SUPPORTED_POSE_MSGS
     assert {t for t in accepted if has_header(t)} == {
-        LASER_SCAN, ODOMETRY, POSE_STAMPED, POSE_COV, TWIST_STAMPED}
+        LASER_SCAN, ODOMETRY, POSE_STAMPED, POSE_COV, TWIST_STAMPED, POSE_ARRAY}
     assert not has_header("my_msgs/msg/NotInJazzy")
 
 
