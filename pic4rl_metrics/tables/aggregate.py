@@ -36,7 +36,7 @@ COUNTED_OUTCOMES: tuple[str, ...] = (
 )
 #: Event counts that a table gives as the number of episodes in which the event happened
 #: (``<metric>_episodes``), not as a mean per episode: "collisions" counts episodes.
-EPISODE_COUNTED: tuple[str, ...] = ("collision_count",)
+EPISODE_COUNTED: tuple[str, ...] = ("collision_count", "people_collision_count")
 #: Episodes the trajectory-quality columns average over: the successful ones, or all.
 OVER_CHOICES: tuple[str, ...] = ("success", "all")
 #: Count columns of an aggregate, in the order they appear before the statistics:

@@ -14,6 +14,7 @@ from metrics_helpers import EXACT
 from metrics_helpers import row as _row
 from rosbags.rosbag2 import Reader, Writer
 
+from pic4rl_metrics import compute
 from pic4rl_metrics.bags.topics import TopicMap
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.contract import PEOPLE_TOPIC, typestore
@@ -26,6 +27,7 @@ from pic4rl_metrics.synthetic.synthetic import (
     write_episode_bag,
 )
 from pic4rl_metrics.synthetic.synthetic_crowd import standing
+from pic4rl_metrics.tables.aggregate import aggregate
 
 ROBOT_RADIUS_M = 0.2
 FACTS = {"footprint": {"radius_m": ROBOT_RADIUS_M}}
@@ -117,6 +119,17 @@ def test_people_collisions_are_counted_apart_from_the_scan_s(tmp_path: Path) -> 
                             people=[standing(0.0, 0.3, 10.0, 0.02)], facts=FACTS)
     m = _row(bag)
     assert (m["collision_count"], m["people_collision_count"]) == (1.0, 1.0)
+
+
+def test_a_comparison_counts_the_episodes_that_touched_a_person(tmp_path: Path) -> None:
+    """Two contacts in one episode and none in another: 1 episode of 2, as collisions."""
+    robot = straight_line(1.0, 10.0, 0.1, start=(-4.0, 0.0, 0.0))
+    twice = [standing(0.0, 0.3, 10.0), standing(2.0, -0.3, 10.0)]
+    bags = [write_episode_bag(tmp_path / "run" / name, robot, people=people, facts=FACTS)
+            for name, people in (("touch", twice), ("clear", [standing(0.0, 2.0, 10.0)]))]
+    table = aggregate(compute(bags).frame)
+    assert table["people_collision_count_episodes"].tolist() == [1]
+    assert table["people_collision_count_mean"].tolist() == [1.0]  # (2 + 0) / 2 contacts
 
 
 def test_without_a_footprint_contact_and_ttc_are_nan(tmp_path: Path) -> None:
