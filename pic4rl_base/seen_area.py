@@ -52,17 +52,16 @@ class SeenGrid:
         high = np.floor(np.array([max(ends_x.max(), x), max(ends_y.max(), y)]) / res)
         low, high = low.astype(np.int64), high.astype(np.int64)
         self._fit(low, high)
-        cx = (np.arange(low[0], high[0] + 1) + 0.5) * res - x
-        cy = (np.arange(low[1], high[1] + 1) + 0.5) * res - y
-        dx, dy = np.meshgrid(cx, cy)
-        dist = np.hypot(dx, dy)
-        seen = dist <= res
-        rel = wrap_angle(np.arctan2(dy, dx) - yaw)
-        seen |= dist <= _limit(bearing, reach, rel)
         r0, c0 = low[1] - self._origin[1], low[0] - self._origin[0]
-        window = self._seen[r0:r0 + seen.shape[0], c0:c0 + seen.shape[1]]
-        new = int(np.count_nonzero(seen & ~window))
-        window |= seen
+        window = self._seen[r0:r0 + high[1] - low[1] + 1, c0:c0 + high[0] - low[0] + 1]
+        rows, cols = np.nonzero(~window)  # only the cells not seen yet are tested
+        dx = (cols + low[0] + 0.5) * res - x
+        dy = (rows + low[1] + 0.5) * res - y
+        dist = np.hypot(dx, dy)
+        rel = wrap_angle(np.arctan2(dy, dx) - yaw)
+        seen = (dist <= res) | (dist <= _limit(bearing, reach, rel))
+        window[rows[seen], cols[seen]] = True
+        new = int(np.count_nonzero(seen))
         self.count += new
         return new
 

@@ -62,19 +62,21 @@ def test_turning_in_place_with_a_full_circle_lidar_sees_the_room_at_once(tmp_pat
 def test_turning_in_place_with_a_sector_sweeps_the_room_wall_by_wall(tmp_path: Path) -> None:
     """90° ahead, turning at 0.5 rad/s: a quarter at once, half after a quarter turn
     (t50 = (π/2) / 0.5 = 3.142 s), 90 % (14.4 m²) after π + π/4 + atan(0.2) turned (8.249 s),
-    all after 1.5 π. Scans are integrated every 5° or more of turn (two 2.86° steps), so a
-    time is late by at most one 0.2 s interval."""
+    all after 1.5 π. Scans are integrated every 10° or more of turn (four 2.86° steps), so a
+    time is late by at most one 0.4 s interval."""
     bag = _sector_bag(tmp_path / "sector")
     m = row(bag)
     assert m["area_seen_m2"] == pytest.approx(16.0, abs=1e-9)
     assert m["coverage_pct"] == pytest.approx(100.0, abs=1e-7)
-    assert 0.5 * math.pi / RATE <= m["time_to_50pct_s"] <= 0.5 * math.pi / RATE + 0.2
+    assert 0.5 * math.pi / RATE <= m["time_to_50pct_s"] <= 0.5 * math.pi / RATE + 0.4
     t90 = (1.25 * math.pi + math.atan(0.2)) / RATE
-    assert t90 - 0.1 <= m["time_to_90pct_s"] <= t90 + 0.2
+    assert t90 - 0.1 <= m["time_to_90pct_s"] <= t90 + 0.4
     curve = Derived(read_episode(bag)).seen
     assert curve is not None and curve.resolution_m == 0.05
     turned = RATE * (curve.t_ns - curve.t_ns[0]) * 1e-9
-    np.testing.assert_allclose(curve.area_m2, _sector_area(turned), atol=0.15)
+    step = 4 * RATE * 0.1  # the turn between scans integrated
+    assert (curve.area_m2 >= _sector_area(np.maximum(turned - step, 0)) - 0.15).all()
+    assert (curve.area_m2 <= _sector_area(turned) + 0.15).all()
 
 
 def test_a_straight_corridor_is_seen_at_width_times_speed(tmp_path: Path) -> None:
@@ -91,14 +93,14 @@ def test_a_straight_corridor_is_seen_at_width_times_speed(tmp_path: Path) -> Non
     assert m["area_seen_m2"] == pytest.approx(a0 + 20.0, rel=2e-3)
     assert math.isnan(m["coverage_pct"])
     assert m["time_to_50pct_s"] == 0.0
-    assert m["time_to_90pct_s"] == pytest.approx((0.9 * (a0 + 20.0) - a0) / 1.0, abs=0.25)
+    assert m["time_to_90pct_s"] == pytest.approx((0.9 * (a0 + 20.0) - a0) / 1.0, abs=0.45)
     assert m["path_per_area_seen_mpm2"] == pytest.approx(10.0 / (a0 + 20.0), rel=2e-3)
     curve = Derived(read_episode(bag)).seen
     assert curve is not None
     t_s = (curve.t_ns - curve.t_ns[0]) * 1e-9
     slope, start = np.polyfit(t_s, curve.area_m2, 1)
     assert slope == pytest.approx(1.0, rel=1e-2)
-    assert start == pytest.approx(a0, rel=3e-3)
+    assert a0 - 0.45 <= start <= a0 + 0.05  # a staircase: a scan integrated every 0.2 m
 
 
 def test_the_reader_s_stream_and_the_whole_scans_agree(tmp_path: Path,
