@@ -156,6 +156,27 @@ class Crowd:
                  + forces.group_forces(self.pos, self.vel, self.params.radius_m, self.group))
         self.vel = forces.cap_speed(self.vel + total * dt, self.speed)
         self.pos = self.pos + self.vel * dt
+        self._separate(robot[0], robot[2])
+
+    def _separate(self, robot_xy: np.ndarray, robot_radius: np.ndarray) -> None:
+        """Contacts: people who overlap are moved apart equally along their centres' line, a
+        person overlapping the robot's disc is moved off it, then a person overlapping an
+        obstacle is moved out to touch it and loses its velocity into it. The paper's
+        walkers are points and need none; Helbing, Farkas & Vicsek (2000) give bodies a stiff
+        contact force instead, which the 0.05 s step cannot integrate stably."""
+        n = len(self.pos)
+        r = self.pos[:, None, :] - np.vstack((self.pos, robot_xy))[None, :, :]
+        dist = np.hypot(r[..., 0], r[..., 1])
+        reach = self._radius[:, None] + np.concatenate((self._radius, robot_radius))[None, :]
+        overlap = np.maximum(reach - dist, 0.0)
+        overlap[:, :n][np.eye(n, dtype=bool)] = 0.0
+        overlap[:, :n] *= 0.5  # each of two people moves half the way
+        self.pos = self.pos + (overlap[..., None] * r / np.maximum(dist, 1e-9)[..., None]).sum(1)
+        away, depth = self._walls.nearest(self.pos)
+        push = np.maximum(self._radius[:, None] - depth, 0.0)
+        self.pos = self.pos + (push[..., None] * away).sum(axis=1)
+        into = np.minimum(np.einsum("nk,nmk->nm", self.vel, away), 0.0) * (push > 0)
+        self.vel = self.vel - (into[..., None] * away).sum(axis=1)
 
     def _follow_routes(self) -> None:
         """Advance each member past reached waypoints; a group whose first member reached

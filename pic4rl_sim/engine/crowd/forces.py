@@ -41,6 +41,7 @@ ATTRACTION_BETA = 3.0
 GROUP_REPULSION_BETA = 1.0
 GROUP_GAP_M = 0.1
 GAZE_HALF_FOV_RAD = math.radians(90.0)
+MIN_GAP_M = 0.01  # the surfaces' distance that overlapping bodies are given
 _EPS = 1e-9
 
 
@@ -81,10 +82,11 @@ def pair_forces(r: np.ndarray, step: np.ndarray) -> np.ndarray:
 def surface_vectors(pos: np.ndarray, radius: np.ndarray, others: np.ndarray,
                     other_radius: np.ndarray) -> np.ndarray:
     """Vectors (n × m × 2) from each other body's surface to each body's surface along the
-    line of centres (the centres' vector shortened by both radii, not past zero)."""
+    line of centres (the centres' vector shortened by both radii); bodies that overlap keep
+    ``MIN_GAP_M`` along that line, so they are pushed apart, never lose the direction."""
     r = pos[:, None, :] - others[None, :, :]
     r_hat, r_len = _unit(r)
-    gap = np.maximum(r_len - radius[:, None] - other_radius[None, :], 0.0)
+    gap = np.maximum(r_len - radius[:, None] - other_radius[None, :], MIN_GAP_M)
     return r_hat * gap[..., None]
 
 

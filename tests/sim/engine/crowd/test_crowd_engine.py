@@ -48,15 +48,21 @@ def test_the_same_seed_gives_the_same_walks_and_another_seed_others():
     assert np.abs(a - c).max() > 0.5
 
 
-def test_people_walk_among_the_walls_without_entering_them():
-    engine = _engine(10, seed=1, max_group_size=2)
-    start = engine.people()[0].copy()
-    clearances = []
-    for _ in range(10):
-        clearances.append(engine.world.clearance(_walk(engine, 30)).min())
-    moved = np.hypot(*(engine.people()[0] - start).T)
-    assert np.median(moved) > 3.0  # 30 s of walking at about 1.3 m/s
-    assert min(clearances) > 0.0  # a centre never inside an obstacle
+def test_people_walk_among_the_walls_without_entering_them_or_each_other():
+    engine = _engine(30, seed=1, max_group_size=3)
+    last = engine.people()[0].copy()
+    walked = np.zeros(30)
+    wall_gaps, pair_gaps = [], []
+    for _ in range(100):
+        people = _walk(engine, 3)
+        walked += np.hypot(*(people - last).T)
+        last = people.copy()
+        wall_gaps.append(engine.world.clearance(people).min() - 0.25)
+        centres = np.hypot(*(people[:, None] - people[None]).transpose(2, 0, 1))
+        pair_gaps.append((centres + 99 * np.eye(30)).min() - 0.5)
+    assert np.median(walked) > 15.0  # 30 s in a crowded indoor world: about 0.8 m/s
+    assert min(wall_gaps) > -1e-6  # a body never inside an obstacle
+    assert np.median(pair_gaps) > -0.05 and min(pair_gaps) > -0.25  # bodies barely overlap
 
 
 def test_a_lidar_beam_hits_a_person_at_the_expected_range():

@@ -52,6 +52,25 @@ def test_the_distance_between_two_people_runs_between_their_surfaces():
     np.testing.assert_allclose(r, [[[0.45, 0.0]]])
 
 
+def test_overlapping_bodies_are_still_pushed_apart_along_their_centres():
+    r = forces.surface_vectors(np.array([[0.3, 0.0]]), np.array([0.25]),
+                               np.array([[0.0, 0.0]]), np.array([0.25]))
+    np.testing.assert_allclose(r, [[[forces.MIN_GAP_M, 0.0]]])
+    f = forces.pair_forces(r[0], np.zeros((1, 2)))
+    assert f[0, 0] == pytest.approx(2.1 / 0.3 * math.exp(-forces.MIN_GAP_M / 0.3))
+
+
+def test_a_point_inside_an_obstacle_is_pushed_out_through_the_nearest_face():
+    world = WorldSpec("w", (-5, -5, 5, 5), boxes=(Box(0.0, 0.0, 2.0, 1.0, 1.0),),
+                      cylinders=(Cylinder(3.0, 0.0, 0.5, 1.0),))
+    away, dist = Walls(world).nearest(np.array([[0.8, 0.1], [0.1, -0.3], [3.2, 0.0]]))
+    np.testing.assert_allclose(dist[:, 0][:2], [0.0, 0.0])
+    np.testing.assert_allclose(away[0, 0], [1.0, 0.0], atol=1e-12)  # 0.2 from the east face
+    np.testing.assert_allclose(away[1, 0], [0.0, -1.0], atol=1e-12)  # 0.2 from the south one
+    assert dist[2, 1] == 0.0
+    np.testing.assert_allclose(away[2, 1], [1.0, 0.0], atol=1e-12)
+
+
 def test_a_force_from_behind_weighs_c():
     e = np.array([[1.0, 0.0]])
     f = np.array([[[1.0, 0.0], [-1.0, 0.0], [math.cos(math.radians(95)),
