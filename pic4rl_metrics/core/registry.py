@@ -45,8 +45,8 @@ INPUTS: frozenset[str] = frozenset(INPUT_TESTS)
 
 #: The comparison tables' sections, in the order they are shown, and whether a section shows
 #: always (the paper's Table 1) or only when some episode has a value (the vineyard's rows, the
-#: social columns of an episode with people).
-TABLE_SECTIONS: dict[str, bool] = {"paper": True, "row": False, "social": False}
+#: social columns of an episode with people, the area seen of an exploration).
+TABLE_SECTIONS: dict[str, bool] = {"paper": True, "row": False, "social": False, "explore": False}
 
 
 @dataclass(frozen=True)

@@ -41,11 +41,14 @@ EPISODE_VIEW: dict[str, str] = {
     "personal_intrusion_time_s": "personal zone",
     "people_dist_min_m": "min person",
     "people_collision_count": "people coll.",
+    "area_seen_m2": "area seen",
+    "coverage_pct": "coverage",
 }
 #: View columns shown only when some episode has them (clearance needs a footprint, the
-#: social columns people).
+#: social columns people, the area seen an exploration).
 _WHERE_DEFINED = frozenset({"footprint_clearance_min_m", "personal_intrusion_time_s",
-                            "people_dist_min_m", "people_collision_count"})
+                            "people_dist_min_m", "people_collision_count", "area_seen_m2",
+                            "coverage_pct"})
 _TEXT_COLUMNS = frozenset({"bag", "outcome", "optimal_path_source", "success", ERROR_COLUMN})
 _SUPERSCRIPT = {"2": "²", "3": "³"}
 

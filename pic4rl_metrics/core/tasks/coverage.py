@@ -2,7 +2,8 @@
 
 The area seen over time is ``Derived.seen`` (``tasks.seen``: the scans integrated into a grid
 of ``SEEN_RESOLUTION_M`` cells, for an episode whose ``task`` fact is an exploration); every
-other episode gets NaN here, so a navigation table holds none of these columns. A simulated
+other episode gets NaN here, so a navigation table holds none of these columns (their
+section, ``explore``, shows only where some episode has a value). A simulated
 bag carries the world's free area (the ``free_area_m2`` fact) and gets a coverage percentage;
 a real log gets the area in m² and its curve. Collisions are the ``collision_count`` every
 episode with a footprint gets. Registered here in table order, imported by ``metrics``.
@@ -25,12 +26,14 @@ NAN = float("nan")
 
 
 def _register(name: str, unit: str, label: str,
-              stat: Callable[[SeenCurve, Derived], float]) -> None:
+              stat: Callable[[SeenCurve, Derived], float], position: int) -> None:
+    """Register a column at ``position`` in the comparison tables' ``explore`` section."""
     def value(d: Derived) -> float:
         curve = d.seen
         return NAN if curve is None else float(stat(curve, d))
 
-    metric(name, unit=unit, label=label, needs=("scan",), _builtin=True)(value)
+    metric(name, unit=unit, label=label, needs=("scan",), table=("explore", position),
+           _builtin=True)(value)
 
 
 def _coverage(curve: SeenCurve, d: Derived) -> float:
@@ -58,8 +61,8 @@ def _path_per_area(curve: SeenCurve, d: Derived) -> float:
     return d.path_m / area if area > 0 else NAN
 
 
-_register("area_seen_m2", "m$^2$", "area seen", lambda c, d: c.area_m2[-1])
-_register("coverage_pct", "%", "coverage", _coverage)
-_register("time_to_50pct_s", "s", "time to 50 % seen", time_to(0.5))
-_register("time_to_90pct_s", "s", "time to 90 % seen", time_to(0.9))
-_register("path_per_area_seen_mpm2", "m/m$^2$", "path per area seen", _path_per_area)
+_register("area_seen_m2", "m$^2$", "area seen", lambda c, d: c.area_m2[-1], 0)
+_register("coverage_pct", "%", "coverage", _coverage, 1)
+_register("time_to_50pct_s", "s", "time to 50 % seen", time_to(0.5), 2)
+_register("time_to_90pct_s", "s", "time to 90 % seen", time_to(0.9), 3)
+_register("path_per_area_seen_mpm2", "m/m$^2$", "path per area seen", _path_per_area, 4)

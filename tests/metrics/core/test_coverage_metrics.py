@@ -132,3 +132,17 @@ def test_the_grid_grows_in_every_direction_and_counts_each_cell_once() -> None:
     assert second == first
     assert grid.add(-20.0, -20.0, 2.0, bearing, np.full(720, 10.0)) == 0
     assert grid.area_m2 == pytest.approx(2 * first * 0.0025)
+
+
+def test_tables_show_the_area_columns_only_where_an_episode_explores(tmp_path: Path) -> None:
+    """Their comparison section (``explore``) and ``compute``'s view show them only when some
+    episode has a value: a navigation table stays as it was."""
+    from pic4rl_metrics import compute
+    from pic4rl_metrics.tables.results import table_columns
+    from pic4rl_metrics.tables.text import render_episodes
+    nav = compute([_sector_bag(tmp_path / "nav", task="goToPose/lidar")]).frame
+    both = compute([_sector_bag(tmp_path / "explore"), tmp_path / "nav"]).frame
+    assert not set(COLUMNS) & set(table_columns(nav))
+    assert set(COLUMNS) <= set(table_columns(both))
+    assert "area seen" not in render_episodes(nav, "table")
+    assert "area seen" in render_episodes(both, "table")

@@ -185,5 +185,5 @@ def test_a_metric_s_table_placement_is_in_its_registry_entry() -> None:
 @pytest.mark.bad_input
 def test_a_table_section_that_does_not_exist_is_refused() -> None:
     with pytest.raises(ConfigError, match=r"metric 'x_m': table section 'table2' is none of "
-                                          r"\['paper', 'row', 'social'\]"):
+                                          r"\['explore', 'paper', 'row', 'social'\]"):
         Metric("x_m", "m", "x", lambda d: 0.0, table=("table2", 0))
