@@ -16,7 +16,6 @@ import numpy as np
 
 from .geometry import wrap_angle
 
-
 #: Neighbouring beams at most this many median spacings apart are joined by a straight edge.
 GAP = 1.5
 

@@ -101,7 +101,8 @@ class SeenStream:
                 added[i] = self.grid.add(sx[i], sy[i], heading[i], block.angles[i], reach[i])
                 self._skipped = None
             else:
-                self._skipped = (start + i, sx[i], sy[i], heading[i], block.angles[i], reach[i])
+                self._skipped = (start + i, sx[i], sy[i], heading[i], block.angles[i].copy(),
+                                 reach[i].copy())
         self._stamps.append(t_ns)
         self._added.append(added)
 

@@ -18,8 +18,12 @@ from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_metrics.core import scan_summary
 from pic4rl_metrics.core.derived import Derived
 from pic4rl_metrics.synthetic.synthetic import cast_scan, straight_line, write_episode_bag
-from pic4rl_metrics.synthetic.synthetic_tracks import (corridor, front_sector, square_room,
-                                                       turn_in_place)
+from pic4rl_metrics.synthetic.synthetic_tracks import (
+    corridor,
+    front_sector,
+    square_room,
+    turn_in_place,
+)
 
 EXPLORE = {"task": "explore/lidar", "free_area_m2": 16.0}
 ROOM = square_room(4.0)
