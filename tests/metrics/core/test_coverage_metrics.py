@@ -150,3 +150,18 @@ def test_tables_show_the_area_columns_only_where_an_episode_explores(tmp_path: P
     assert set(COLUMNS) <= set(table_columns(both))
     assert "area seen" not in render_episodes(nav, "table")
     assert "area seen" in render_episodes(both, "table")
+
+
+def test_scans_are_placed_through_the_lidar_s_mount(tmp_path: Path) -> None:
+    """A robot standing in the 2 m corridor heading along it, its 90° sensor mounted 0.5 m
+    ahead and turned to the left wall (``scan_mount`` yaw π/2): it sees the triangle up to
+    that wall, h²/2 (tan 45° − tan −45°) = 1 m² with h = 1 m, plus the 40 cells whose centres
+    lie on its 45° edges, half outside (0.05 m²); read without the mount it would look down
+    the corridor (tens of m²)."""
+    track = turn_in_place(0.0, 2.0)
+    scans = [front_sector(cast_scan(0.5, 0.0, math.pi / 2, corridor(-15.0, 40.0, 2.0),
+                                    n_beams=BEAMS), math.pi / 2) for _ in track.t_s]
+    mount = {"x_m": 0.5, "y_m": 0.0, "yaw_rad": math.pi / 2}
+    m = row(write_episode_bag(tmp_path / "mounted", track, scans=scans,
+                              facts={"task": "explore", "scan_mount": mount}))
+    assert m["area_seen_m2"] == pytest.approx(1.05, abs=0.01)
