@@ -1,4 +1,4 @@
-"""The crowd in the engine: seeded walks, people seen by the LiDAR and touched by the robot,
+"""The crowd in the engine: seeded walks, people seen by the LiDAR and the depth camera and
 kept off the walls, and the ``people`` topic recorded through the in-process transport."""
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pic4rl_sim.errors import WorldError
 from pic4rl_sim.engine.crowd.params import CrowdParams
 from pic4rl_sim.engine.engine_config import EngineConfig
 from pic4rl_sim.engine.geometry import Twist2D
+from pic4rl_sim.engine.ray_sensors import DepthCameraSpec
 from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.engine.worlds.spec import WorldSpec
@@ -79,6 +80,20 @@ def test_a_lidar_beam_hits_a_person_at_the_expected_range():
     ahead = int(np.argmin(np.abs(angles + lidar.mount_yaw_rad)))
     assert ranges[ahead] == pytest.approx(3.0 - 0.25 - lidar.mount_xyz_m[0], abs=1e-3)
     assert np.isinf(ranges[(ahead + lidar.beams // 2) % lidar.beams])  # nothing behind
+
+
+def test_the_depth_camera_sees_a_person_at_the_expected_depth():
+    world = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0))
+    robot = JACKAL.with_sensors(depth=DepthCameraSpec())  # level, 0.2 m ahead of the base
+    engine = Engine(robot, world, EngineConfig(crowd=CrowdParams(count=1)))
+    engine.reset(start=Pose2D(0.0, 0.0, 0.0))
+    mocap = engine.ids.crowd_mocap[0]
+    engine.data.mocap_pos[mocap] = (-3.0, 0.0, 0.0)  # behind the camera
+    mujoco.mj_forward(engine.model, engine.data)
+    assert np.isinf(engine.depth_image()[30, 40])
+    engine.data.mocap_pos[mocap] = (3.0, 0.0, 0.0)
+    mujoco.mj_forward(engine.model, engine.data)
+    assert engine.depth_image()[30, 40] == pytest.approx(3.0 - 0.25 - 0.2, abs=0.01)
 
 
 def test_the_robot_driving_into_a_person_collides():
