@@ -1,5 +1,6 @@
-"""The crowd in the engine: seeded walks, people seen by the LiDAR and the depth camera and
-kept off the walls, and the ``people`` topic recorded through the in-process transport."""
+"""The crowd in the engine: seeded walks kept off the walls and each other, people seen by the
+LiDAR and the depth camera and touched by the robot, and the ``people`` topic recorded through
+the in-process transport."""
 
 from __future__ import annotations
 
