@@ -26,6 +26,7 @@ from ..person_walk import corner_occluders, leg_speeds
 from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
 from .barn import BarnParams, barn
 from .barn_like import BarnLikeParams, barn_like
+from .clutter3d import Clutter3dParams, clutter3d
 from .spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 from .vineyard import VineyardParams, vineyard
 
@@ -298,7 +299,8 @@ class Generator(NamedTuple):
 WORLD_TABLE: dict[str, Generator] = {g.params.KIND: g for g in (
     Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
     Generator(VineyardParams, vineyard), Generator(PersonParams, person),
-    Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like))}
+    Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like),
+    Generator(Clutter3dParams, clutter3d))}
 
 
 def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:
