@@ -14,6 +14,8 @@ from enum import Enum
 
 from pic4rl_base.plugins import load_group
 
+from .engine.sensor_kinds import sonar
+
 
 class Direction(str, Enum):
     """The node's side: it publishes, subscribes or serves."""
@@ -160,11 +162,17 @@ RESET_WORLD = Interface(
     "reset_world", "std_srvs/srv/Empty", Direction.SRV, None, "starts the next episode")
 PAUSE_PHYSICS = Interface(
     "pause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "stops stepping")
+#: A sonar ring's cones (``engine.sensor_kinds.sonar``): a ring of ``sonar.count`` publishes the
+#: first ``count``.
+SONAR = tuple(Interface(sonar.topic_name(i), "sensor_msgs/msg/Range", Direction.PUB,
+                        QosKind.SENSOR_DATA, f"sonar cone {i}'s range (m, REP 117)", Cadence.STEP,
+                        f"with `sonar.count` > {i}") for i in range(sonar.MAX_CONES))
 UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, PERSON_POSE, PEOPLE, CAMERA_INFO,
+INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, *SONAR, PERSON_POSE,
+                   PEOPLE, CAMERA_INFO,
               DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
 #: A user's sensors' topics: each an ``Interface`` that its package names in this entry-point

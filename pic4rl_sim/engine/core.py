@@ -26,6 +26,7 @@ from .model import build_model
 from .paths import plan_path
 from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
+from .sensor_kinds import NAMES as KIND_NAMES
 from .sensors import KINDS_BY_NAME, SENSOR_TABLE, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
 from .worlds.spec import WorldSpec
 
@@ -36,8 +37,9 @@ _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarn
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
 # Independent random streams per purpose: reading one sensor never shifts another's noise
 # (a sensor kind added at the end of SENSOR_TABLE leaves the others' streams as they were;
-# the crowd's comes last, after a user's sensors', for the same reason).
-_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE), "crowd")
+# the crowd's comes after a user's sensors', for the same reason, and ``sensor_kinds``' after it).
+_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE if kind.name not in KIND_NAMES),
+            "crowd", *KIND_NAMES)
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 

@@ -1,7 +1,7 @@
 """A robot's sensors in one table, ``SENSOR_TABLE``: each kind's spec (the robot's data and the
 sim's ``<kind>.*`` parameters) and how the engine builds and reads it. The IMU and wheel
 odometry live here beside their specs; the ray-casting LiDAR and depth camera in
-``ray_sensors``.
+``ray_sensors``; the paper's future-work sensors in ``sensor_kinds``, one module each.
 
 Each read takes the ``np.random.Generator`` of its own sensor, so noise does not depend on the
 order in which sensors are read; a sensor without noise never draws from it. Frames follow
@@ -23,6 +23,7 @@ from pic4rl_base.schema import FRACTION, Range, check, param
 
 from .geometry import Twist2D
 from .ray_sensors import DepthCamera, DepthCameraSpec, Lidar, LidarSpec
+from .sensor_kinds import sonar
 
 STANDARD_GRAVITY_M_S2 = 9.80665
 # ROS reads a zero covariance as "unknown"; an exact (noise-free) quantity gets this instead.
@@ -210,6 +211,8 @@ SENSOR_TABLE = (
                optional=True, carried=False, label="depth camera", publishes="camera/depth/*"),
     SensorKind("imu", ImuSpec, lambda model, spec, body: Imu(spec), _read_imu),
     SensorKind("odometry", OdometrySpec, lambda model, spec, body: WheelOdometry(spec)),
+    SensorKind(sonar.NAME, sonar.SonarSpec, sonar.build, sonar.read, optional=True,
+               carried=False, label="sonar ring", publishes="sonar/*"),
 )
 #: A user's sensors, after pic4rl's: each a ``SensorKind`` that its package names in this
 #: entry-point group under the kind's name (its topic in ``pic4rl.interfaces``, its reading

@@ -31,11 +31,12 @@ from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
 from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
+from ..engine.sensor_kinds import sonar
 from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
-                          IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, STEP_TOPICS, TF, TF_STATIC,
-                          WORLD_MARKERS, Interface)
+                          IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, SONAR, STEP_TOPICS, TF,
+                          TF_STATIC, WORLD_MARKERS, Interface)
 from .transforms import OdomTransform, static_transforms
 
 WORLD_FRAME = "world"
@@ -168,6 +169,8 @@ class _Scan:
 #: ``held`` (interface → message, allocated once) and ``fill(engine)`` writes a reading.
 SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], Any]], ...] = (
     (lambda engine: True, _Imu),
+    (lambda engine: sonar.NAME in engine.sensors,
+     lambda engine, stamp: sonar.RangeMessages(engine, stamp, SONAR)),
     (lambda engine: engine.world.person is not None, _Person),
     (lambda engine: engine.crowd is not None, _People),
     (lambda engine: engine.depth is not None, _Depth),

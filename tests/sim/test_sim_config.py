@@ -160,8 +160,8 @@ def test_a_robot_holds_one_spec_per_sensor_kind():
         robot_from_mapping({"base": "jackal", "lidr": {}})
     with pytest.raises(ConfigError, match=r"unknown key 'sensors'"):
         robot_from_mapping({"base": "jackal", "sensors": {}})
-    with pytest.raises(ConfigError, match=r"unknown key 'sonar'"):
-        JACKAL.with_sensors(sonar=None)
+    with pytest.raises(ConfigError, match=r"unknown key 'radar'"):
+        JACKAL.with_sensors(radar=None)
     with pytest.raises(ConfigError, match=r"robot.imu: None is invalid; expected ImuSpec$"):
         JACKAL.with_sensors(imu=None)
 
