@@ -99,21 +99,23 @@ def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
 
 def check_no_test_world(config: EnvConfig) -> None:
     """``ConfigError`` when a training or evaluation env would run one of a benchmark's test
-    worlds (BARN's 50: docs/results.md; nothing is trained or chosen on them): its
+    worlds (``HELD_OUT``: BARN's 50, the dynamic BARN's 60; docs/results.md): its
     ``episodes.world_variants``, or without them the sim's ``world_variant``."""
-    from pic4rl_sim.engine.worlds.barn import challenge_test_worlds
+    from pic4rl_sim.engine.worlds.held_out import HELD_OUT
 
-    if config.sim_params.get("world") != "barn":
+    kind = config.sim_params.get("world")
+    if kind not in HELD_OUT:
         return
+    held = HELD_OUT[kind]
     key = "episodes.world_variants"
     variants = parse_variants(config.episodes.world_variants)
     if not variants:
         key, variants = "sim world_variant", (int(config.sim_params.get("world_variant", 0)),)
-    banned = sorted(set(variants) & set(challenge_test_worlds()))
+    banned = sorted(set(variants) & set(held.variants()))
     if banned:
-        raise ConfigError(f"{key}: holds BARN test world(s) {', '.join(map(str, banned[:5]))}"
-                          f"{' ...' if len(banned) > 5 else ''}; train and evaluate on the 250 "
-                          "others (the test worlds are 0, 6, ..., 294)")
+        raise ConfigError(f"{key}: holds {held.name} test world(s) "
+                          f"{', '.join(map(str, banned[:5]))}{' ...' if len(banned) > 5 else ''}"
+                          f"; {held.instead}")
 
 
 def _make(scenario: Scenario, monitor_file: str | None, node: Any = None,

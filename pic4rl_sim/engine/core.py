@@ -20,6 +20,7 @@ from pic4rl_base.goal import Goal
 
 from ..errors import WorldError
 from .crowd.crowd import Crowd
+from .crowd.movers import Movers
 from .engine_config import EngineConfig
 from .geometry import Twist2D
 from .model import build_model
@@ -84,6 +85,8 @@ class Engine:
                                            crowd=self.config.crowd)
         #: The walking people (``config.crowd``), ``None`` without any.
         self.crowd = Crowd(self.config.crowd, world) if self.config.crowd.count else None
+        #: The world's moving obstacles (``world.moving``: ``dynbarn``), ``None`` without any.
+        self.movers = None if world.moving is None else Movers(world.moving, self.ids.mover_mocap)
         self.data = mujoco.MjData(self.model)
         body = self.ids.robot_body
         #: The robot's sensors by ``SENSOR_TABLE`` name (an optional one it lacks: absent).
@@ -165,6 +168,8 @@ class Engine:
                              self.robot.footprint.bounding_radius_m)
             d.mocap_pos[list(self.ids.crowd_mocap), :2] = self.crowd.pos
             self._turn_crowd()
+        if self.movers is not None:
+            self.movers.place(d, self.world.seed, self.seed)
         mujoco.mj_forward(self.model, d)
         self.odometry.reset(self.start)
         self._odom = (self.start, Twist2D())
@@ -180,6 +185,8 @@ class Engine:
         before = self.robot_pose()
         warnings = d.warning.number[_BAD_STATE_WARNINGS].copy()
         walks = [w for w in (self._person_walk(), self._crowd_walk()) if w is not None]
+        if self.movers is not None:
+            walks.append(self.movers.walk(d, self.config.control_dt_s, self.config.substeps))
         touched = False
         if not walks:  # a static world: contact with it lasts while the servos push
             mujoco.mj_step(m, d, nstep=self.config.substeps)

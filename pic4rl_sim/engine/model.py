@@ -23,9 +23,10 @@ from .worlds.spec import WorldSpec
 ROBOT_BODY = "pic4rl_robot"
 PERSON_BODY = "pic4rl_person"
 CROWD_BODY = "pic4rl_crowd"  # + the person's index in the crowd
-# Collision bits: the robot's geom also accepts bit 2, which only the crowd's people carry, so
-# they touch the robot and nothing else (not the walls, not each other: the forces keep them
-# apart); the walls and the single person keep MuJoCo's default bit 1.
+MOVER_BODY = "pic4rl_mover"  # + the moving obstacle's index in ``WorldSpec.moving``
+# Collision bits: the robot's geom also accepts bit 2, which only the crowd's people and the
+# moving obstacles carry, so they touch the robot and nothing else (not the walls, not each
+# other); the walls and the single person keep MuJoCo's default bit 1.
 _CROWD_CONTYPE = 2
 SERVO_TIME_CONSTANT_S = 0.01  # velocity servos settle this fast below their force caps
 GRIP_TIME_CONSTANT_S = 0.001  # a wheel's sideways grip is stiff: slip = v·ω·this on an arc
@@ -60,6 +61,7 @@ class ModelIds:
     act_wz: int
     person_mocap: int  # -1 when the world has no person
     crowd_mocap: tuple[int, ...] = ()  # the crowd's people, in the crowd's order
+    mover_mocap: tuple[int, ...] = ()  # the moving obstacles, in ``WorldSpec.moving``'s order
 
 
 def yaw_inertia_kg_m2(robot: RobotSpec) -> float:
@@ -71,8 +73,9 @@ def yaw_inertia_kg_m2(robot: RobotSpec) -> float:
 
 
 def _add_world(spec: mujoco.MjSpec, world: WorldSpec) -> None:
-    """Floor, light and obstacles of a generated world (a user's MJCF file has its own), and
-    the person as a mocap body that the engine moves along its waypoints."""
+    """Floor, light and obstacles of a generated world (a user's MJCF file has its own), the
+    person as a mocap body that the engine moves along its waypoints, and the moving
+    obstacles as mocap bodies that it moves on their trajectories."""
     body = spec.worldbody
     if world.mjcf_path is None:
         body.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
@@ -99,6 +102,13 @@ def _add_world(spec: mujoco.MjSpec, world: WorldSpec) -> None:
         person.add_geom(name="person", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                         size=[p.radius_m, p.height_m / 2, 0], pos=[0, 0, p.height_m / 2],
                         rgba=_RGBA["person"])
+    if world.moving is not None:
+        m = world.moving
+        for i, (x, y) in enumerate(m.starts):
+            mover = body.add_body(name=f"{MOVER_BODY}{i}", mocap=True, pos=[x, y, 0])
+            mover.add_geom(name=f"{MOVER_BODY}{i}_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                           size=[m.radius_m, m.height_m / 2, 0], pos=[0, 0, m.height_m / 2],
+                           rgba=_RGBA["obstacle"], contype=_CROWD_CONTYPE, conaffinity=0)
 
 
 def _add_crowd(spec: mujoco.MjSpec, crowd: CrowdParams) -> None:
@@ -195,4 +205,6 @@ def _ids(model: mujoco.MjModel, world: WorldSpec, people: int) -> ModelIds:
         person_mocap=person,
         crowd_mocap=tuple(int(model.body_mocapid[model.body(f"{CROWD_BODY}{i}").id])
                           for i in range(people)),
+        mover_mocap=tuple(int(model.body_mocapid[model.body(f"{MOVER_BODY}{i}").id])
+                          for i in range(len(world.moving.starts) if world.moving else 0)),
     )

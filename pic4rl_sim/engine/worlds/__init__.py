@@ -3,9 +3,10 @@
 ``spec`` (``WorldSpec``: walls, obstacles and people as boxes and cylinders), ``generators``
 (``WORLD_TABLE``: each generator's parameters and ``make_world``), ``arena`` (walls and the
 seeded random stream), ``barn`` (BARN's 300 worlds, from ``data/``), ``barn_like`` (BARN-like
-fields from a seed), ``clutter3d`` (obstacles below and above a LiDAR's plane), ``vineyard``
-(the vineyard's rows and lanes) and ``mjcf`` (a user's MJCF world; loads MuJoCo). Names are
-imported on first use.
+fields from a seed), ``dynbarn`` (them crossed by moving obstacles), ``held_out`` (the
+benchmarks' test worlds, never trained on), ``clutter3d`` (obstacles below and above a LiDAR's
+plane), ``vineyard`` (the vineyard's rows and lanes) and ``mjcf`` (a user's MJCF world; loads
+MuJoCo). Names are imported on first use.
 """
 
 from __future__ import annotations

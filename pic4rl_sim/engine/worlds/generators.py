@@ -26,6 +26,7 @@ from ..person_walk import corner_occluders, leg_speeds
 from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
 from .barn import BarnParams, barn
 from .barn_like import BarnLikeParams, barn_like
+from .dynbarn import DynBarnParams, dynbarn
 from .clutter3d import Clutter3dParams, clutter3d
 from .spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 from .vineyard import VineyardParams, vineyard
@@ -300,7 +301,7 @@ WORLD_TABLE: dict[str, Generator] = {g.params.KIND: g for g in (
     Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
     Generator(VineyardParams, vineyard), Generator(PersonParams, person),
     Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like),
-    Generator(Clutter3dParams, clutter3d))}
+    Generator(Clutter3dParams, clutter3d), Generator(DynBarnParams, dynbarn))}
 
 
 def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:

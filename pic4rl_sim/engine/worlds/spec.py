@@ -100,13 +100,39 @@ class PersonSpec:
 
 
 @dataclass(frozen=True)
+class MovingObstacles:
+    """Cylinders moving on smooth random trajectories inside ``field`` (xmin, ymin, xmax, ymax:
+    their centres stay ``radius_m`` inside it, bouncing off its edges): where each starts (m),
+    its heading (rad) and mean speed (m/s), the speeds' range (m/s) and the trajectories'
+    correlation time (s); ``engine.crowd.movers`` moves them."""
+
+    field: tuple[float, float, float, float]
+    starts: tuple[tuple[float, float], ...]
+    headings_rad: tuple[float, ...]
+    speeds_m_s: tuple[float, ...]
+    speed_range_m_s: tuple[float, float]
+    turn_time_s: float
+    radius_m: float = 0.15
+    height_m: float = 1.0
+
+    def __post_init__(self) -> None:
+        n = len(self.starts)
+        require(len(self.headings_rad) == n and len(self.speeds_m_s) == n, "moving.speeds_m_s",
+                self.speeds_m_s, f"one heading and one speed per obstacle ({n})")
+        lo, hi = self.speed_range_m_s
+        require(0 < lo <= hi and all(lo <= v <= hi for v in self.speeds_m_s),
+                "moving.speeds_m_s", self.speeds_m_s, f"speeds in [{lo}, {hi}] m/s, 0 < lo")
+
+
+@dataclass(frozen=True)
 class WorldSpec:
     """A world: arena bounds, static obstacles, optional person, spawn hints.
 
     ``spawn_poses``/``goal_points`` restrict sampling to those candidates (a vineyard's lane
     ends); empty means anywhere inside ``bounds`` with clearance. ``lanes`` are centre lines
     between crop rows (vineyard). ``mjcf_path`` is a user's MJCF file the engine builds on;
-    its obstacles were read into ``boxes``/``cylinders`` for sampling and markers.
+    its obstacles were read into ``boxes``/``cylinders`` for sampling and markers. ``moving``
+    are obstacles that the engine moves (``dynbarn``), absent from ``clearance``.
     """
 
     name: str
@@ -120,6 +146,7 @@ class WorldSpec:
     mjcf_path: Path | None = None
     seed: int = 0
     params: dict[str, float] = field(default_factory=dict, compare=False)
+    moving: MovingObstacles | None = None
 
     def __post_init__(self) -> None:
         xmin, ymin, xmax, ymax = self.bounds

@@ -309,7 +309,7 @@ def test_generator_params_describe_every_parameter(kind: str) -> None:
     assert described or kind == "barn"  # BARN's worlds are data: an index, no parameters
     for spec in described:
         assert type(spec.default) in (int, float) and spec.description and spec.bounds
-        assert (spec.unit != "") == spec.name.endswith(("_m", "_m_s"))
+        assert (spec.unit != "") == spec.name.endswith(("_m", "_m_s", "_s"))
         assert spec.check(spec.default) == spec.default
     with pytest.raises(ConfigError, match="did you mean"):
         world_params(kind + "x")
