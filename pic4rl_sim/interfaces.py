@@ -14,7 +14,7 @@ from enum import Enum
 
 from pic4rl_base.plugins import load_group
 
-from .engine.sensor_kinds import sonar
+from .engine.sensor_kinds import sonar, uwb
 
 
 class Direction(str, Enum):
@@ -167,13 +167,25 @@ PAUSE_PHYSICS = Interface(
 SONAR = tuple(Interface(sonar.topic_name(i), "sensor_msgs/msg/Range", Direction.PUB,
                         QosKind.SENSOR_DATA, f"sonar cone {i}'s range (m, REP 117)", Cadence.STEP,
                         f"with `sonar.count` > {i}") for i in range(sonar.MAX_CONES))
+#: A UWB tag's ranges (``engine.sensor_kinds.uwb``), one per anchor a robot's tag may range to,
+#: then the goal's tag; the anchors' positions, latched.
+UWB = tuple(Interface(uwb.topic_name(target), "sensor_msgs/msg/Range", Direction.PUB,
+                      QosKind.SENSOR_DATA, f"the UWB range to {what} (m, REP 117)", Cadence.STEP,
+                      when)
+            for target, what, when in (
+                *((f"a{i}", f"anchor a{i}", f"with `uwb.anchors_xy_m` of {i + 1}+ anchors")
+                  for i in range(uwb.MAX_ANCHORS)),
+                (uwb.GOAL_TAG, "the goal's tag", "with `uwb.goal_tag`")))
+UWB_ANCHORS = Interface(
+    uwb.ANCHORS_TOPIC, "geometry_msgs/msg/PoseArray", Direction.PUB, QosKind.LATCHED,
+    "the UWB anchors' positions, in name order", Cadence.EPISODE, "with UWB anchors")
 UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, *SONAR, PERSON_POSE,
+INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, *SONAR, *UWB, PERSON_POSE,
                    PEOPLE, CAMERA_INFO,
-              DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, WORLD_MARKERS, DIAGNOSTICS,
+              DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, UWB_ANCHORS, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)
 #: A user's sensors' topics: each an ``Interface`` that its package names in this entry-point
 #: group under the topic's name, published after the IMU's (so that the scan stays last).

@@ -19,8 +19,8 @@ from pic4rl_base.goal import Goal
 from pic4rl_base.plugins import load_group
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
-from pic4rl_sim.engine.sensor_kinds import sonar
-from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, SONAR, Interface
+from pic4rl_sim.engine.sensor_kinds import sonar, uwb
+from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, SONAR, UWB, Interface
 
 from . import cdr, decode
 from .frame import ScanData, SensorFrame, as_published
@@ -117,6 +117,8 @@ READING_TABLE = (
                 "e.g. nav2's /plan)"),
     *(FrameSensor(sonar.reading_name(i), topic, sonar.decode, sonar.cone_reader(i),
                   kind=sonar.NAME) for i, topic in enumerate(SONAR)),
+    *(FrameSensor(uwb.reading_name(target), topic, uwb.decode, uwb.target_reader(target),
+                  kind=uwb.NAME) for target, topic in zip(uwb.TARGETS, UWB)),
 )
 #: A user's readings, after pic4rl's: each a ``FrameSensor`` that its package names in this
 #: entry-point group under the reading's name (its sensor in ``pic4rl.sensors``).

@@ -31,12 +31,12 @@ from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
 from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
-from ..engine.sensor_kinds import sonar
+from ..engine.sensor_kinds import sonar, uwb
 from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
                           IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, SONAR, STEP_TOPICS, TF,
-                          TF_STATIC, WORLD_MARKERS, Interface)
+                          TF_STATIC, UWB, UWB_ANCHORS, WORLD_MARKERS, Interface)
 from .transforms import OdomTransform, static_transforms
 
 WORLD_FRAME = "world"
@@ -171,6 +171,8 @@ SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], 
     (lambda engine: True, _Imu),
     (lambda engine: sonar.NAME in engine.sensors,
      lambda engine, stamp: sonar.RangeMessages(engine, stamp, SONAR)),
+    (lambda engine: uwb.NAME in engine.sensors,
+     lambda engine, stamp: uwb.RangeMessages(engine, stamp, dict(zip(uwb.TARGETS, UWB)))),
     (lambda engine: engine.world.person is not None, _Person),
     (lambda engine: engine.crowd is not None, _People),
     (lambda engine: engine.depth is not None, _Depth),
@@ -287,13 +289,18 @@ def world_markers(world: WorldSpec, goal: Goal, stamp_ns: int) -> MarkerArray:
 
 def episode_messages(engine: Engine, stamp_ns: int,
                      topics: Container[str] | None = None) -> list[tuple[Interface, Any]]:
-    """The episode's messages (goal, plan, sensor frames, markers), stamped ``stamp_ns``, in
-    publishing order; of ``topics`` (relative names) only, when given (the rest not made)."""
+    """The episode's messages (goal, plan, sensor frames, UWB anchors, markers), stamped
+    ``stamp_ns``, in publishing order; of ``topics`` (relative names) only, when given (the
+    rest not made); a topic this engine has no message for (no UWB anchors) is left out."""
+    anchors_header = Header(frame_id=WORLD_FRAME)
+    set_stamp(anchors_header.stamp, stamp_ns)
     makers: dict[Interface, Callable[[], Any]] = {
         GOAL_POSE: lambda: goal_pose(engine.goal, stamp_ns),
         PLAN: lambda: plan_message(engine.plan(), stamp_ns),
         TF_STATIC: lambda: static_transforms(engine, stamp_ns),
+        UWB_ANCHORS: lambda: uwb.anchors_message(engine, anchors_header),
         WORLD_MARKERS: lambda: world_markers(engine.world, engine.goal, stamp_ns),
     }
-    return [(topic, makers[topic]()) for topic in EPISODE_TOPICS
+    made = [(topic, makers[topic]()) for topic in EPISODE_TOPICS
             if topics is None or topic.name in topics]
+    return [(topic, msg) for topic, msg in made if msg is not None]

@@ -61,8 +61,8 @@ from ..engine.geometry import Twist2D
 from ..engine.sampling import check_free
 from ..engine.worlds.spec import WorldSpec
 from ..errors import WorldError
-from ..interfaces import (CMD_VEL, DIAGNOSTICS, EPISODE_TOPICS, INTERFACE_TABLE, PAUSE_PHYSICS,
-                          RESET_WORLD, STEP_TOPICS, UNPAUSE_PHYSICS, Direction, Interface)
+from ..interfaces import (CMD_VEL, DIAGNOSTICS, INTERFACE_TABLE, PAUSE_PHYSICS, RESET_WORLD,
+                          STEP_TOPICS, UNPAUSE_PHYSICS, Direction, Interface)
 from .messages import PHYSICS_STATUS, StateMessages, episode_messages
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
@@ -98,7 +98,7 @@ class SimNode(Node):
                               seed=episode.seed)
         self._engine.reset(seed=episode.seed, start=episode.start, goal=episode.goal)
         self._messages = StateMessages(self._engine)
-        self._episode_pubs = {topic: self._publisher(topic) for topic in EPISODE_TOPICS}
+        self._episode_pubs: dict[Interface, Publisher] = {}
         self._diagnostics_pub = self._publisher(DIAGNOSTICS)
         self._status = DiagnosticArray(status=[DiagnosticStatus(
             name=PHYSICS_STATUS, hardware_id=self._config.robot.name)])
@@ -182,7 +182,13 @@ class SimNode(Node):
         """Goal, plan, sensor frames (``tf_static``), markers and a full set of sensor messages,
         all with the current stamp."""
         self._command = _STOP
-        for topic, msg in episode_messages(self._engine, self._stamp_ns):
+        messages = episode_messages(self._engine, self._stamp_ns)
+        made = {topic for topic, _ in messages}
+        for topic in [t for t in self._episode_pubs if t not in made]:
+            self.destroy_publisher(self._episode_pubs.pop(topic))  # no stale latched message
+        for topic, msg in messages:
+            if topic not in self._episode_pubs:
+                self._episode_pubs[topic] = self._publisher(topic)
             self._episode_pubs[topic].publish(msg)
         self._publish_state()
 

@@ -8,7 +8,8 @@ So a message's ``frame_id`` resolves through TF as on a real robot: a scan's ``l
 Sensor frames: ``laser`` at the LiDAR's mount (x, y, z) turned by its yaw; the depth image's
 ``camera_depth_optical_frame`` at the camera's mount, pitched down by its pitch, in the optical
 convention (REP 103: z forward, x right, y down); ``imu_link`` at the base's origin (the IMU
-reads the base's motion); a sonar ring's ``sonar_<i>`` at its mount, +x along cone i's axis.
+reads the base's motion); a sonar ring's ``sonar_<i>`` at its mount, +x along cone i's axis;
+a UWB tag's ``uwb_tag`` at its mount.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from tf2_msgs.msg import TFMessage
 from pic4rl_base.geometry import yaw_to_quaternion
 
 from ..engine.core import Engine
+from ..engine.sensor_kinds import NAMES as KIND_NAMES
 
 Quaternion = tuple[float, float, float, float]
 #: A sensor's frame in the base frame: (frame id, (x, y, z) m, quaternion (x, y, z, w)).
@@ -53,8 +55,9 @@ def sensor_frames(engine: Engine) -> tuple[MountedFrame, ...]:
         half = 0.5 * cam.mount_pitch_rad  # a positive pitch looks down: about +y
         pitch = (0.0, math.sin(half), 0.0, math.cos(half))
         frames.append((engine.depth.frame_id, cam.mount_xyz_m, _multiply(pitch, _OPTICAL)))
-    if "sonar" in engine.sensors:
-        frames.extend(engine.sensors["sonar"].frames())
+    for name in KIND_NAMES:  # the sonar ring's cones, the UWB tag
+        if name in engine.sensors:
+            frames.extend(engine.sensors[name].frames())
     return tuple(frames)
 
 

@@ -13,9 +13,9 @@ import numpy as np
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
+from pic4rl_base.geometry import Pose2D
 from pic4rl_bridge.readings.sensor_table import BY_NAME
 from pic4rl_bridge.recording import make_env
-from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.interfaces import RECORDED
 
 ROOT = Path(__file__).resolve().parents[2]

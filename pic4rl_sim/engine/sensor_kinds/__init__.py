@@ -7,4 +7,23 @@ the other way round (no import circle), so a module here imports no table. Kept 
 
 #: Their kinds' names, in ``SENSOR_TABLE``'s order: their random streams come after the crowd's,
 #: so that adding one leaves every earlier stream as it was.
-NAMES = ("sonar",)
+NAMES = ("sonar", "uwb")
+
+
+class Instant:
+    """A sensor's last reading, kept for the instant it was made at: the robot's pose, the
+    sim time and the random stream (an episode's), so that the several messages and readings
+    of one instant share one draw of noise."""
+
+    def __init__(self) -> None:
+        self._last: tuple[object, tuple[float, ...], object] | None = None
+
+    def get(self, rng: object, key: tuple[float, ...]) -> object | None:
+        """The reading made with ``rng`` at ``key``, or ``None``."""
+        last = self._last
+        return last[2] if last is not None and last[0] is rng and last[1] == key else None
+
+    def keep(self, rng: object, key: tuple[float, ...], reading: object) -> object:
+        """Keep ``reading`` as made with ``rng`` at ``key``; returns it."""
+        self._last = (rng, key, reading)
+        return reading

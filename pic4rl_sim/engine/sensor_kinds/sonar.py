@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any
 from pic4rl_base.errors import require
 from pic4rl_base.schema import FRACTION, Range, check, param
 
+from . import Instant
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -77,8 +79,8 @@ def _cone_directions(half_angle: float) -> np.ndarray:
 
 class SonarRing:
     """The ring on the engine's robot: every cone's rays in one ``mj_multiRay`` call, the
-    robot's own body skipped. A reading is kept for the pose, time and random stream (an
-    episode's) it was made with, so that its cones' messages and readings share one draw."""
+    robot's own body skipped; its cones' messages and readings of an instant share one draw
+    (``Instant``)."""
 
     frame_prefix = "sonar_"
 
@@ -100,7 +102,7 @@ class SonarRing:
         self._vec = np.empty((self._n, 3))
         self._geomid = np.empty(self._n, dtype=np.int32)
         self._dist = np.empty(self._n)
-        self._last: tuple[Any, tuple[float, ...], np.ndarray] | None = None
+        self._instant = Instant()
 
     @property
     def rays_per_cone(self) -> int:
@@ -119,8 +121,9 @@ class SonarRing:
         import numpy as np
 
         key = (pose.x, pose.y, pose.yaw, float(data.time))
-        if self._last is not None and self._last[0] is rng and self._last[1] == key:
-            return self._last[2]
+        kept = self._instant.get(rng, key)
+        if kept is not None:
+            return kept  # type: ignore[return-value]
         spec = self.spec
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         mx, my, mz = spec.mount_xyz_m
@@ -142,9 +145,7 @@ class SonarRing:
             ranges[rng.random(spec.count) < spec.dropout_prob] = np.inf
         ranges[ranges > spec.range_max_m] = np.inf
         ranges[too_close | (ranges < spec.range_min_m)] = -np.inf
-        out = ranges.astype(np.float32)
-        self._last = (rng, key, out)
-        return out
+        return self._instant.keep(rng, key, ranges.astype(np.float32))  # type: ignore[return-value]
 
 
 def build(model: Any, spec: SonarSpec, body: int) -> SonarRing:

@@ -31,7 +31,10 @@ def panel(distance_m: float, bearing_rad: float, half_width_m: float) -> str:
             f'size="0.05 {half_width_m} 1"/>')
 
 
-def read(geoms: str, spec: SonarSpec, pose: Pose2D = Pose2D(0.0, 0.0, 0.0),
+ORIGIN = Pose2D(0.0, 0.0, 0.0)
+
+
+def read(geoms: str, spec: SonarSpec, pose: Pose2D = ORIGIN,
          seed: int = 0) -> np.ndarray:
     model, data, robot = world(geoms)
     return SonarRing(model, spec, exclude_body=robot).read(data, pose, np.random.default_rng(seed))
