@@ -30,6 +30,12 @@ if TYPE_CHECKING:  # pic4rl_sim.config imports mujoco: only when a sim section i
     from pic4rl_sim.config import SimConfig
 
 
+#: The env settings a ``Scenario`` resolves from (with the sim section): an env made from it
+#: (``for_env``) has the same.
+RESOLVED_KEYS = ("transport", "robot", "control_dt_s", "task", "ros.sim_node",
+                 "episodes.world_variants")
+
+
 class Scenario:
     """The robot and world an env runs: from ``config.sim_params`` when the env drives a
     simulator (``EnvConfig.simulated``), else from ``config.robot`` (a real robot: no world;
@@ -84,16 +90,30 @@ class Scenario:
     def for_env(self, config: EnvConfig | None = None) -> Scenario:
         """This scenario for one more env: its own current world (``select``), the worlds built
         so far shared (they are immutable); ``config``, when given, is that env's config, which
-        may differ from this one's in ``ros.*`` alone (each env's namespace)."""
+        may differ from this one's in what the resolution does not read (``RESOLVED_KEYS`` and
+        the sim section: each env's namespace, a test's episodes, its recording); the robot's
+        speed limits follow it."""
         if config is not None:
             mine, theirs = self.config.to_params(), config.to_params()
-            changed = sorted(k for k in mine if mine[k] != theirs[k] and not k.startswith("ros."))
+            keys = RESOLVED_KEYS + (("episodes.file",) if self.variants else ())
+            changed = [k for k in keys if mine[k] != theirs[k]]
             if changed or config.sim_params != self.config.sim_params:
                 raise ConfigError(f"{(changed or ['sim'])[0]}: differs from the scenario's "
-                                  "config; expected another ros.* setting alone")
+                                  f"config; expected the same {', '.join(RESOLVED_KEYS)} and "
+                                  "sim section")
         twin = copy.copy(self)
         twin.config, twin.variant = config or self.config, None
+        if config is not None:
+            twin.robot = RobotInfo.of(self.spec, config, self.robot.control_dt_s)
         return twin
+
+    @property
+    def node_values(self) -> dict[str, Any]:
+        """``values`` as a sim node's params file carries them (``pic4rl-run``'s, a suite's ROS
+        cells', a stack's driver's): empty arrays left out, as a ROS params file cannot type
+        one (the sim's array parameters default to empty)."""
+        return {k: v for k, v in self.values.items()
+                if not (isinstance(v, (list, tuple)) and not v)}
 
     def world_at(self, variant: int | None) -> WorldSpec | None:
         """Variant ``variant`` of the simulated world (``None``: the sim's own), built once."""

@@ -29,6 +29,7 @@ from pic4rl_base import params_file
 from pic4rl_base.entry import entry_point
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError
+from pic4rl_bridge.scenario import Scenario
 
 from pic4rl_agents.launch.rosargs import RosArgs, split_ros_args
 from pic4rl_agents.launch.simproc import start_sim, stop_group
@@ -84,7 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         env["ROS_DOMAIN_ID"] = str(run_env.ros.domain_id)
     with tempfile.TemporaryDirectory(prefix="pic4rl-run-") as tmp:
         sim_file = Path(tmp) / "sim.yaml"
-        sim_file.write_text(params_file.dump({"/**": run_env.sim_params}))
+        sim_file.write_text(params_file.dump({"/**": Scenario(run_env).node_values}))
         sims: list[subprocess.Popen[bytes]] = []
         for rank in range(n_envs):
             namespace = env_namespace(run_env, rank, n_envs) or "/"

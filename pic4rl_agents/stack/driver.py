@@ -208,23 +208,28 @@ def _call(env: StackEnv, service: str, what: str) -> None:
 def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
                 episodes: int, seed: int, domain: int, cwd: Path,
                 sim_file: Path) -> list[str]:
-    """Drive ``episodes`` episodes of ``stack`` in the env of ``config`` (an ``EnvConfig`` or
-    a params file; + ``overrides``): the sim node (its params written to ``sim_file``) and the
-    stack in ROS domain ``domain``, both stopped at the end; the episodes' outcomes in order."""
+    """Drive ``episodes`` episodes of ``stack`` in the env of ``config`` (a ``Scenario``, an
+    ``EnvConfig`` or a params file; + ``overrides``): the sim node (its resolved params written
+    to ``sim_file``) and the stack in ROS domain ``domain``, both stopped at the end; the
+    episodes' outcomes in order. The config is resolved once (a ``Scenario`` is used as it is)."""
     from pic4rl_base import params_file
     from pic4rl_bridge.config import EnvConfig, load_env_config
     from pic4rl_bridge.recording import record_from_config
+    from pic4rl_bridge.scenario import Scenario
 
     ros_env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
                os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
     realtime = stack.clock == "realtime"
-    base = config if isinstance(config, EnvConfig) else load_env_config(config)
+    given = config if isinstance(config, Scenario) else None
+    base = given.config if given else (
+        config if isinstance(config, EnvConfig) else load_env_config(config))
     env_config = base.replace(**{**overrides, "agent": stack.name, "transport": "ros",
                                  "ros.domain_id": domain, "topics.cmd_vel": SIM_CMD_VEL,
                                  "ros.step_mode": "rate" if realtime else "lockstep"})
     clock = ({"clock_mode": "realtime", "real_time_factor": stack.real_time_factor}
              if realtime else {"clock_mode": "lockstep"})
-    sim_file.write_text(params_file.dump({"/**": {**env_config.sim_params, **clock}}))
+    scenario = given.for_env(env_config) if given else Scenario(env_config)
+    sim_file.write_text(params_file.dump({"/**": {**scenario.node_values, **clock}}))
     # The sim and the stack start before the env is built: their start-up (seconds of DDS
     # discovery, the longest part of a short run) goes on while it is.
     sim = start_child([sys.executable, "-m", "pic4rl_sim.node", "--ros-args",
@@ -236,7 +241,7 @@ def drive_stack(stack: StackSpec, config: Any, *, overrides: Mapping[str, Any],
     outcomes: list[str] = []
     try:
         process.start()
-        env = StackEnv(env_config, stack=stack, failure=process.failure)
+        env = StackEnv(scenario, stack=stack, failure=process.failure)
         recorded = record_from_config(env) if env_config.record.enabled else env
         action = np.zeros(env.action_space.shape, dtype=np.float32)
         fresh = True  # a stack started and not yet seen ready

@@ -23,11 +23,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pic4rl_agents.testing.plan import AgentSpec, TestPlan, recorded, resolve_agents
+from pic4rl_agents.testing.plan import (AgentSpec, TestPlan, free_env, recorded,
+                                        resolve_agents, scenario_of, test_env)
 from pic4rl_agents.testing.policies import is_plugin
 from pic4rl_base import atomic, params_file
-from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.episodes import GoalsAndPoses, load_goals_and_poses, save_goals_and_poses
+from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.scenario import Scenario
 from pic4rl_metrics.bags.inputs import METADATA
 
 from .suite import Cell
@@ -72,9 +74,9 @@ def _plan(cell: Cell, root: Path, *, episodes: int, pairs: str, domain: int) -> 
                     env_overrides=env, sim_overrides=sim, progress=False)
 
 
-def _cell_pairs(cell: Cell, root: Path, env: EnvConfig) -> GoalsAndPoses | None:
+def _cell_pairs(cell: Cell, root: Path, scenario: Scenario) -> GoalsAndPoses | None:
     """The cell's pairs in episode order: its file's, or drawn once from the pair set's seed
-    (in ``env``'s robot and world) into ``<cell>/pairs.json``; ``None`` for the env's own
+    (in ``scenario``'s robot and world) into ``<cell>/pairs.json``; ``None`` for the env's own
     episodes."""
     if cell.pairs.file:
         return load_goals_and_poses(cell.pairs.file)
@@ -83,11 +85,12 @@ def _cell_pairs(cell: Cell, root: Path, env: EnvConfig) -> GoalsAndPoses | None:
     path = cell_dir(root, cell) / PAIRS
     if not path.is_file():
         from pic4rl_bridge.episodes import PairSampler
-        from pic4rl_bridge.scenario import Scenario
         from pic4rl_sim.engine.sampling import PAIR_KINDS
 
-        sampler = PairSampler.for_scenario(Scenario(env.replace(transport="inprocess")))
-        drawn = sampler.goals_and_poses(cell.pairs.random, seed=cell.pairs.seed,  # type: ignore[union-attr]
+        sampler = PairSampler.for_scenario(scenario)
+        if sampler is None:
+            raise ConfigError(f"{cell.pairs.label}: drawn pairs need a simulated world")
+        drawn = sampler.goals_and_poses(cell.pairs.random, seed=cell.pairs.seed,
                                         kind=PAIR_KINDS[cell.pairs.kind])
         with atomic.replacing(path) as tmp:
             save_goals_and_poses(drawn, tmp, overwrite=True,
@@ -127,7 +130,7 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
     if cell.stack is not None:  # the stack's driver starts the sim and the stack
         from pic4rl_agents.stack.driver import drive_stack
 
-        drive_stack(cell.stack, spec.run.env, overrides={}, episodes=episodes, seed=seed,
+        drive_stack(cell.stack, scenario_of(spec), overrides={}, episodes=episodes, seed=seed,
                     domain=domain, cwd=Path(cell.stack_cwd), sim_file=folder / SIM_PARAMS)
         return
     if cell.transport != "ros":
@@ -136,7 +139,7 @@ def _drive(spec: AgentSpec, cell: Cell, folder: Path, *, episodes: int, seed: in
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE":
            os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")}
     sim_file = atomic.write_text(folder / SIM_PARAMS,
-                                 params_file.dump({"/**": spec.run.env.sim_params}))
+                                 params_file.dump({"/**": scenario_of(spec).node_values}))
     sim = start_sim(["--params-file", str(sim_file)], env)
     try:
         drive_agent(spec, episodes=episodes, seed=seed, progress=False)
@@ -189,7 +192,7 @@ def _drive_from(cell: Cell, root: Path, folder: Path, *, first: int, total: int,
     plan = _plan(cell, root, episodes=total - first, pairs=file, domain=domain)
     spec = (recorded(_stack_agent(cell, plan), folder) if cell.stack is not None
             else resolve_agents(plan, folder)[0])  # its files, read once
-    pairs = _cell_pairs(cell, root, spec.run.env)
+    pairs = _cell_pairs(cell, root, scenario_of(spec))
     if pairs is not None:
         _pairs_from(pairs, first, folder)
     _drive(spec, cell, folder, episodes=total - first, seed=cell.seed + first, domain=domain)
@@ -199,12 +202,11 @@ def _stack_agent(cell: Cell, plan: TestPlan) -> AgentSpec:
     """A stack's row in the env a plugin gets (``plan``'s params files alone, the cell's
     world, variant and robot), set up for testing as the tester sets up every agent's."""
     from pic4rl_agents.runs.config import ENV_NODE, NODES
-    from pic4rl_agents.testing.plan import _free_env, _test_env
 
     files = params_file.load(plan.params_files, NODES)
     pairs = plan.env_overrides.get("episodes.file", files[ENV_NODE].get("episodes.file") or None)
-    run, _ = _free_env(plan, f"stack {cell.agent}", [], files)
-    return _test_env(AgentSpec(cell.agent, run), plan, pairs)
+    run, _ = free_env(plan, f"stack {cell.agent}", [], files)
+    return test_env(AgentSpec(cell.agent, run), plan, pairs)
 
 
 def expected_episodes(cell: Cell) -> int:

@@ -6,7 +6,6 @@ a wrong one is a ``ConfigError`` in one line naming the file and the key.
 
 from __future__ import annotations
 
-import dataclasses
 import re
 import shutil
 from collections.abc import Mapping
@@ -126,14 +125,14 @@ def check_worlds(env: str, worlds: list[tuple[str, int | None, str]], robots: li
     from pic4rl_agents.runs.config import NODES, run_config
     from pic4rl_bridge.scenario import Scenario
 
-    test = run_config(params_file.load([env], NODES), [env]).env.replace(**{
-        "transport": TransportName.INPROCESS.value, "robot": "", "episodes.file": "",
-        "episodes.world_variants": ""})
+    files = params_file.load([env], NODES)  # read once; each cell's sim overrides on it
+    test = {"transport": TransportName.INPROCESS.value, "robot": "", "episodes.file": "",
+            "episodes.world_variants": ""}
 
     def built(key: str, shown: str, **sim: Any) -> None:
-        params = {**test.sim_params, **{k: v for k, v in sim.items() if v not in ("", None)}}
+        given = {k: v for k, v in sim.items() if v not in ("", None)}
         try:
-            Scenario(dataclasses.replace(test, sim_params=params)).world_at(None)
+            Scenario(run_config(files, [env], env=test, sim=given).env).world_at(None)
         except ConfigError as err:
             raise ConfigError(f"{where}.{key}: {shown}: {err}") from err
 

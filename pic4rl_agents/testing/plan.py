@@ -79,6 +79,8 @@ class AgentSpec:
     env_from: str = ""  # a baseline's or plugin's env, in words
     plugin: str = ""  # FILE.py:NAME, package.module:NAME or an entry point (testing.policies)
     algorithm: str = ""  # an SB3/sb3-contrib class beyond the table's (--algorithm RecurrentPPO)
+    #: Its test env resolved (``test_env``), once, for the sim node's file and the env.
+    scenario: Scenario | None = field(default=None, compare=False, repr=False)
 
     @property
     def env_line(self) -> str:
@@ -223,7 +225,7 @@ def _plugins(plan: TestPlan, agents: list[AgentSpec], files: Sections) -> list[A
         if is_plugin(location if sep else item):
             ref = location if sep else item
             own = load_plugin(ref)[1]
-            run, env_from = _free_env(plan, f"--agent {ref}", agents, files)
+            run, env_from = free_env(plan, f"--agent {ref}", agents, files)
             specs.append(AgentSpec(name if sep else own, run, plugin=ref, env_from=env_from))
     return specs
 
@@ -234,19 +236,19 @@ def _baseline(plan: TestPlan, baseline: str, agents: list[AgentSpec],
     plan's params files (``files``, read once)."""
     if baseline not in BASELINES:
         raise ConfigError(f"--baseline {baseline!r}: expected one of {', '.join(BASELINES)}")
-    run, env_from = _free_env(plan, f"--baseline {baseline}", agents, files)
+    run, env_from = free_env(plan, f"--baseline {baseline}", agents, files)
     check_fits(baseline, run.env)  # before any run directory or bag exists
     settings = baselines_config(files[BASELINES_NODE], plan.baseline_overrides,
                                 where=" + ".join(plan.params_files))
     return AgentSpec(baseline, run, baseline=baseline, settings=settings, env_from=env_from)
 
 
-def _free_env(plan: TestPlan, flag: str, agents: list[AgentSpec],
+def free_env(plan: TestPlan, flag: str, agents: list[AgentSpec],
               files: Sections) -> tuple[RunConfig, str]:
     """The env of an agent not trained here (a baseline, a plugin: ``flag``) and where it came
     from, in words: the first trained agent's (at the robot's full speed range), or the
     plan's params files (``files``, read once)."""
-    # The test env's one world, as the agents' (``_test_env``): never a world per episode.
+    # The test env's one world, as the agents' (``test_env``): never a world per episode.
     unset = {"episodes.world_variants": ""}
     if agents:
         run = agents[0].run
@@ -281,7 +283,7 @@ def resolve_agents(plan: TestPlan, run_dir: Path | None = None) -> list[AgentSpe
     if not specs:
         raise ConfigError("nothing to test: give --agent PATH and/or --baseline "
                           f"{'|'.join(BASELINES)}")
-    tested = [_test_env(s, plan, pairs) for s in specs]
+    tested = [test_env(s, plan, pairs) for s in specs]
     return tested if run_dir is None else [recorded(s, run_dir) for s in tested]
 
 
@@ -292,23 +294,30 @@ def first_env(plan: TestPlan) -> EnvConfig:
 
 def recorded(spec: AgentSpec, run_dir: Path) -> AgentSpec:
     """``spec`` with its episodes recorded to ``<run_dir>/<its name>/``."""
-    return replace(spec, run=spec.run.replace(env={
-        "record.enabled": True, "record.bags_dir": str(run_dir), "record.run": spec.name}))
+    run = spec.run.replace(env={
+        "record.enabled": True, "record.bags_dir": str(run_dir), "record.run": spec.name})
+    return replace(spec, run=run, scenario=spec.scenario and spec.scenario.for_env(run.env))
 
 
-def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
+def scenario_of(spec: AgentSpec) -> Scenario:
+    """The resolved test env of ``spec``: ``test_env``'s, else resolved now."""
+    return spec.scenario or Scenario(spec.run.env)
+
+
+def test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
     """``spec`` set up for testing: the test episodes, no curriculum, in the test env's world
-    (never the training worlds of ``episodes.world_variants``)."""
+    (never the training worlds of ``episodes.world_variants``), resolved once (``scenario``)."""
     overrides: dict[str, Any] = {"agent": spec.name, "episodes.starting_episodes": 0,
                                  "episodes.world_variants": ""}
-    from pic4rl_sim.config import SimParams
-
-    env = spec.run.env
-    if not env.simulated:
+    if not spec.run.env.simulated:
         return replace(spec, run=spec.run.replace(env={**overrides, "episodes.file": ""}),
                        episode_set=_without_sim(plan, pairs))
-    sim = env.sim_params
-    world = sim.get("world", SimParams.world), sim.get("world_variant", SimParams.world_variant)
+    from pic4rl_sim.config import SimParams
+
+    scenario = Scenario(spec.run.env.replace(**{"episodes.world_variants": ""}))
+    sim = scenario.sim  # none: a sim node with no sim section, in its defaults' world
+    world = (sim.world.kind, sim.world.variant) if sim else (SimParams.world,
+                                                              SimParams.world_variant)
     if pairs is None and world == DEFAULT_PAIRS_WORLD:
         pairs = str(DEFAULT_PAIRS)
     if plan.random or not pairs:
@@ -324,7 +333,8 @@ def _test_env(spec: AgentSpec, plan: TestPlan, pairs: str | None) -> AgentSpec:
                           "episodes.change_goal_and_pose": 1})
         episode_set = ("the paper's 5 indoor pairs" if pairs == str(DEFAULT_PAIRS)
                        else "pairs file") + f" {pairs}"
-    return replace(spec, run=spec.run.replace(env=overrides), episode_set=episode_set)
+    run = spec.run.replace(env=overrides)
+    return replace(spec, run=run, episode_set=episode_set, scenario=scenario.for_env(run.env))
 
 
 def _without_sim(plan: TestPlan, pairs: str | None) -> str:

@@ -81,7 +81,7 @@ def drive_agent(spec: AgentSpec, *, episodes: int, seed: int, progress: bool) ->
     from pic4rl_bridge.env import NavEnv
     from pic4rl_bridge.recording import record_from_config
 
-    nav = NavEnv(spec.run.env)  # what the policy sees; ``env`` records it
+    nav = NavEnv(spec.scenario or spec.run.env)  # what the policy sees; ``env`` records it
     env = record_from_config(nav) if spec.run.env.record.enabled else nav
     outcomes: list[str] = []
     headline, words = TASK_TABLE[spec.run.env.task].headline

@@ -23,7 +23,7 @@ from pic4rl_base.schema import to_params
 from pic4rl_bridge.config import EnvConfig, EpisodesConfig
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.recording import make_env
-from pic4rl_bridge.scenario import Scenario, parse_variants
+from pic4rl_bridge.scenario import Scenario
 
 from .curriculum import STAGE_KEY, Curriculum
 
@@ -97,20 +97,19 @@ def eval_env_config(env: EnvConfig, evaluation: EvalConfig) -> EnvConfig:
                           "transport": "inprocess", "record.enabled": False})
 
 
-def check_no_test_world(config: EnvConfig) -> None:
+def check_no_test_world(scenario: Scenario) -> None:
     """``ConfigError`` when a training or evaluation env would run one of a benchmark's test
     worlds (``HELD_OUT``: BARN's 50, the dynamic BARN's 60; docs/results.md): its
-    ``episodes.world_variants``, or without them the sim's ``world_variant``."""
+    ``episodes.world_variants``, or without them the sim's ``world_variant`` (both as
+    ``scenario`` resolved them)."""
     from pic4rl_sim.engine.worlds.held_out import HELD_OUT
 
-    kind = config.sim_params.get("world")
-    if kind not in HELD_OUT:
+    if scenario.sim is None or scenario.sim.world.kind not in HELD_OUT:
         return
-    held = HELD_OUT[kind]
-    key = "episodes.world_variants"
-    variants = parse_variants(config.episodes.world_variants)
+    held = HELD_OUT[scenario.sim.world.kind]
+    key, variants = "episodes.world_variants", scenario.variants
     if not variants:
-        key, variants = "sim world_variant", (int(config.sim_params.get("world_variant", 0)),)
+        key, variants = "sim world_variant", (scenario.sim.world.variant,)
     banned = sorted(set(variants) & set(held.variants()))
     if banned:
         raise ConfigError(f"{key}: holds {held.name} test world(s) "
@@ -147,9 +146,8 @@ def make_vec_env(config: EnvConfig | Scenario, *, n_envs: int = 1, seed: int = 0
     rank the same env kwargs (ours differ by ROS namespace and node) and names monitor files
     ``<rank>`` (ours are ``<session>_<rank>``, which a resume and the reward curve read).
     ``config`` is resolved once (a ``Scenario`` given is used as it is), before any env."""
-    given = config if isinstance(config, Scenario) else None
-    check_no_test_world(given.config if given else config)  # no env ever sees a test world
-    scenario = given or Scenario(config)
+    scenario = config if isinstance(config, Scenario) else Scenario(config)
+    check_no_test_world(scenario)  # no env ever sees a test world
 
     def factory(rank: int) -> Callable[[], gym.Env]:
         mine = scenario.for_env(env_for_rank(scenario.config, rank, n_envs))

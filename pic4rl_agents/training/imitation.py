@@ -143,14 +143,15 @@ class Imitation:
     checkpoints, the clock); ``run`` returns False when a callback ended training or the
     steps reached ``max_steps``."""
 
-    def __init__(self, config: ImitationConfig, env: VecEnv, env_config: EnvConfig, model: Any,
-                 callback: CallbackList, *, batch_size: int, seed: int = 0,
+    def __init__(self, config: ImitationConfig, env: VecEnv, env_config: EnvConfig | Scenario,
+                 model: Any, callback: CallbackList, *, batch_size: int, seed: int = 0,
                  max_steps: int | None = None, sources: tuple[str, ...] = ()) -> None:
         self.config, self.env, self.model, self.callback = config, env, model, callback
         self.max_steps = max_steps
         section = params_file.load(sources, (BASELINES_NODE, *NODES))[BASELINES_NODE]  # experts'
         settings = baselines_config(section, where=" + ".join(sources))  # tuning, as baselines'
-        scenario = Scenario(env_config)  # resolved once, for every env's expert
+        # Resolved once, for every env's expert (the trainer's, when it hands it down).
+        scenario = env_config if isinstance(env_config, Scenario) else Scenario(env_config)
         self.experts = [make_expert(config.expert, scenario, settings)
                         for _ in range(env.num_envs)]
         self.data = Demonstrations()

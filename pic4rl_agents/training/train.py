@@ -21,7 +21,7 @@ import time
 import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
@@ -35,6 +35,9 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import BridgeError, TransportError
 
 from .args import build_parser, resolve
+
+if TYPE_CHECKING:
+    from pic4rl_bridge.scenario import Scenario
 
 log = logging.getLogger(__name__)
 
@@ -87,6 +90,8 @@ class Trainer:
         """Train this session (resumed where the run was), save, and close what it opened."""
         import torch
 
+        from pic4rl_bridge.scenario import Scenario
+
         from .callbacks import StopWhenSet, evaluate_saved
 
         cfg = self.config.train
@@ -94,6 +99,7 @@ class Trainer:
         if session is None:
             return self.run_dir
         env_cfg, seed = session
+        scenario = Scenario(env_cfg)  # resolved once: the training envs' and the experts'
         if cfg.torch_threads > 0:
             torch.set_num_threads(cfg.torch_threads)
         with contextlib.ExitStack() as stack:
@@ -101,7 +107,7 @@ class Trainer:
             if env_cfg.transport == "ros" and cfg.n_envs == 1:
                 node = stack.enter_context(_trainer_node(env_cfg, self.ros))
             started = time.perf_counter()
-            env = self._training_env(stack, env_cfg, seed, node)
+            env = self._training_env(stack, scenario, seed, node)
             model = self._model(env)
             self._stop.clear()
             callbacks = [StopWhenSet(self._stop), *self._callbacks(stack, env_cfg, started)]
@@ -110,13 +116,13 @@ class Trainer:
             self.layout.write_config(self.config.to_yaml())
             steps = model.num_timesteps
             stack.callback(self._save_if_trained, model, started, steps)
-            if self._imitate(model, env, env_cfg, callbacks):
+            if self._imitate(model, env, scenario, callbacks):
                 self._learn(model, callbacks)
             if not self.interrupted and model.num_timesteps > steps:  # judge the saved model
                 self.interrupted = not evaluate_saved(callbacks, self._stop, self._refitted)
         return self.run_dir
 
-    def _imitate(self, model: Any, env: Any, env_cfg: EnvConfig, callbacks: list[Any]) -> bool:
+    def _imitate(self, model: Any, env: Any, scenario: Scenario, callbacks: list[Any]) -> bool:
         """Imitation before RL when ``imitation.enabled`` (not on a resume: the resumed model
         has imitated already); False when a callback (the clock) ended training during it."""
         from stable_baselines3.common.callbacks import CallbackList
@@ -131,7 +137,7 @@ class Trainer:
         callback.init_callback(model)
         with stop_on_signal(self._stop):
             try:
-                imitation = Imitation(cfg.imitation, env, env_cfg, model, callback,
+                imitation = Imitation(cfg.imitation, env, scenario, model, callback,
                                       batch_size=cfg.batch_size, seed=cfg.seed,
                                       max_steps=cfg.max_steps, sources=self.config.sources)
                 done = imitation.run()
@@ -181,12 +187,12 @@ class Trainer:
         for partial in atomic.remove_partials(resume.run_dir):
             log.info("removed %s, a file a killed session left half-written", partial)
 
-    def _training_env(self, stack: contextlib.ExitStack, env_cfg: EnvConfig, seed: int,
+    def _training_env(self, stack: contextlib.ExitStack, scenario: Scenario, seed: int,
                       node: Any) -> Any:
         from .envs import make_vec_env
 
         cfg = self.config.train
-        env = make_vec_env(env_cfg, n_envs=cfg.n_envs, seed=seed, reward_scale=cfg.reward_scale,
+        env = make_vec_env(scenario, n_envs=cfg.n_envs, seed=seed, reward_scale=cfg.reward_scale,
                            curriculum=cfg.curriculum, vec_env=cfg.vec_env,
                            monitor_dir=self.layout.monitor, node=node,
                            prefix=f"{self.layout.session}_")

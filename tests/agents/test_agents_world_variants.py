@@ -14,6 +14,7 @@ from pic4rl_agents.training.envs import check_no_test_world, eval_env_config, ma
 from pic4rl_agents.testing import plan as testplan
 from pic4rl_bridge.config import load_env_config
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 BARN = ROOT / "config" / "env_barn.yaml"
@@ -31,8 +32,8 @@ def test_the_evaluation_walks_its_own_worlds_in_order() -> None:
     assert evaluation.episodes.world_variants == "5,11" and evaluation.episodes.ordered
     plain = eval_env_config(train, EvalConfig(pair_kind="any"))
     assert plain.episodes.world_variants == "" and not plain.episodes.ordered
-    check_no_test_world(train)
-    check_no_test_world(evaluation)
+    check_no_test_world(Scenario(train))
+    check_no_test_world(Scenario(evaluation))
 
 
 @pytest.mark.bad_input

@@ -7,6 +7,7 @@ sim section (``EnvConfig.sim_params``) to resolve it again."""
 from __future__ import annotations
 
 import ast
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -24,19 +25,16 @@ from pic4rl_bridge.scenario import Scenario
 ROOT = Path(__file__).resolve().parents[3]
 LIDAR = ROOT / "config" / "env_goto_lidar.yaml"
 
-#: The edges: where a config is loaded, written for a sim node's own process, checked before
-#: anything runs, or resolved (``Scenario``). Only these may read ``sim_params``.
+#: The edges: where a config is loaded or written as it was given, or resolved
+#: (``Scenario``). Only these read ``sim_params``; the rest (the sim node's params files of
+#: pic4rl-run, a suite's cells and a stack's driver, the test world, the BARN test-world
+#: check) take a ``Scenario``'s resolved values.
 EDGES = {
     "pic4rl_bridge/config.py",  # loads it
     "pic4rl_bridge/scenario.py",  # resolves it: the one place
     "pic4rl_bridge/env.py",  # NavEnv(config, sim=...) for users: merges it, then resolves once
     "pic4rl_bridge/recording.py",  # writes the run's config beside its bags
     "pic4rl_agents/runs/config.py",  # loads and writes the run's sections
-    "pic4rl_agents/launch/run.py", "pic4rl_agents/stack/driver.py",  # the sim node's file
-    "pic4rl_agents/suites/cell.py",  # the sim node's file
-    "pic4rl_agents/suites/checks.py",  # a suite's worlds and robots, checked before it runs
-    "pic4rl_agents/testing/plan.py",  # the test world, which picks the test pairs
-    "pic4rl_agents/training/envs.py",  # no BARN test world, refused before any env
 }
 
 
@@ -104,12 +102,18 @@ def test_a_scenario_given_with_overrides_is_resolved_again() -> None:
 
 
 @pytest.mark.bad_input
-def test_a_scenario_serves_another_env_only_in_another_namespace() -> None:
+def test_a_scenario_serves_another_env_only_where_it_resolves_the_same() -> None:
     resolved = Scenario(load_env_config(LIDAR))
     assert resolved.for_env(resolved.config.replace(**{"ros.namespace": "/r1"})).config \
         .ros.namespace == "/r1"
-    with pytest.raises(ConfigError, match=r"^episode_max_steps: differs from the scenario's"):
-        resolved.for_env(resolved.config.replace(episode_max_steps=3))
+    slower = resolved.for_env(resolved.config.replace(max_linear_m_s=0.2, episode_max_steps=3))
+    assert slower.robot.max_linear_m_s == 0.2 != resolved.robot.max_linear_m_s
+    assert slower.sim is resolved.sim and slower.values is resolved.values
+    with pytest.raises(ConfigError, match=r"^robot: differs from the scenario's"):
+        resolved.for_env(resolved.config.replace(robot="burger"))
+    with pytest.raises(ConfigError, match=r"^sim: differs from the scenario's"):
+        resolved.for_env(dataclasses.replace(
+            resolved.config, sim_params={**resolved.config.sim_params, "world": "empty"}))
 
 
 def test_imitation_experts_share_one_resolution(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -134,7 +138,7 @@ def test_no_module_below_the_edges_reads_the_raw_sim_section() -> None:
                 readers[path.relative_to(ROOT).as_posix()] = lines
     below = {f: lines for f, lines in readers.items() if f not in EDGES}
     assert not below, f"sim_params read below the edges (resolve it with Scenario): {below}"
-    assert {"pic4rl_bridge/scenario.py", "pic4rl_agents/training/envs.py"} <= readers.keys()
+    assert readers.keys() == EDGES  # each edge still reads it: the list stays true
 
 
 def test_the_check_sees_a_read(tmp_path: Path) -> None:
@@ -143,3 +147,59 @@ def test_the_check_sees_a_read(tmp_path: Path) -> None:
     assert _reads_sim_params(module) == [2]
     module.write_text("def f(scenario):\n    return scenario.values['world']  # sim_params\n")
     assert _reads_sim_params(module) == []
+
+
+def test_a_training_run_with_imitation_resolves_its_env_once(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """The trainer hands one ``Scenario`` to its envs and imitation's experts (no evaluation
+    env here: it would be another config, its own pairs, resolved on its own)."""
+    from agents_helpers import LIDAR_TD3, TINY
+
+    from pic4rl_agents.training import train
+
+    made: list[object] = []
+    init = Scenario.__init__
+
+    def counted_init(self, config):  # type: ignore[no-untyped-def]
+        made.append(config)
+        init(self, config)
+
+    monkeypatch.setattr(scenario_module.Scenario, "__init__", counted_init)
+    args = ["--no-progress", "--run", "once", "--hyperparams", f"runs_dir:{tmp_path}", *TINY,
+            "imitation.enabled:true", "imitation.bc_steps:20", "imitation.dagger_rounds:0",
+            "imitation.critic_warmup_steps:0", "eval.interval_steps:0", "eval.interval_s:0",
+            "checkpoint.interval_steps:0", "learning_starts:20", "-n", "40",
+            "--env-kwargs", "episode_max_steps:20", "min_linear_m_s:0.0",
+            "--ros-args", "--params-file", str(LIDAR_TD3)]
+    assert train.main(args) == 0
+    assert len(made) == 1
+    assert (tmp_path / "once" / "model.zip").is_file()
+
+
+def test_the_sim_node_takes_a_scenarios_resolved_values_as_its_params_file(
+        tmp_path: Path) -> None:
+    """What pic4rl-run, a suite's ROS cell and a stack's driver write for the sim node: the
+    resolved values (empty arrays, which a ROS params file cannot type, left out), declared
+    by the node as they are."""
+    import rclpy
+    from rclpy.node import Node
+
+    from pic4rl_base import params_file
+    from pic4rl_sim.node.parameters import declare
+
+    resolved = Scenario(load_env_config(LIDAR, transport="ros",
+                                        **{"robot": "burger", "max_linear_m_s": 0.2}))
+    assert resolved.values["start_pose"] == [] and "start_pose" not in resolved.node_values
+    file = tmp_path / "sim.yaml"
+    file.write_text(params_file.dump({"/**": resolved.node_values}))
+    context = rclpy.Context()
+    rclpy.init(args=["--ros-args", "--params-file", str(file)], context=context)
+    try:
+        node = Node("resolved_probe", context=context)
+        try:
+            _, values = declare(node)
+            assert values == resolved.values and values["robot"] == "burger"
+        finally:
+            node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
