@@ -9,8 +9,8 @@ moves them (``engine.crowd.movers``: speed and turn rate vary smoothly with corr
 ``turn_time_s``, and they bounce off the field's edges), its random stream seeded by the
 variant and the episode's seed. The start and goal are BARN's, below and above the field, so
 the robot must cross it. ``params`` carry ``reference_path_length_m``, the static field's
-shortest path for a point from start to goal (0.05 m grid), which marks the world as BARN's for
-the BARN score (docs/metrics.md). ``TEST_SCENES`` are its 60 held-out test scenes.
+shortest path from start to goal for a disc of a cell's radius, which marks the world as
+BARN's for the BARN score (docs/metrics.md). ``TEST_SCENES`` are its 60 held-out test scenes.
 """
 
 from __future__ import annotations
@@ -24,16 +24,18 @@ import numpy as np
 from pic4rl_base.errors import require
 from pic4rl_base.schema import Range, param, redefault
 
+from . import barn_like as grid
 from .arena import rng_for
-from .barn_like import _FIELD_Y, _LEFT_X, CELL_M, COLUMNS, ROWS, BarnLikeParams, barn_like
+from .barn_like import BarnLikeParams, barn_like
 from .spec import MovingObstacles, WorldSpec
 
 #: The held-out test scenes (``world_variant``s 0, 5, ..., 295, 60 of them): never trained on.
 TEST_SCENES = tuple(range(0, 300, 5))
 #: The field the moving obstacles stay in (xmin, ymin, xmax, ymax, m): BARN's 28 x 30 cells,
 #: inside the enclosure's side columns.
-FIELD = (_LEFT_X + CELL_M / 2, _FIELD_Y - CELL_M / 2,
-         _LEFT_X + (COLUMNS + 0.5) * CELL_M, _FIELD_Y + (ROWS - 0.5) * CELL_M)
+FIELD = (grid._LEFT_X + grid.CELL_M / 2, grid._FIELD_Y - grid.CELL_M / 2,
+         grid._LEFT_X + (grid.COLUMNS + 0.5) * grid.CELL_M,
+         grid._FIELD_Y + (grid.ROWS - 0.5) * grid.CELL_M)
 _SPEEDS = Range(0.1, 1.5)
 
 
@@ -63,11 +65,16 @@ class DynBarnParams(BarnLikeParams):
 
 
 def _reference_path_m(world: WorldSpec) -> float:
-    """The static field's shortest path for a point from start to goal (m)."""
-    from ..paths import plan_path  # the grid search, loaded only when a world is built
+    """The static field's shortest path from start to goal for a disc of a cell's radius
+    (0.075 m: no squeezing between diagonal neighbours, like a path of free cells), searched
+    on a 0.1 m grid between the enclosure's columns from just below the start to just above the
+    goal (a sixth of a 0.05 m grid over the whole world: a suite builds 60 worlds)."""
+    from ..paths import PathPlanner  # the grid search, loaded only when a world is built
 
     start, goal = world.spawn_poses[0], world.goal_points[0]
-    path = plan_path(world, start[:2], goal, robot_radius_m=0.0, margins_m=(0.0,))
+    band = (FIELD[0], start.y - 0.5, FIELD[2], goal[1] + 0.5)
+    path = PathPlanner(WorldSpec("field", band, cylinders=world.cylinders),
+                       robot_radius_m=grid.RADIUS_M, resolution_m=0.1).path(start[:2], goal)
     return float(np.hypot(*np.diff(path, axis=0).T).sum())
 
 
