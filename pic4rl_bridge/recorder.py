@@ -27,7 +27,7 @@ from rosbags.interfaces import Qos
 from pic4rl_base import atomic
 from pic4rl_base.errors import OutputError
 from pic4rl_metrics.bags.bagwriter import DEFAULT_QOS, LATCHED_QOS, BagWriter, qos_record
-from pic4rl_metrics.contract import STORAGES, EpisodeFacts, Outcome, plain
+from pic4rl_metrics.contract import STORAGES, CollisionRule, EpisodeFacts, Outcome, plain
 from pic4rl_sim.interfaces import QosKind, find
 
 from .errors import RecorderError
@@ -113,14 +113,16 @@ class EpisodeBag:
         with _as_recorder_error():
             self._bag.write_facts(self._facts, stamp_ns)
 
-    def close(self, outcome: Outcome | str, stamp_ns: int, reason: str | None = None) -> Path:
+    def close(self, outcome: Outcome | str, stamp_ns: int, reason: str | None = None,
+              rule: CollisionRule | str | None = None) -> Path:
         """End the episode: publish the ``outcome`` (one of the contract's
-        ``WRITTEN_OUTCOMES``) at ``stamp_ns`` (ns), store every fact, the outcome and the
-        ``reason`` it was cut short (if any) in ``custom_data``, write ``metadata.yaml``;
-        return the bag directory."""
+        ``WRITTEN_OUTCOMES``) at ``stamp_ns`` (ns), store every fact, the outcome, the
+        ``reason`` it was cut short (if any) and the ``rule`` that made it a collision (if
+        any) in ``custom_data``, write ``metadata.yaml``; return the bag directory."""
         with _as_recorder_error():
             word = self._bag.write_outcome(outcome, stamp_ns)
-            self._bag.close(replace(self._facts, outcome=word, end_reason=reason))
+            self._bag.close(replace(self._facts, outcome=word, end_reason=reason,
+                                    collision_rule=None if rule is None else CollisionRule(rule)))
         log.info("episode bag %s: %s, %d messages", self.path, word.value,
                  sum(self.counts.values()))
         return self.path

@@ -41,7 +41,8 @@ class Recordable(Protocol):
     - ``offered_qos(topic)``: how a topic's publisher offered it (``None``: not known).
 
     At an episode's end ``info["outcome"]`` is one of the contract's outcomes; an ``aborted``
-    one's ``info["reason"]`` is the bag's ``end_reason``.
+    one's ``info["reason"]`` is the bag's ``end_reason``, a ``collision``'s
+    ``info["collision_rule"]`` its ``collision_rule``.
     """
 
     tap: Tap | None
@@ -107,7 +108,8 @@ class RecordEpisodes(gym.Wrapper[Any, Any, Any, Any]):
                 raise RecorderError(f"info['outcome']: {word!r} at the episode's end is "
                                     f"invalid; expected one of "
                                     f"{', '.join(o.value for o in Outcome)}") from None
-            self._end(outcome, info.get("reason") if outcome is Outcome.ABORTED else None)
+            self._end(outcome, info.get("reason") if outcome is Outcome.ABORTED else None,
+                      info.get("collision_rule"))
         return obs, reward, terminated, truncated, info
 
     def abort(self, reason: str) -> None:
@@ -122,8 +124,10 @@ class RecordEpisodes(gym.Wrapper[Any, Any, Any, Any]):
         self._end(None)
         super().close()
 
-    def _end(self, outcome: Outcome | None, reason: str | None = None) -> None:
-        """Close the episode's bag: with its ``outcome`` (and ``reason``), else without one."""
+    def _end(self, outcome: Outcome | None, reason: str | None = None,
+             rule: str | None = None) -> None:
+        """Close the episode's bag: with its ``outcome`` (and ``reason``, or a collision's
+        ``rule``), else without one."""
         bag, self.bag = self.bag, None
         if bag is None:
             return
@@ -135,7 +139,7 @@ class RecordEpisodes(gym.Wrapper[Any, Any, Any, Any]):
         if outcome is None:
             bag.abort()
         else:
-            bag.close(outcome, source.stamp_ns, reason)
+            bag.close(outcome, source.stamp_ns, reason, rule)
 
 
 def run_params(config: EnvConfig) -> dict[str, Any]:

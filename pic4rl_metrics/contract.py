@@ -94,6 +94,15 @@ class Outcome(str, Enum):
             raise ConfigError(msg) from err
 
 
+class CollisionRule(str, Enum):
+    """Which rule ended an episode as a ``collision``: ``SENSED``, the paper's (a sensed point
+    closer to the footprint than ``collision_tolerance_m``, what a real robot can judge), or
+    ``CONTACT``, a simulator's contact (the robot touched something, sensed or not)."""
+
+    SENSED = "sensed"
+    CONTACT = "contact"
+
+
 #: The outcome words of an episode that ran its course (the agent's or the physics' end).
 OUTCOMES = tuple(o.value for o in Outcome if o not in (Outcome.ABORTED, Outcome.UNKNOWN))
 #: The outcome words a writer records: those, and ``aborted`` with an ``end_reason``
@@ -129,6 +138,15 @@ TOLERANCE_DEFAULTS_M = {"goal_tolerance_m": GOAL_TOLERANCE_M,
 
 def _outcome(raw: Any, key: str, source: str) -> Outcome:
     return Outcome.parse(str(raw), source=f"{source}: {key}")
+
+
+def _collision_rule(raw: Any, key: str, source: str) -> CollisionRule:
+    text = str(raw).strip().lower()
+    rules = {r.value: r for r in CollisionRule}
+    if text not in rules:
+        raise ConfigError(f"{source}: {key}: {raw!r} is not a collision rule; expected one of "
+                          f"{', '.join(rules)}")
+    return rules[text]
 
 
 def _fact(decoder: decode.Decoder, encoder: Any = None) -> Any:
@@ -190,6 +208,8 @@ class EpisodeFacts:
     outcome: Outcome | None = _fact(_outcome)
     #: Why the env cut the episode short (an ``aborted`` outcome), in words.
     end_reason: str | None = _fact(decode.text)
+    #: Which rule ended a ``collision`` episode (``CollisionRule``); ``None`` otherwise.
+    collision_rule: CollisionRule | None = _fact(_collision_rule)
     #: Time of the outcome event (ns, on the pose topic's time base) when it was recorded.
     outcome_stamp_ns: int | None = None
     extra: Mapping[str, str] = field(default_factory=dict)

@@ -156,8 +156,9 @@ WORLD_MARKERS = Interface(
     "the world's boxes and cylinders, and the goal", Cadence.EPISODE)
 DIAGNOSTICS = Interface(
     "diagnostics", "diagnostic_msgs/msg/DiagnosticArray", Direction.PUB, QosKind.RELIABLE,
-    "status `sim: physics`: OK, or ERROR with the reason when the physics diverged",
-    Cadence.STATUS)
+    "status `sim: physics`: OK, or ERROR with the reason when the physics diverged; status "
+    "`sim: contact`: WARN (`touching`) when the robot touched anything during the step, sensed "
+    "or not, else OK (`clear`)", Cadence.STATUS)
 RESET_WORLD = Interface(
     "reset_world", "std_srvs/srv/Empty", Direction.SRV, None, "starts the next episode")
 PAUSE_PHYSICS = Interface(

@@ -1,7 +1,8 @@
 """How close the nearest obstacle is to the robot's footprint, from what the robot senses.
 
 The paper's collision test: any scan point closer to the footprint than
-``collision_tolerance_m``. It runs every step on every beam, so it is plain vectorized numpy:
+``collision_tolerance_m``; in simulation also the engine's contact (``assess``). It runs
+every step on every beam, so it is plain vectorized numpy:
 beams to points in the base frame (``ScanData.points``), then the exact signed distance to the
 footprint, a circle or a box (``Footprint.signed_distance``).
 Robots without a LiDAR fall back on the depth image (each column's nearest pixel that is not
@@ -18,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pic4rl_base.geometry import Pose2D, sensor_to_base
+from pic4rl_metrics.contract import CollisionRule
 
 from ..config import EnvConfig
 from ..readings.frame import ScanData, SensorFrame
@@ -119,20 +121,29 @@ def obstacle_distance(frame: SensorFrame, robot: RobotInfo) -> float:
 
 class Safety(NamedTuple):
     """One step's collision check: nearest obstacle (m), whether the footprint plus
-    ``collision_tolerance_m`` is violated, whether one is within ``warning_tolerance_m``,
-    the streak of violating steps and whether it reached ``collision_steps``."""
+    ``collision_tolerance_m`` is violated or the robot touches something, whether an obstacle
+    is within ``warning_tolerance_m``, the streak of violating steps, whether the episode ends
+    as a collision, and by which rule (``None`` when it goes on)."""
 
     min_obstacle_m: float
     collision: bool
     warning: bool
     streak: int
     ended: bool
+    rule: CollisionRule | None = None
 
 
 def assess(frame: SensorFrame, robot: RobotInfo, config: EnvConfig, streak: int) -> Safety:
-    """The collision check every task shares; ``streak`` counts the violating steps before."""
+    """The collision check every task shares; ``streak`` counts the violating steps before.
+
+    The sensed rule (the paper's): a sensed point closer than ``collision_tolerance_m`` for
+    ``collision_steps`` steps. In simulation (``frame.contact`` known) a contact ends the
+    episode too, sensed or not: a box below the LiDAR's plane stops the robot without a
+    sensed point. Both at one step: ``SENSED``."""
     distance = obstacle_distance(frame, robot)
-    collision = distance < config.collision_tolerance_m
-    streak = streak + 1 if collision else 0
-    return Safety(distance, collision, distance < config.warning_tolerance_m, streak,
-                  streak >= config.collision_steps)
+    near = distance < config.collision_tolerance_m
+    streak = streak + 1 if near else 0
+    rule = (CollisionRule.SENSED if streak >= config.collision_steps
+            else CollisionRule.CONTACT if frame.contact else None)
+    return Safety(distance, near or bool(frame.contact), distance < config.warning_tolerance_m,
+                  streak, rule is not None, rule)

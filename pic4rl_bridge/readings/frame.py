@@ -70,7 +70,10 @@ class SensorFrame:
     ``pose`` and ``twist`` come from the configured pose topic (wheel odometry by default, in
     the frame the goal is given in); ``goal`` is the current goal in that frame; ``depth`` is
     height × width metres (float32, ±inf out of range); ``person`` is the person's pose;
-    ``plan`` is the latest global plan (k × 2, m, in the goal's frame).
+    ``plan`` is the latest global plan (k × 2, m, in the goal's frame). ``contact`` says
+    whether the robot touched anything during the step, sensed or not, as only a simulator
+    knows it (the engine's ``StepResult.collided``); ``None``: not known (a real robot, a
+    reset's frame).
     """
 
     stamp_ns: int
@@ -78,14 +81,16 @@ class SensorFrame:
     twist: Twist2D
     goal: Goal | None
     readings: Mapping[str, Any]
+    contact: bool | None
 
     def __init__(self, stamp_ns: int, pose: Pose2D, twist: Twist2D,
                  goal: Goal | None = None,
-                 readings: Mapping[str, Any] | None = None, **sensors: Any) -> None:
+                 readings: Mapping[str, Any] | None = None, contact: bool | None = None,
+                 **sensors: Any) -> None:
         """``sensors`` by name add to (or replace) ``readings``; a ``None`` one is absent
         (``dataclasses.replace(frame, scan=None)`` drops the scan)."""
         for name, value in (("stamp_ns", stamp_ns), ("pose", pose), ("twist", twist),
-                            ("goal", goal)):
+                            ("goal", goal), ("contact", contact)):
             object.__setattr__(self, name, value)
         merged = {**(readings or {}), **sensors} if sensors else readings or {}
         object.__setattr__(self, "readings", MappingProxyType(

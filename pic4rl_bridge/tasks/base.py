@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_base.goal import Goal
-from pic4rl_metrics.contract import Outcome
+from pic4rl_metrics.contract import CollisionRule, Outcome
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
 
@@ -46,8 +46,8 @@ class Judgement:
     """One step judged: named reward terms (scaled), the outcome that ends the episode
     (``GOAL`` or ``COLLISION``; ``None`` goes on), whether the footprint plus
     ``collision_tolerance_m`` is violated now, the streak of such steps, whether an obstacle is
-    within ``warning_tolerance_m``, and the nearest obstacle to the footprint (m, ``inf`` if
-    none seen)."""
+    within ``warning_tolerance_m``, the nearest obstacle to the footprint (m, ``inf`` if
+    none seen), and which rule made a ``COLLISION`` (``perception.collision.assess``)."""
 
     terms: Mapping[str, float]
     outcome: Outcome | None
@@ -55,6 +55,7 @@ class Judgement:
     collision_streak: int
     warning: bool
     min_obstacle_m: float
+    collision_rule: CollisionRule | None = None
 
     @property
     def reward(self) -> float:
@@ -70,6 +71,8 @@ class Judgement:
         if outcome is not None:
             info["outcome"] = outcome.value
             info["is_success"] = outcome is Outcome.GOAL
+        if outcome is Outcome.COLLISION and self.collision_rule is not None:
+            info["collision_rule"] = self.collision_rule.value
         return info
 
 

@@ -148,7 +148,7 @@ class _GoToPose(Task):
         outcome = Outcome.GOAL if reached else Outcome.COLLISION if crashed else None
         return Judgement(terms=terms, outcome=outcome, collision=safety.collision,
                          collision_streak=safety.streak, warning=safety.warning,
-                         min_obstacle_m=safety.min_obstacle_m)
+                         min_obstacle_m=safety.min_obstacle_m, collision_rule=safety.rule)
 
 
 def _goal(context: EpisodeContext) -> tuple[float, float]:

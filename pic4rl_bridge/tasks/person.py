@@ -102,7 +102,8 @@ class PersonMonitoringTask(Task):
                  "step": reward.step}
         return Judgement(terms=terms, outcome=Outcome.COLLISION if safety.ended else None,
                          collision=safety.collision, collision_streak=safety.streak,
-                         warning=safety.warning, min_obstacle_m=safety.min_obstacle_m)
+                         warning=safety.warning, min_obstacle_m=safety.min_obstacle_m,
+                         collision_rule=safety.rule)
 
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         """The desired distance and the camera's field of view, which the person metrics

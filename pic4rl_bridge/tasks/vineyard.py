@@ -81,7 +81,7 @@ class VineyardTask(Task):
         outcome = Outcome.GOAL if done else Outcome.COLLISION if crashed else None
         return Judgement(terms=terms, outcome=outcome, collision=safety.collision,
                          collision_streak=safety.streak, warning=safety.warning,
-                         min_obstacle_m=safety.min_obstacle_m)
+                         min_obstacle_m=safety.min_obstacle_m, collision_rule=safety.rule)
 
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         return {"row_centerline": _centerline(context).tolist()}

@@ -6,12 +6,14 @@ every sensor once; a step tracks the command for one control period, then reads 
 once. Values pass through the same float32 buffers and quaternions as the node's messages, so
 the frames equal the ROS transport's bit for bit. When recording, it builds the node's own
 messages (``pic4rl_sim.node.messages``), decodes the frame from them and hands them to the tap
-serialized, so its bags equal the node's too. A request for another variant of the world builds a new
-engine on it, as the node does when its ``world_variant`` changed.
+serialized, so its bags equal the node's too. A step's frame carries the engine's contact
+(``SensorFrame.contact``), as the node's ``diagnostics`` do. A request for another variant of
+the world builds a new engine on it, as the node does when its ``world_variant`` changed.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
@@ -95,7 +97,7 @@ class InProcessTransport(Transport):
         result = self.engine.step(command)
         self.fault = result.reason if result.diverged else None
         self._stamp_ns += self._control_dt_ns
-        return self._frame()
+        return dataclasses.replace(self._frame(), contact=result.collided)
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
         """As the sim node and the ROS transport offer it."""

@@ -1,6 +1,6 @@
 """What the ROS transport asks of a simulator node (``ros.sim_node``): the episode's set-up as
 one atomic parameter request, the check that only one simulator answers on our names, and its
-per-step physics status."""
+per-step physics and contact statuses."""
 
 from __future__ import annotations
 
@@ -64,15 +64,16 @@ def check_one_sim(node: Node, sim_node: str, goal_topic: str, pose_topic: str) -
                 "(-r __ns:=/robot2) or ROS_DOMAIN_ID")
 
 
-def subscribe_status(node: Node, faults: dict[int, str]) -> Topic:
-    """Our sim's per-step ``diagnostics`` status (``pic4rl_sim.node``): an ERROR says the
-    physics diverged and the robot was put back at its start; its reason goes to ``faults``
-    under the step's stamp (ns). The returned topic holds the last status's stamp. Read from
-    the CDR bytes (``cdr.statuses``: no message objects built each step)."""
-    from pic4rl_sim.node.messages import PHYSICS_STATUS  # the engine's: only with our sim
+def subscribe_status(node: Node, faults: dict[int, str], contacts: set[int]) -> Topic:
+    """Our sim's per-step ``diagnostics`` statuses (``pic4rl_sim.node``): an ERROR physics
+    status says the physics diverged and the robot was put back at its start; its reason goes
+    to ``faults`` under the step's stamp (ns); a contact status above OK (the robot touched
+    something) puts the stamp in ``contacts``. The returned topic holds the last status's
+    stamp. Read from the CDR bytes (``cdr.statuses``: no message objects built each step)."""
+    from pic4rl_sim.node.messages import CONTACT_STATUS, PHYSICS_STATUS  # only with our sim
 
     entry = Topic(DIAGNOSTICS.name, DIAGNOSTICS.type)
-    error = DiagnosticStatus.ERROR[0]
+    error, ok = DiagnosticStatus.ERROR[0], DiagnosticStatus.OK[0]
 
     def on_status(data: bytes) -> None:
         read = cdr.statuses(data)
@@ -86,8 +87,22 @@ def subscribe_status(node: Node, faults: dict[int, str]) -> Topic:
                 entry.stamp_ns = stamp_ns
                 if level == error:
                     faults[stamp_ns] = message
+            elif name == CONTACT_STATUS and level != ok:
+                contacts.add(stamp_ns)
 
     sub = node.create_subscription(DiagnosticArray, DIAGNOSTICS.name, on_status,
                                    profile(bridge_qos(QosKind.RELIABLE)), raw=True)
     entry.name = sub.topic_name
     return entry
+
+
+def settle(faults: dict[int, str], contacts: set[int], before_ns: int,
+           stamp_ns: int) -> tuple[str | None, bool]:
+    """A step's statuses, from after ``before_ns`` to ``stamp_ns`` (ns), taken out of
+    ``faults`` and ``contacts`` with every older one: the first fault's reason (``None``: none)
+    and whether the robot touched anything."""
+    void = {s: faults.pop(s) for s in sorted(s for s in faults if s <= stamp_ns)}
+    reasons = [reason for s, reason in void.items() if s > before_ns]
+    touched = {s for s in contacts if s <= stamp_ns}
+    contacts -= touched
+    return (reasons[0] if reasons else None), any(s > before_ns for s in touched)

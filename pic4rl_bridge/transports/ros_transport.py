@@ -18,13 +18,15 @@ topic, scan or depth image, with a newer stamp, and every other needed topic at 
 needed topic silent longer than ``ros.max_sensor_age_s`` stops the robot (zero ``cmd_vel``)
 and raises ``StaleSensor``, which the env turns into an aborted episode.
 With our sim node, a step also waits for the sim's status of that step on ``diagnostics``: an
-ERROR (the physics diverged; the robot is back at its start) becomes the transport's ``fault``.
+ERROR (the physics diverged; the robot is back at its start) becomes the transport's ``fault``,
+a contact the frame's ``contact`` (``None`` without our sim: a real robot's).
 """
 
 from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 from collections.abc import Callable
 from typing import Any
 
@@ -50,7 +52,7 @@ from ..errors import EpisodeRejected, StaleSensor, TransportError
 from ..scenario import Scenario
 from ..readings import cdr, decode
 from ..readings.frame import SensorFrame
-from .ros_sim import check_one_sim, episode_request, subscribe_status
+from .ros_sim import check_one_sim, episode_request, settle, subscribe_status
 from .ros_topics import Topic, command_message, offered, receiver, silent, stale, wiring
 from ..readings.sensor_table import FrameSensor, build_frame
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Transport
@@ -89,10 +91,10 @@ class RosTransport(Transport):
         self._closed = False
         self._subscribe(config, sensors)
         self._faults: dict[int, str] = {}  # step stamp (ns) -> why the sim voided the episode
-        self._status: Topic | None = None
+        self._contacts: set[int] = set()  # step stamps (ns) at which the sim's robot touched
         self._status_live = False  # the sim publishes a status every step: wait for it
-        if config.ros.sim_node:
-            self._status = subscribe_status(node, self._faults)
+        self._status = (subscribe_status(node, self._faults, self._contacts)
+                        if config.ros.sim_node else None)
         self._cmd_stamped = config.ros.cmd_vel_type == "TwistStamped"
         kind = TwistStamped if self._cmd_stamped else Twist
         self._cmd_pub = node.create_publisher(kind, config.topics.cmd_vel,
@@ -252,10 +254,8 @@ class RosTransport(Transport):
             self._spin_until(lambda: time.monotonic() >= deadline, None, "control period")
         before = self._frame_stamp_ns
         frame = self._next_frame(before, inclusive=False)
-        void = [stamp for stamp in self._faults if stamp <= frame.stamp_ns]
-        reasons = [self._faults.pop(stamp) for stamp in sorted(void) if stamp > before]
-        self.fault = reasons[0] if reasons else None
-        return frame
+        self.fault, touched = settle(self._faults, self._contacts, before, frame.stamp_ns)
+        return replace(frame, contact=touched if self._status_live else None)
 
     def _needed(self) -> list[Topic]:
         """The topics every frame needs: the pose and the task's sensors sent every step."""

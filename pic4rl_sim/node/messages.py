@@ -44,6 +44,9 @@ BASE_FRAME = "base_link"
 #: Name of the sim node's per-step status on ``diagnostics``: ERROR when the physics diverged.
 PHYSICS_STATUS = "sim: physics"
 _RGBA = {
+#: Name of its per-step contact status: WARN (message ``touching``) when the robot touched
+#: anything during the step, sensed or not (``StepResult.collided``), else OK (``clear``).
+CONTACT_STATUS = "sim: contact"
     "wall": (0.75, 0.75, 0.72, 1.0), "furniture": (0.55, 0.38, 0.22, 1.0),
     "obstacle": (0.35, 0.45, 0.6, 1.0), "trunk": (0.4, 0.26, 0.13, 1.0),
     "canopy": (0.2, 0.55, 0.2, 0.6), "person": (0.9, 0.55, 0.2, 1.0),

@@ -12,7 +12,9 @@ wall-clock timer steps with the latest command, or a stop once it is older than
 ``cmd_timeout_s`` of sim time. Each step first publishes ``diagnostics`` (the step's stamp):
 its status ``sim: physics`` is OK, or ERROR with the reason when the physics diverged, which
 the engine logs (through this node's logger) and answers by putting the robot back at its
-start: the episode is void, and the bridge ends it as ``diverged``.
+start: the episode is void, and the bridge ends it as ``diverged``; its status ``sim: contact``
+is WARN when the robot touched anything during the step, sensed or not, else OK (the bridge
+ends the episode as a ``contact`` collision).
 
 Episodes: set ``seed``, ``world_variant``, ``start_pose``, ``goal`` (or any parameter) with the
 parameter services, whose result is the acknowledgement, then call ``reset_world``. The reset
@@ -63,7 +65,7 @@ from ..engine.worlds.spec import WorldSpec
 from ..errors import WorldError
 from ..interfaces import (CMD_VEL, DIAGNOSTICS, INTERFACE_TABLE, PAUSE_PHYSICS, RESET_WORLD,
                           STEP_TOPICS, UNPAUSE_PHYSICS, Direction, Interface)
-from .messages import PHYSICS_STATUS, StateMessages, episode_messages
+from .messages import CONTACT_STATUS, PHYSICS_STATUS, StateMessages, episode_messages
 from .parameters import NodeLogHandler, declare, rules_as_parameters, usage
 from .ros_interfaces import qos_profile, ros_type
 
@@ -101,7 +103,8 @@ class SimNode(Node):
         self._episode_pubs: dict[Interface, Publisher] = {}
         self._diagnostics_pub = self._publisher(DIAGNOSTICS)
         self._status = DiagnosticArray(status=[DiagnosticStatus(
-            name=PHYSICS_STATUS, hardware_id=self._config.robot.name)])
+            name=name, hardware_id=self._config.robot.name)
+            for name in (PHYSICS_STATUS, CONTACT_STATUS)])
         self._use_engine()
         self._publish_episode()
         self._serve()
@@ -250,9 +253,11 @@ class SimNode(Node):
         made at all without a subscriber (as the step's messages)."""
         if not self._diagnostics_pub.get_subscription_count():
             return
-        status = self._status.status[0]
+        status, contact = self._status.status
         status.level = DiagnosticStatus.ERROR if result.diverged else DiagnosticStatus.OK
         status.message = result.reason if result.diverged else "ok"
+        contact.level = DiagnosticStatus.WARN if result.collided else DiagnosticStatus.OK
+        contact.message = "touching" if result.collided else "clear"
         stamp = self._status.header.stamp
         stamp.sec, stamp.nanosec = divmod(self._stamp_ns, 1_000_000_000)
         self._diagnostics_pub.publish(self._status)

@@ -30,11 +30,11 @@ ALWAYS = ("stamp_ns", "pose", "twist", "goal")
 
 
 def test_a_frame_holds_the_tables_sensors_as_readings() -> None:
-    """A frame's fields are the ones every frame has and ``readings``; each sensor of the
-    table is a reading by its name (the stock ones also a typed accessor), so a new sensor
-    needs no new field."""
+    """A frame's fields are the ones every frame has, ``readings`` and a simulator's
+    ``contact`` (no sensor's: what the robot touched); each sensor of the table is a reading by
+    its name (the stock ones also a typed accessor), so a new sensor needs no new field."""
     fields = [f.name for f in dataclasses.fields(SensorFrame)]
-    assert fields == [*ALWAYS, "readings"]
+    assert fields == [*ALWAYS, "readings", "contact"]
     names = [s.name for s in READING_TABLE]
     frame = build_frame(1, (Pose2D(0.0, 0.0, 0.0), Twist2D()), None, names[::-1],
                         lambda sensor: f"value of {sensor.name}")
