@@ -11,8 +11,8 @@ import pytest
 from pic4rl_base.errors import ConfigError
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.core import Engine
-from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.ray_sensors import DepthCameraSpec
+from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.sampling import sample_start_goal
 from pic4rl_sim.engine.worlds.clutter3d import LIDAR_PLANE_M
 from pic4rl_sim.engine.worlds.generators import make_world
