@@ -1,6 +1,6 @@
 """The dynamic BARN's 60 test scenes are refused to training and evaluation envs as BARN's test
 worlds are (``pic4rl_sim.engine.worlds.held_out``), naming only the test scenes among the
-variants given."""
+variants given, and other variants are accepted."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from pic4rl_agents.training.envs import make_vec_env
+from pic4rl_agents.training.envs import check_no_test_world, make_vec_env
 from pic4rl_bridge.config import load_env_config
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.scenario import Scenario
 from pic4rl_sim.engine.worlds.dynbarn import TEST_SCENES
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -22,6 +23,11 @@ def _dynbarn(variants: str = "", world_variant: int = 1):
                              **{"episodes.world_variants": variants})
     return dataclasses.replace(config, sim_params={**config.sim_params, "world": "dynbarn",
                                                    "world_variant": world_variant})
+
+
+def test_variants_outside_the_test_scenes_are_accepted() -> None:
+    check_no_test_world(Scenario(_dynbarn("1:300:5,2:300:5")))
+    check_no_test_world(Scenario(_dynbarn(world_variant=301)))
 
 
 @pytest.mark.bad_input
