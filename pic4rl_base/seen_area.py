@@ -35,6 +35,26 @@ class SeenGrid:
     def area_m2(self) -> float:
         return self.count * self.resolution_m**2
 
+    @property
+    def bounds_m(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) (m) of the cells the grid holds (seen or not); all 0 when
+        empty."""
+        rows, cols = self._seen.shape
+        lo = self._origin * self.resolution_m
+        return (float(lo[0]), float(lo[1]), float(lo[0] + cols * self.resolution_m),
+                float(lo[1] + rows * self.resolution_m))
+
+    def seen_at(self, xy: np.ndarray) -> np.ndarray:
+        """Whether the cell of each point of ``xy`` (n, 2, m) has been seen."""
+        idx = np.floor(np.asarray(xy, dtype=float) / self.resolution_m).astype(np.int64)
+        local = idx - self._origin
+        rows, cols = self._seen.shape
+        inside = (local[:, 0] >= 0) & (local[:, 0] < cols) & (local[:, 1] >= 0) & (
+            local[:, 1] < rows)
+        out = np.zeros(len(local), dtype=bool)
+        out[inside] = self._seen[local[inside, 1], local[inside, 0]]
+        return out
+
     def add(self, x: float, y: float, yaw: float, bearing: np.ndarray, reach_m: np.ndarray) -> int:
         """Integrate one scan from a sensor at ``(x, y)`` heading ``yaw`` (m, rad): per beam,
         its bearing from the heading (rad) and how far it saw (m; NaN or <= 0: nothing)."""

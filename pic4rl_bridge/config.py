@@ -36,8 +36,8 @@ from .errors import ConfigError, require
 from .readings.sensor_table import READING_TABLE
 from .settings.baselines import PREFIX as BASELINES_PREFIX
 from .settings.baselines import ExplorerConfig
-from .settings.tasks import (TASK_TABLE, GoalInput, PersonConfig, RewardConfig, SensorName, TaskName,
-                             VineyardConfig)
+from .settings.tasks import (TASK_TABLE, ExploreConfig, GoalInput, PersonConfig, RewardConfig,
+                             SensorName, TaskName, VineyardConfig)
 
 
 class TransportName(ParamEnum):
@@ -261,6 +261,7 @@ class EnvConfig:
                                        "unused)")
     vineyard: VineyardConfig = section(VineyardConfig)
     person: PersonConfig = section(PersonConfig)
+    explore: ExploreConfig = section(ExploreConfig)
     episodes: EpisodesConfig = section(EpisodesConfig)
     topics: TopicsConfig = section(TopicsConfig)
     ros: RosConfig = section(RosConfig)

@@ -144,8 +144,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                                   sim_defaults or {})
         self.config = self.scenario.config
         self._task_spec = task_spec(self.config.task)
-        world = self.scenario.world if self._task_spec.uses_world else None
-        self.task = make_task(self.config, self.scenario.robot, world)
+        self.task = make_task(self.config, self.scenario.robot, self.scenario.world)
         self.observation_space, self.action_space = (self.task.observation_space,
                                                      self.task.action_space)
         e = self.config.episodes
@@ -213,8 +212,9 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         request = self._schedule.next_request(self._episode, self.np_random)
         request = dataclasses.replace(request, **{k: given[k] for k in ("seed", "start", "goal")
                                                   if k in given})
-        if self.scenario.select(request.world_variant):  # the episode's world, and its pairs
+        if self.scenario.select(request.world_variant):  # the episode's world, pairs and task
             self._sampler = PairSampler.for_scenario(self.scenario)
+            self.task = make_task(self.config, self.scenario.robot, self.scenario.world)
         kind = self._kind if "pairs" not in given else self._pair_kind(given["pairs"])
         if "pairs" in given:  # the drawn pair replaces the schedule's
             request = EpisodeRequest(request.seed, world_variant=request.world_variant)

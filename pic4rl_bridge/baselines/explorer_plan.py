@@ -140,14 +140,17 @@ class ExplorerPlan:
                 self._field = None
         return new
 
-    def update(self, frame: SensorFrame) -> tuple[np.ndarray, float]:
-        """The plan after ``frame`` (marked, planned anew when needed) and the arc length (m)
-        of the robot's projection on it. Calling it twice with one frame changes nothing."""
-        if frame.goal is None:
+    def update(self, frame: SensorFrame,
+               goal: tuple[float, float] | None = None) -> tuple[np.ndarray, float]:
+        """The plan to ``goal`` (default: the frame's) after ``frame`` (marked, planned anew
+        when needed) and the arc length (m) of the robot's projection on it. Calling it twice
+        with one frame changes nothing."""
+        goal = goal or frame.goal
+        if goal is None:
             raise ValueError("ExplorerPlan: the frame has no goal")
         new = self.observe(frame)
         xy = np.array([frame.pose.x, frame.pose.y])
-        goal = (float(frame.goal[0]), float(frame.goal[1]))
+        goal = (float(goal[0]), float(goal[1]))
         path = self._path
         s = offset = 0.0
         if path is not None and len(path) > 1:

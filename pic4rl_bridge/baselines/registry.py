@@ -20,6 +20,8 @@ package adds its own without editing it: a ``BaselineSpec`` named in the entry-p
 - ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
   bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
   hybrid.
+- ``frontier`` and ``random_walk`` (explore): Yamauchi's frontier-based exploration on the
+  robot's own grids and a random-walk floor (``pic4rl_bridge.baselines.exploration``).
 
 The first two and ``explorer`` are pure numpy over the env's decoded frame (pose, goal, scan): no
 ROS, no simulator.
@@ -122,6 +124,20 @@ def _row_follower(name: str) -> Callable[..., Baseline]:
     return make
 
 
+def _frontier(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+              settings: BaselinesConfig) -> Baseline:
+    from .exploration import FrontierExplorer
+
+    return FrontierExplorer(robot, settings.explorer)
+
+
+def _random_walk(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+                 settings: BaselinesConfig) -> Baseline:
+    from .exploration import RandomWalk
+
+    return RandomWalk(robot)
+
+
 def _heading(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
              settings: BaselinesConfig) -> Baseline:
     from .follow import HeadingController
@@ -153,6 +169,8 @@ BASELINE_TABLE: dict[str, BaselineSpec] = {
                                expert="centerline"),
     "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),
     "dwa_heading": BaselineSpec(("personMonitoring",), _heading, expert="dwa_heading"),
+    "frontier": BaselineSpec(("explore",), _frontier),
+    "random_walk": BaselineSpec(("explore",), _random_walk),
 }
 #: A user's baselines: each a ``BaselineSpec`` that its package names in this entry-point group.
 BASELINE_GROUP = "pic4rl.baselines"

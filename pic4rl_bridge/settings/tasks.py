@@ -119,6 +119,30 @@ class PersonConfig:
         self.dwa.check_as("person.dwa.")
 
 
+# -- explore ------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ExploreReward(CommonReward):
+    area: float = param(1.0, doc="explore: times the area newly seen this step (m², the "
+                        "episode's seen grid)")
+
+
+@dataclass(frozen=True)
+class ExploreConfig:
+    coverage_target: float = param(0.9, doc="the episode ends (a goal) once the area seen "
+                                   "reaches this share of the world's free area; 0: only at "
+                                   "the time budget or a collision (a real robot: the world "
+                                   "unknown)", range=NON_NEGATIVE)
+    crop_px: int = param(8, doc="the observation's seen-grid crop: this many pixels a side, "
+                         "round the robot, heading up", range=POSITIVE)
+    crop_cell_m: float = param(1.0, doc="the crop's pixel size", unit="m", range=POSITIVE)
+
+    def __post_init__(self) -> None:
+        require(self.coverage_target <= 1.0, "explore.coverage_target", self.coverage_target,
+                "a share in [0, 1]")
+
+
 # -- the registry ------------------------------------------------------------------------------
 
 
@@ -138,7 +162,9 @@ class TaskSpec:
     default); ``reward``: its scales' class; ``section``: its own ``nav_env`` section (name,
     class), if any; ``experts``: the ``imitation.expert`` names that label its states;
     ``build``: ``"module:function"`` making the task from ``(config, robot, world)``;
-    ``uses_world``: it reads the simulated world (the vineyard's lanes); ``per_sensor``: its
+    ``uses_world``: it reads the simulated world (the vineyard's lanes); ``judges_world``: only
+    its judgement reads it, not its observation (explore: the free area to cover), so it may
+    draw a world per episode (the env hands it each episode's); ``per_sensor``: its
     bags' task fact names the sensor (``goToPose/lidar``); ``headline``: the outcome that is
     the task's normal good end and its words in a test's table (personMonitoring has no goal:
     its episodes should last the time budget, ``timeout``, without a collision)."""
@@ -151,6 +177,7 @@ class TaskSpec:
     experts: tuple[str, ...] = ()
     section: tuple[str, type] | None = None
     uses_world: bool = False
+    judges_world: bool = False
     per_sensor: bool = False
     headline: tuple[str, str] = ("goal", "goals")
 
@@ -191,6 +218,12 @@ TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
              build="pic4rl_bridge.tasks.person:build",
              experts=("dwa_heading",), section=("person", PersonConfig),
              headline=("timeout", "full runs")),
+    TaskSpec("explore",
+             (EnvId("pic4rl/ExploreLidar-v0", "lidar"),),
+             sensors=("lidar",), reward=ExploreReward,
+             build="pic4rl_bridge.tasks.explore:build",
+             section=("explore", ExploreConfig), judges_world=True, per_sensor=True,
+             headline=("goal", "covered")),
 )}
 #: A user's tasks: each a ``TaskSpec`` that its package names in this entry-point group under
 #: the task's name; read before anything below derives from the table.

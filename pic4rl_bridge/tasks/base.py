@@ -121,7 +121,9 @@ class Task(ABC):
 
 def make_task(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None = None) -> Task:
     """The task ``config.task`` names (``pic4rl_bridge.settings.tasks.TASKS``), built by its
-    entry's ``build``; ``world``, when the task reads it (``uses_world``), is the simulated
-    world."""
-    task: Task = task_spec(config.task).make(config, robot, world)
+    entry's ``build``; ``world``, the simulated world of the episode, is passed on only to a
+    task that reads it (``uses_world`` or ``judges_world``)."""
+    spec = task_spec(config.task)
+    reads = spec.uses_world or spec.judges_world
+    task: Task = spec.make(config, robot, world if reads else None)
     return task

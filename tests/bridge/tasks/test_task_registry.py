@@ -17,7 +17,8 @@ from pic4rl_bridge.baselines.registry import BASELINE_TASKS, check_fits
 from pic4rl_bridge.config import EnvConfig, env_config_from_params
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.robot_info import RobotInfo
-from pic4rl_bridge.settings.tasks import (TASK_TABLE, EnvId, GoToPoseReward, PersonConfig, PersonReward,
+from pic4rl_bridge.settings.tasks import (TASK_TABLE, EnvId, ExploreConfig, GoToPoseReward,
+                                          PersonConfig, PersonReward,
                                           TaskName, TaskSpec, VineyardConfig, VineyardReward,
                                           env_ids, task_spec)
 from pic4rl_bridge.tasks import make_task
@@ -37,6 +38,7 @@ def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaul
                                "sim_defaults": {"world": "vineyard", "depth.enabled": True}},
         "pic4rl/PersonMonitoring-v0": {"task": "personMonitoring", "sensor": "lidar",
                                        "sim_defaults": {"robot": "omni", "world": "person"}},
+        "pic4rl/ExploreLidar-v0": {"task": "explore", "sensor": "lidar"},
     }
     for env_id, kwargs in pic4rl_bridge.ENV_IDS.items():
         assert gym.spec(env_id).kwargs == kwargs
@@ -65,9 +67,10 @@ def test_an_entrys_ids_observe_through_its_sensors():
 
 
 def test_the_task_choice_is_the_registry():
-    assert [t.value for t in TaskName] == ["goToPose", "vineyard", "personMonitoring"]
+    assert [t.value for t in TaskName] == ["goToPose", "vineyard", "personMonitoring",
+                                           "explore"]
     with pytest.raises(ConfigError, match=r"task: 'toy' is invalid; expected one of goToPose, "
-                                          r"vineyard, personMonitoring"):
+                                          r"vineyard, personMonitoring, explore"):
         env_config_from_params({"task": "toy"})
     with pytest.raises(ConfigError, match="task: 'toy' is invalid"):
         task_spec("toy")
@@ -91,6 +94,7 @@ def test_each_task_reads_its_own_reward_scales_from_the_one_reward_section():
         500.0, 7.0, 3.0, -9.0)
     own = {spec.name: {f.name for f in dataclasses.fields(spec.reward)} for spec in TASK_TABLE.values()}
     assert own["vineyard"] == {"collision", "step", "progress", "centering", "row_end"}
+    assert own["explore"] == {"collision", "step", "area"}
     assert own["personMonitoring"] == {"collision", "step", "facing", "person_distance",
                                        "bearing"}
     assert "goal" in own["goToPose"] and "progress" not in own["goToPose"]
@@ -104,7 +108,8 @@ def test_each_task_reads_its_own_reward_scales_from_the_one_reward_section():
 
 def test_a_tasks_section_is_its_entrys():
     sections = {spec.section for spec in TASK_TABLE.values() if spec.section is not None}
-    assert sections == {("vineyard", VineyardConfig), ("person", PersonConfig)}
+    assert sections == {("vineyard", VineyardConfig), ("person", PersonConfig),
+                        ("explore", ExploreConfig)}
     config = env_config_from_params({"task": "personMonitoring", "person.distance_m": 1.5,
                                      "vineyard.end_tolerance_m": 0.2})
     assert config.person == PersonConfig(distance_m=1.5)
@@ -118,7 +123,8 @@ def test_the_baselines_come_from_their_table_and_the_facts_from_the_entries():
                               "planner": ("goToPose",), "explorer": ("goToPose",),
                               "centerline": ("vineyard",),
                               "row_follower": ("vineyard",),
-                              "dwa_heading": ("personMonitoring",)}
+                              "dwa_heading": ("personMonitoring",),
+                              "frontier": ("explore",), "random_walk": ("explore",)}
     check_fits("centerline", EnvConfig(task="vineyard"))
     with pytest.raises(ConfigError, match=r"--baseline dwa: it drives goToPose; this env's "
                                           r"task is 'vineyard'\. Test it with --baseline "

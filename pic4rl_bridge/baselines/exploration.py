@@ -1,0 +1,213 @@
+"""The explore task's classical references: frontier-based exploration and a random-walk floor.
+
+``FrontierExplorer`` is Yamauchi's (1997): it integrates its scans into a seen grid, as the task
+and the metrics do (``pic4rl_bridge.perception.frontiers.integrate_scan``), and marks their
+returns on the mapless explorer's occupancy grid (``pic4rl_bridge.baselines.explorer_plan``);
+it drives to the nearest reachable frontier (a known free cell next to an unseen one, reached
+through seen cells clear of the inflated obstacles, on a ``FRONTIER_CELL_M`` grid), by the
+explorer's shortest path on its own grid and the planner's pursuit law
+(``pic4rl_bridge.control.pursuit``), keeping the plan's full margin even in a narrow door (it
+turns in place at its targets, and hits a door jamb passed at the narrow margin), and picks
+the next frontier on arrival: when within ``ARRIVE_M`` of the target, or when the target is no
+longer a frontier (seen round it). A
+target the explorer's plan finds no way to (its fallback, straight on through what was seen),
+or one it has not come ``PROGRESS_M`` nearer to in ``PATIENCE_STEPS``, is given up for the rest
+of the episode. With no frontier left it stops.
+
+``RandomWalk`` drives straight at full speed until an obstacle is within ``STOP_M`` of its
+footprint's circumscribed disc ahead, then turns in place, a random way, for a random 0.5 to 3
+s; its draws come from ``seed`` (given when made; ``reset`` does not reseed, so a run of
+episodes is one sequence). Both read only the scan and the pose (no map), as an agent does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from pic4rl_base.seen_area import SeenGrid
+
+from ..control.actions import normalized_action
+from ..control.pursuit import pursuit_command
+from ..perception.frontiers import frontier_cells, grow, integrate_scan, neighbours
+from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
+from ..settings.baselines import ExplorerConfig
+from .explorer_plan import ExplorerPlan
+
+#: Cell size (m) of the grid the frontiers are searched on (coarser than the seen grid's).
+FRONTIER_CELL_M = 0.1
+ARRIVE_M = 0.4  # a target this near is reached
+PROGRESS_M = 0.2  # ... and one not come this much nearer to
+PATIENCE_STEPS = 60  # in this many steps is given up
+_BAN_M = 0.5  # frontier cells this near a given-up target are not picked again
+_TRIES = 3  # targets tried in one step before driving to the last (its plan straight on)
+STOP_M = 0.35  # the random walk turns when an obstacle is this near its disc, ahead
+
+
+class FrontierExplorer:
+    """Frontier-based exploration (see the module's docstring)."""
+
+    def __init__(self, robot: RobotInfo, config: ExplorerConfig | None = None, *,
+                 resolution_m: float = 0.05, lookahead_m: float = 0.4,
+                 turn_in_place_rad: float = 0.8) -> None:
+        config = config or ExplorerConfig()
+        # no squeezing past a door jamb at the narrow margin: it turns in place at its targets
+        self.robot = robot
+        self.config = dataclasses.replace(
+            config, narrow_margin_m=max(config.narrow_margin_m, config.margin_m))
+        self.plan = ExplorerPlan(robot, self.config)
+        self.seen = SeenGrid(resolution_m)
+        self.lookahead_m, self.turn_in_place_rad = lookahead_m, turn_in_place_rad
+        cap = self.config.max_linear_m_s
+        self.max_linear_m_s = min(cap, robot.max_linear_m_s) if cap > 0 else robot.max_linear_m_s
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the grids, the target and the given-up targets (a new episode)."""
+        self.plan.reset()
+        self.seen = SeenGrid(self.seen.resolution_m)
+        self.target: tuple[float, float] | None = None
+        self._frontier: tuple[float, float] | None = None  # the frontier cell beside it
+        self.targets = 0  # frontiers picked this episode
+        self._banned: list[tuple[float, float]] = []
+        self._best_m, self._since = math.inf, 0
+
+    def action(self, frame: SensorFrame) -> np.ndarray:
+        return normalized_action(self.robot, *self.command(frame))
+
+    def command(self, frame: SensorFrame) -> tuple[float, float]:
+        """(v, ω) (m/s, rad/s) for ``frame``."""
+        if frame.scan is not None:
+            integrate_scan(self.seen, frame.scan, frame.pose)
+        self.plan.observe(frame)
+        pick = self._arrived(frame)
+        for _ in range(_TRIES):
+            if pick:
+                found = self.nearest_frontier(frame)
+                self.target, self._frontier = found or (None, None)
+                self.targets += found is not None
+                self._best_m, self._since = math.inf, 0
+            if self.target is None:
+                return 0.0, 0.0
+            path, s = self.plan.update(frame, self.target)
+            # the plan's fallback, straight on through what was seen: no way there
+            pick = len(path) == 2 and not self.plan.visible(path[0], path[1:])[0]
+            if not pick:
+                break
+            self._banned.append(self.target)
+        return pursuit_command(self.robot, frame.pose, path, s, self.plan.visible,
+                               lookahead_m=self.lookahead_m,
+                               turn_in_place_rad=self.turn_in_place_rad,
+                               max_linear_m_s=self.max_linear_m_s)
+
+    def _arrived(self, frame: SensorFrame) -> bool:
+        """Whether to pick a new target: none yet, reached, no longer a frontier, or given up."""
+        if self.target is None:
+            return True
+        d = math.hypot(self.target[0] - frame.pose.x, self.target[1] - frame.pose.y)
+        if d <= ARRIVE_M:
+            return True
+        step = FRONTIER_CELL_M
+        x, y = self._frontier or self.target
+        round_it = np.array([[x + step, y], [x - step, y], [x, y + step], [x, y - step]])
+        if self.seen.seen_at(round_it).all():
+            return True
+        if d < self._best_m - PROGRESS_M:
+            self._best_m, self._since = d, 0
+            return False
+        self._since += 1
+        if self._since >= PATIENCE_STEPS:
+            self._banned.append(self.target)
+            return True
+        return False
+
+    def nearest_frontier(self, frame: SensorFrame) -> tuple[tuple[float, float],
+                                                           tuple[float, float]] | None:
+        """(the centre of the cell beside it, of the frontier cell) first reached growing from
+        the robot
+        through known free cells clear of the obstacles inflated by the circumscribed radius
+        (whole cells, at most; a robot nearer a wall first grows to the nearest clear cells);
+        ``None``: none."""
+        res = FRONTIER_CELL_M
+        xmin, ymin, xmax, ymax = self.seen.bounds_m
+        lo = np.floor(np.array([min(xmin, frame.pose.x), min(ymin, frame.pose.y)]) / res) - 1
+        hi = np.floor(np.array([max(xmax, frame.pose.x), max(ymax, frame.pose.y)]) / res) + 2
+        nx, ny = (hi - lo).astype(int)
+        xs, ys = (lo[0] + np.arange(nx) + 0.5) * res, (lo[1] + np.arange(ny) + 0.5) * res
+        gx, gy = np.meshgrid(xs, ys)
+        seen = self.seen.seen_at(np.column_stack((gx.ravel(), gy.ravel()))).reshape(ny, nx)
+        occupied = np.zeros((ny, nx), dtype=bool)
+        cells = np.floor(self.plan.grid.centres() / res).astype(np.int64) - lo.astype(np.int64)
+        inside = (cells >= 0).all(axis=1) & (cells[:, 0] < nx) & (cells[:, 1] < ny)
+        occupied[cells[inside, 1], cells[inside, 0]] = True
+        frontier = frontier_cells(seen, occupied)
+        robot_d = np.hypot(gx - frame.pose.x, gy - frame.pose.y)
+        frontier &= robot_d > ARRIVE_M
+        for bx, by in self._banned:
+            frontier &= np.hypot(gx - bx, gy - by) > _BAN_M
+        radius = self.robot.footprint.bounding_radius_m
+        inflated = occupied
+        for k in range(math.floor(radius / res)):
+            inflated = neighbours(inflated, diagonal=k % 2 == 1)
+        clear = seen & ~inflated
+        # from the robot's own cell; one near a wall first reaches the nearest clear cells
+        start = robot_d <= res
+        near = seen & ~neighbours(occupied, diagonal=True)
+        if not (start & clear).any():
+            start, _ = grow(start, near | start, diagonal=True, stop=clear)
+        region, touched = grow(start, clear | start, diagonal=True, stop=frontier)
+        if not touched.any():
+            return None
+        # the cell beside the frontier the robot can stand on: clear of the plan's margin too
+        # (within three cells of the frontier), else clear of the radius
+        wide, around = inflated, touched
+        for k in range(math.ceil((radius + self.config.margin_m) / res) - math.floor(radius / res)):
+            wide = neighbours(wide, diagonal=k % 2 == 1)
+        for k in range(3):
+            around = neighbours(around, diagonal=k % 2 == 1)
+        beside = region & ~wide & around
+        if not beside.any():
+            beside = region & clear & neighbours(touched, diagonal=True)
+        if not beside.any():
+            beside = touched
+        best = np.flatnonzero(beside.ravel())[int(np.argmin(robot_d[beside]))]
+        x, y = float(gx.ravel()[best]), float(gy.ravel()[best])
+        front = np.flatnonzero(touched.ravel())
+        nearest = front[int(np.argmin(np.hypot(gx.ravel()[front] - x, gy.ravel()[front] - y)))]
+        return (x, y), (float(gx.ravel()[nearest]), float(gy.ravel()[nearest]))
+
+
+class RandomWalk:
+    """The random-walk floor (see the module's docstring)."""
+
+    def __init__(self, robot: RobotInfo, *, seed: int = 0) -> None:
+        self.robot = robot
+        self.rng = np.random.default_rng(seed)
+        self.reset()
+
+    def reset(self) -> None:
+        """End any turn (a new episode); the draws go on."""
+        self._turn_steps, self._turn_sign = 0, 1.0
+
+    def action(self, frame: SensorFrame) -> np.ndarray:
+        r = self.robot
+        if self._turn_steps == 0 and self._blocked(frame):
+            dt = r.control_dt_s
+            self._turn_steps = int(self.rng.integers(round(0.5 / dt), round(3.0 / dt) + 1))
+            self._turn_sign = float(self.rng.choice([-1.0, 1.0]))
+        if self._turn_steps > 0:
+            self._turn_steps -= 1
+            return normalized_action(r, 0.0, self._turn_sign * r.max_angular_rad_s)
+        return normalized_action(r, r.max_linear_m_s, 0.0)
+
+    def _blocked(self, frame: SensorFrame) -> bool:
+        """Whether a return lies ahead within ``STOP_M`` of the circumscribed disc."""
+        if frame.scan is None:
+            return False
+        points = frame.scan.points()
+        radius = self.robot.footprint.bounding_radius_m
+        ahead = (points[:, 0] > 0) & (np.abs(points[:, 1]) < radius)
+        return bool(ahead.any() and points[ahead, 0].min() < radius + STOP_M)

@@ -1,0 +1,137 @@
+"""explore: see as much of an unknown world's floor as the time budget allows, without colliding.
+
+There is no goal: the simulator still draws one with each start (its sampler's pairs), and
+the task reads none of it (its context's goal is ``None``, so the bag's facts carry none).
+What the robot has seen is a ``pic4rl_base.seen_area.SeenGrid`` of its own scans at the
+metrics' resolution (``pic4rl_metrics``' ``SEEN_RESOLUTION_M``), kept in the episode's
+context, so the reward is the bags' area seen, live: ``reward.area`` times the m² newly seen
+this step, and ``reward.collision`` on the collision that ends the episode. The episode also
+ends, as a goal, once the area seen reaches ``explore.coverage_target`` of the world's free
+area: the floor (clearance > 0) connected to the start, on the simulated world's 5 cm
+clearance grid (``pic4rl_sim.engine.paths.clearance_grid``); it is the bag's
+``free_area_m2`` fact, from which the metrics give coverage in %. On a real robot there is no
+world: no target and no fact, the area in m² only.
+
+The observation is a flat vector: the LiDAR sectors (m, or / ``lidar.clip_m`` normalised), the
+last action (2) and a crop of the seen grid, ``explore.crop_px`` square pixels of
+``explore.crop_cell_m`` round the robot, heading up (row 0 farthest ahead, column 0 farthest
+left), 1 where the grid cell at the pixel's centre is seen.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from pic4rl_base.geometry import Pose2D
+from pic4rl_base.seen_area import SeenGrid
+from pic4rl_metrics.contract import Outcome
+from pic4rl_metrics.core.tasks.seen import SEEN_RESOLUTION_M
+from pic4rl_sim.engine.geometry import Twist2D
+from pic4rl_sim.engine.paths import clearance_grid
+
+from ..config import EnvConfig
+from ..control.actions import planar_action_space, planar_command
+from ..perception.collision import assess
+from ..perception.frontiers import component, integrate_scan
+from ..perception.observations import clipped_action, lidar_sectors
+from ..readings.frame import SensorFrame
+from ..robot_info import RobotInfo
+from ..settings.tasks import ExploreReward
+from .base import EpisodeContext, Judgement, Task
+
+#: Cell size (m) of the world's free-area grid (the planner's).
+FREE_RESOLUTION_M = 0.05
+
+
+def free_area_m2(world: Any, start: tuple[float, float]) -> float:
+    """The world's free floor (m²) that can be seen from ``start``: the cells of its clearance
+    grid with clearance > 0 that are 4-connected to the start's cell (a start inside an obstacle
+    counts from the nearest free cell)."""
+    clear = clearance_grid(world, FREE_RESOLUTION_M)
+    xmin, ymin = world.bounds[:2]
+    ny, nx = clear.shape
+    ix = min(max(int((start[0] - xmin) / FREE_RESOLUTION_M), 0), nx - 1)
+    iy = min(max(int((start[1] - ymin) / FREE_RESOLUTION_M), 0), ny - 1)
+    return float(np.count_nonzero(component(clear > 0, (iy, ix)))) * FREE_RESOLUTION_M**2
+
+
+def seen_crop(grid: SeenGrid, pose: Pose2D, size: int, cell_m: float) -> np.ndarray:
+    """The egocentric crop (size × size, float32, 1 seen, 0 not) of pixels ``cell_m`` wide
+    round ``pose``, heading up, each the grid's cell at the pixel's centre."""
+    ahead = (0.5 * size - 0.5 - np.arange(size)) * cell_m  # row r: this far ahead
+    left = (0.5 * size - 0.5 - np.arange(size)) * cell_m  # column k: this far left
+    fwd, lat = np.meshgrid(ahead, left, indexing="ij")
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    xy = np.column_stack(((pose.x + c * fwd - s * lat).ravel(),
+                          (pose.y + s * fwd + c * lat).ravel()))
+    return grid.seen_at(xy).reshape(size, size).astype(np.float32)
+
+
+class ExploreLidar(Task):
+    """explore from LiDAR (see the module's docstring); ``world``: the simulated world of the
+    episodes (``None``: a real robot)."""
+
+    name = "explore"
+    required = frozenset({"scan"})
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo, world: Any = None) -> None:
+        super().__init__(config, robot)
+        self.world = world
+        self.action_space = planar_action_space()
+        e, lidar = config.explore, config.lidar
+        far = 1.0 if config.normalize_observations else lidar.clip_m
+        low = np.concatenate((np.zeros(lidar.sectors), [-1.0, -1.0], np.zeros(e.crop_px**2)))
+        high = np.concatenate((np.full(lidar.sectors, far), [1.0, 1.0], np.ones(e.crop_px**2)))
+        self.observation_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32),
+                                                dtype=np.float32)
+
+    def command(self, action: np.ndarray) -> Twist2D:
+        return planar_command(action, self.robot)
+
+    def begin(self, frame: SensorFrame) -> EpisodeContext:
+        grid = SeenGrid(SEEN_RESOLUTION_M)
+        if frame.scan is not None:
+            integrate_scan(grid, frame.scan, frame.pose)
+        free = (free_area_m2(self.world, (frame.pose.x, frame.pose.y))
+                if self.world is not None else None)
+        return EpisodeContext(start=frame.pose, extra={"seen": grid, "free_area_m2": free})
+
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> np.ndarray:
+        if frame.scan is None:
+            raise ValueError("explore (lidar): the frame has no scan")
+        lidar, e = self.config.lidar, self.config.explore
+        sectors = lidar_sectors(frame.scan, lidar)
+        if self.config.normalize_observations:
+            sectors /= np.float32(lidar.clip_m)
+        crop = seen_crop(context.extra["seen"], frame.pose, e.crop_px, e.crop_cell_m)
+        return np.concatenate((sectors, clipped_action(last_action, 2), crop.ravel()))
+
+    def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
+              collision_streak: int) -> Judgement:
+        reward: ExploreReward = self.config.reward
+        grid: SeenGrid = context.extra["seen"]
+        new = integrate_scan(grid, frame.scan, frame.pose) if frame.scan is not None else 0
+        free, target = context.extra["free_area_m2"], self.config.explore.coverage_target
+        covered = bool(free and target > 0 and grid.area_m2 >= target * free)
+        safety = assess(frame, self.robot, self.config, collision_streak)
+        crashed = safety.ended and not covered
+        terms = {"area": reward.area * new * grid.resolution_m**2, "step": reward.step,
+                 "collision": reward.collision if crashed else 0.0}
+        outcome = Outcome.GOAL if covered else Outcome.COLLISION if crashed else None
+        return Judgement(terms=terms, outcome=outcome, collision=safety.collision,
+                         collision_streak=safety.streak, warning=safety.warning,
+                         min_obstacle_m=safety.min_obstacle_m)
+
+    def facts(self, context: EpisodeContext) -> dict[str, Any]:
+        free = context.extra["free_area_m2"]
+        return {} if free is None else {"free_area_m2": free}
+
+
+def build(config: EnvConfig, robot: RobotInfo, world: Any = None) -> ExploreLidar:
+    """explore (its table entry's ``build``)."""
+    return ExploreLidar(config, robot, world)
