@@ -14,7 +14,7 @@ from enum import Enum
 
 from pic4rl_base.plugins import load_group
 
-from .engine.sensor_kinds import sonar, uwb
+from .engine.sensor_kinds import sonar, stereo, uwb
 
 
 class Direction(str, Enum):
@@ -177,6 +177,13 @@ UWB = tuple(Interface(uwb.topic_name(target), "sensor_msgs/msg/Range", Direction
                 *((f"a{i}", f"anchor a{i}", f"with `uwb.anchors_xy_m` of {i + 1}+ anchors")
                   for i in range(uwb.MAX_ANCHORS)),
                 (uwb.GOAL_TAG, "the goal's tag", "with `uwb.goal_tag`")))
+STEREO_DEPTH = Interface(
+    stereo.DEPTH_TOPIC, "sensor_msgs/msg/Image", Direction.PUB, QosKind.SENSOR_DATA,
+    "the stereo camera's depth, 32FC1 (m; NaN: no match)", Cadence.STEP, "with a stereo camera")
+STEREO_DISPARITY = Interface(
+    stereo.DISPARITY_TOPIC, "stereo_msgs/msg/DisparityImage", Direction.PUB,
+    QosKind.SENSOR_DATA, "the stereo camera's disparity (px; -1: invalid), `f`, `T`",
+    Cadence.STEP, "with a stereo camera")
 UWB_ANCHORS = Interface(
     uwb.ANCHORS_TOPIC, "geometry_msgs/msg/PoseArray", Direction.PUB, QosKind.LATCHED,
     "the UWB anchors' positions, in name order", Cadence.EPISODE, "with UWB anchors")
@@ -184,7 +191,8 @@ UNPAUSE_PHYSICS = Interface(
     "unpause_physics", "std_srvs/srv/Empty", Direction.SRV, None, "resumes stepping")
 
 #: The sim node's interfaces, in the docs' order (``STEP`` topics: in publishing order).
-INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, *SONAR, *UWB, PERSON_POSE,
+INTERFACE_TABLE = (CMD_VEL, CLOCK, GROUND_TRUTH, ODOM, TF, IMU, *SONAR, *UWB, STEREO_DEPTH,
+                   STEREO_DISPARITY, PERSON_POSE,
                    PEOPLE, CAMERA_INFO,
               DEPTH_IMAGE, SCAN, GOAL_POSE, PLAN, TF_STATIC, UWB_ANCHORS, WORLD_MARKERS, DIAGNOSTICS,
               RESET_WORLD, PAUSE_PHYSICS, UNPAUSE_PHYSICS)

@@ -19,8 +19,9 @@ from pic4rl_base.goal import Goal
 from pic4rl_base.plugins import load_group
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
-from pic4rl_sim.engine.sensor_kinds import sonar, uwb
-from pic4rl_sim.interfaces import DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, SONAR, UWB, Interface
+from pic4rl_sim.engine.sensor_kinds import sonar, stereo, uwb
+from pic4rl_sim.interfaces import (DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, SONAR, STEREO_DEPTH, UWB,
+                                   Interface)
 
 from . import cdr, decode
 from .frame import ScanData, SensorFrame, as_published
@@ -119,6 +120,9 @@ READING_TABLE = (
                   kind=sonar.NAME) for i, topic in enumerate(SONAR)),
     *(FrameSensor(uwb.reading_name(target), topic, uwb.decode, uwb.target_reader(target),
                   kind=uwb.NAME) for target, topic in zip(uwb.TARGETS, UWB)),
+    FrameSensor("stereo_depth", STEREO_DEPTH,
+                lambda msg, mount, topic: decode.depth_image(msg, topic=topic), stereo.read_depth,
+                kind=stereo.NAME, topic_note=" (32FC1; NaN: no match)", read_cdr=_depth_cdr),
 )
 #: A user's readings, after pic4rl's: each a ``FrameSensor`` that its package names in this
 #: entry-point group under the reading's name (its sensor in ``pic4rl.sensors``).

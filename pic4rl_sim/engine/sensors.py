@@ -23,7 +23,7 @@ from pic4rl_base.schema import FRACTION, Range, check, param
 
 from .geometry import Twist2D
 from .ray_sensors import DepthCamera, DepthCameraSpec, Lidar, LidarSpec
-from .sensor_kinds import sonar, uwb
+from .sensor_kinds import sonar, stereo, uwb
 
 STANDARD_GRAVITY_M_S2 = 9.80665
 # ROS reads a zero covariance as "unknown"; an exact (noise-free) quantity gets this instead.
@@ -215,6 +215,8 @@ SENSOR_TABLE = (
                carried=False, label="sonar ring", publishes="sonar/*"),
     SensorKind(uwb.NAME, uwb.UwbSpec, uwb.build, uwb.read, optional=True, carried=False,
                label="UWB tag", publishes="uwb/*"),
+    SensorKind(stereo.NAME, stereo.StereoCameraSpec, stereo.build, stereo.read, optional=True,
+               carried=False, label="stereo depth camera", publishes="stereo/*"),
 )
 #: A user's sensors, after pic4rl's: each a ``SensorKind`` that its package names in this
 #: entry-point group under the kind's name (its topic in ``pic4rl.interfaces``, its reading

@@ -31,22 +31,23 @@ from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
 from pic4rl_base.goal import Goal
 
 from ..engine.core import Engine
-from ..engine.sensor_kinds import sonar, uwb
+from ..engine.sensor_kinds import sonar, stereo, uwb
 from ..engine.sensors import EXACT_VARIANCE, SENSOR_TABLE
 from ..engine.worlds.spec import WorldSpec
 from ..interfaces import (CAMERA_INFO, CLOCK, DEPTH_IMAGE, EPISODE_TOPICS, GOAL_POSE, GROUND_TRUTH,
-                          IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, SONAR, STEP_TOPICS, TF,
-                          TF_STATIC, UWB, UWB_ANCHORS, WORLD_MARKERS, Interface)
+                          IMU, ODOM, PEOPLE, PERSON_POSE, PLAN, SCAN, SONAR, STEP_TOPICS,
+                          STEREO_DEPTH, STEREO_DISPARITY, TF, TF_STATIC, UWB, UWB_ANCHORS,
+                          WORLD_MARKERS, Interface)
 from .transforms import OdomTransform, static_transforms
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
 #: Name of the sim node's per-step status on ``diagnostics``: ERROR when the physics diverged.
 PHYSICS_STATUS = "sim: physics"
-_RGBA = {
 #: Name of its per-step contact status: WARN (message ``touching``) when the robot touched
 #: anything during the step, sensed or not (``StepResult.collided``), else OK (``clear``).
 CONTACT_STATUS = "sim: contact"
+_RGBA = {
     "wall": (0.75, 0.75, 0.72, 1.0), "furniture": (0.55, 0.38, 0.22, 1.0),
     "obstacle": (0.35, 0.45, 0.6, 1.0), "trunk": (0.4, 0.26, 0.13, 1.0),
     "canopy": (0.2, 0.55, 0.2, 0.6), "person": (0.9, 0.55, 0.2, 1.0),
@@ -176,6 +177,8 @@ SENSOR_MESSAGES: tuple[tuple[Callable[[Engine], bool], Callable[[Engine, Time], 
      lambda engine, stamp: sonar.RangeMessages(engine, stamp, SONAR)),
     (lambda engine: uwb.NAME in engine.sensors,
      lambda engine, stamp: uwb.RangeMessages(engine, stamp, dict(zip(uwb.TARGETS, UWB)))),
+    (lambda engine: stereo.NAME in engine.sensors,
+     lambda engine, stamp: stereo.StereoMessages(engine, stamp, STEREO_DEPTH, STEREO_DISPARITY)),
     (lambda engine: engine.world.person is not None, _Person),
     (lambda engine: engine.crowd is not None, _People),
     (lambda engine: engine.depth is not None, _Depth),

@@ -9,7 +9,8 @@ Sensor frames: ``laser`` at the LiDAR's mount (x, y, z) turned by its yaw; the d
 ``camera_depth_optical_frame`` at the camera's mount, pitched down by its pitch, in the optical
 convention (REP 103: z forward, x right, y down); ``imu_link`` at the base's origin (the IMU
 reads the base's motion); a sonar ring's ``sonar_<i>`` at its mount, +x along cone i's axis;
-a UWB tag's ``uwb_tag`` at its mount.
+a UWB tag's ``uwb_tag`` at its mount; a stereo camera's ``stereo_left_optical_frame`` at its mount
+(the left camera's, optical).
 """
 
 from __future__ import annotations
@@ -25,14 +26,13 @@ from pic4rl_base.geometry import yaw_to_quaternion
 
 from ..engine.core import Engine
 from ..engine.sensor_kinds import NAMES as KIND_NAMES
+from ..engine.sensor_kinds import OPTICAL_XYZW
 
 Quaternion = tuple[float, float, float, float]
 #: A sensor's frame in the base frame: (frame id, (x, y, z) m, quaternion (x, y, z, w)).
 MountedFrame = tuple[str, tuple[float, float, float], Quaternion]
 
 _IDENTITY: Quaternion = (0.0, 0.0, 0.0, 1.0)
-#: The optical frame (z forward, x right, y down) in a body frame (x forward, y left, z up).
-_OPTICAL: Quaternion = (-0.5, 0.5, -0.5, 0.5)
 
 
 def _multiply(a: Quaternion, b: Quaternion) -> Quaternion:
@@ -54,7 +54,7 @@ def sensor_frames(engine: Engine) -> tuple[MountedFrame, ...]:
         cam = engine.depth.spec
         half = 0.5 * cam.mount_pitch_rad  # a positive pitch looks down: about +y
         pitch = (0.0, math.sin(half), 0.0, math.cos(half))
-        frames.append((engine.depth.frame_id, cam.mount_xyz_m, _multiply(pitch, _OPTICAL)))
+        frames.append((engine.depth.frame_id, cam.mount_xyz_m, _multiply(pitch, OPTICAL_XYZW)))
     for name in KIND_NAMES:  # the sonar ring's cones, the UWB tag
         if name in engine.sensors:
             frames.extend(engine.sensors[name].frames())

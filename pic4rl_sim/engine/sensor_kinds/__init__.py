@@ -7,7 +7,10 @@ the other way round (no import circle), so a module here imports no table. Kept 
 
 #: Their kinds' names, in ``SENSOR_TABLE``'s order: their random streams come after the crowd's,
 #: so that adding one leaves every earlier stream as it was.
-NAMES = ("sonar", "uwb")
+NAMES = ("sonar", "uwb", "stereo")
+#: An optical frame (z forward, x right, y down) in a body frame (x forward, y left, z up),
+#: as a quaternion (x, y, z, w).
+OPTICAL_XYZW = (-0.5, 0.5, -0.5, 0.5)
 
 
 class Instant:

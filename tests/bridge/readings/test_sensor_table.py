@@ -15,6 +15,7 @@ from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
 from pic4rl_sim.engine.sensor_kinds.sonar import SonarSpec
+from pic4rl_sim.engine.sensor_kinds.stereo import StereoCameraSpec
 from pic4rl_sim.engine.sensor_kinds.uwb import UwbSpec
 from pic4rl_sim.engine.worlds.generators import make_world
 from pic4rl_sim.node.messages import StateMessages, plan_message
@@ -81,13 +82,14 @@ def test_build_frame_fills_only_the_wanted_sensors() -> None:
 
 @pytest.fixture(scope="module")
 def engine() -> Engine:
-    """An omni robot with a noisy LiDAR, a depth camera, a sonar ring and a UWB tag ranging to
-    four anchors and the goal, next to a walking person."""
+    """An omni robot with a noisy LiDAR, a depth camera, a sonar ring, a UWB tag ranging to
+    four anchors and the goal and a stereo camera, next to a walking person."""
     robot = OMNI.with_sensors(lidar=LidarSpec(beams=90, noise_std_m=0.01),
                               depth=DepthCameraSpec(width=16, height=12, noise_std_m=0.01),
                               sonar=SonarSpec(noise_std_m=0.01),
                               uwb=UwbSpec(anchors_xy_m=(1.0, 1.0, -1.0, 1.0, 1.0, -1.0, 0.0, 5.0),
-                                          dropout_prob=0.1))
+                                          dropout_prob=0.1),
+                              stereo=StereoCameraSpec(width=16, height=12))
     return Engine(robot, make_world("person", seed=3), seed=5)
 
 

@@ -234,13 +234,14 @@ def test_every_sensor_kind_is_built_and_read_through_the_table():
     from pic4rl_sim.engine.robot_specs import DepthCameraSpec, ImuSpec
     from pic4rl_sim.engine.sensors import SENSOR_TABLE
     from pic4rl_sim.engine.sensor_kinds.sonar import SonarSpec
+    from pic4rl_sim.engine.sensor_kinds.stereo import StereoCameraSpec
     from pic4rl_sim.engine.sensor_kinds.uwb import UwbSpec
 
     assert list(JACKAL.sensors) == [k.name for k in SENSOR_TABLE]
     robot = JACKAL.with_sensors(lidar=LidarSpec(beams=30, noise_std_m=0.02),
                                 depth=DepthCameraSpec(width=8, height=6, noise_std_m=0.02),
                                 imu=ImuSpec(gyro_noise_std_rad_s=0.1), sonar=SonarSpec(),
-                                uwb=UwbSpec())
+                                uwb=UwbSpec(), stereo=StereoCameraSpec(width=8, height=6))
     engine = Engine(robot, open_field(Box(2.0, 0.0, 0.2, 2.0, 1.0)), seed=4)
     assert set(engine.sensors) == {k.name for k in SENSOR_TABLE}
     named = {"lidar": engine.scan, "depth": engine.depth_image, "imu": engine.imu_reading}
