@@ -1,7 +1,7 @@
 """Real-time factor of the engine in the dynamic BARN: ``dynbarn``'s moving obstacles and the
 LiDAR, against the same field standing still.
 
-One model (Jackal in ``dynbarn`` variant 1, the default 12 moving cylinders, 10 Hz control,
+One model (Jackal in ``dynbarn`` variant 1 with 12 moving cylinders (``--moving``), 10 Hz control,
 5 ms physics), two loops of ``Engine.step`` + ``Engine.scan`` (what the in-process transport
 does per step), run interleaved, best of ``--repeat``: ``moving`` and ``still`` (the same world
 with ``moving_count`` 0). The real-time factor is simulated seconds per wall second; the ratio

@@ -45,7 +45,7 @@ class DynBarnParams(BarnLikeParams):
 
     KIND: ClassVar[str] = "dynbarn"
     fill_fraction: float = redefault(BarnLikeParams, "fill_fraction", 0.35)
-    moving_count: int = param(12, doc="number of moving cylinders in the field",
+    moving_count: int = param(6, doc="number of moving cylinders in the field",
                               range=Range(0, 40))
     moving_radius_m: float = param(0.15, doc="radius of each moving cylinder", unit="m",
                                    range=Range(0.075, 0.5))

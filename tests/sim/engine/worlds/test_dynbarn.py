@@ -101,7 +101,7 @@ def test_the_world_has_barns_start_goal_and_a_reference_path():
     start, goal = start_and_goal()
     assert world.spawn_poses == (start,) and world.goal_points == (goal,)
     assert world.params["reference_path_length_m"] >= 10.0  # the goal is 10 m ahead
-    assert len(world.moving.starts) == 12
+    assert len(world.moving.starts) == 6
     assert len(TEST_SCENES) == 60 and len(set(TEST_SCENES)) == 60
 
 
