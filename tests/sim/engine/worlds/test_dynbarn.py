@@ -1,5 +1,6 @@
 """The ``dynbarn`` world and its moving obstacles in the engine: the same variant and episode
-seed give the same motion, speeds stay in their range and obstacles in the field, the LiDAR
+seed give the same motion, speeds stay in their range and obstacles in the field, headings
+turn smoothly but at the field's edges, the LiDAR
 sees a moving obstacle where its trajectory has taken it, touching one is a collision, and
 the world carries BARN's start, goal and a reference path for the BARN score."""
 
@@ -61,6 +62,20 @@ def test_speeds_stay_in_their_range_and_obstacles_in_the_field(low, high, turn):
     assert steps.max() <= high + 1e-9  # a bounce only shortens a step
     assert np.median(steps) > low  # they do move
     assert speeds.std(axis=0).min() > 0.0  # each one's speed varies
+
+
+def test_trajectories_turn_smoothly_away_from_the_edges():
+    """With ``turn_time_s`` 5 the turn rate's deviation is 0.2 rad/s: a heading moves a few
+    hundredths of a radian per 0.1 s step, never a corner, but where it bounces."""
+    tracks = _tracks(2, 3, 300, moving_count=20, speed_min_m_s=0.5, turn_time_s=5.0)
+    step = np.diff(tracks, axis=0)  # (steps - 1) x n x 2
+    heading = np.arctan2(step[..., 1], step[..., 0])
+    turn = np.abs(np.angle(np.exp(1j * np.diff(heading, axis=0))))
+    margin = 0.15 + 0.2  # the radius and a step at the top speed and more
+    lo, hi = np.array(FIELD[:2]) + margin, np.array(FIELD[2:]) - margin
+    inside = ((tracks[1:-1] > lo) & (tracks[1:-1] < hi)).all(axis=-1)
+    assert inside.mean() > 0.5 and turn[inside].max() < 0.15
+    assert turn[~inside].max() > 0.5  # they do bounce
 
 
 def _lane(start_x: float, heading: float, speed: float) -> WorldSpec:
