@@ -1,8 +1,8 @@
 """The ``dynbarn`` world and its moving obstacles in the engine: the same variant and episode
 seed give the same motion, speeds stay in their range and obstacles in the field, headings
-turn smoothly but at the field's edges, the LiDAR
-sees a moving obstacle where its trajectory has taken it, touching one is a collision, and
-the world carries BARN's start, goal and a reference path for the BARN score."""
+turn smoothly but at the field's edges, the LiDAR sees a moving obstacle where its trajectory
+has taken it, touching one is a collision, and the world carries BARN's start, goal and a
+reference path for the BARN score."""
 
 from __future__ import annotations
 
