@@ -47,7 +47,7 @@ _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goa
 class StepResult(NamedTuple):
     """What happened in one control period."""
 
-    collided: bool  # the robot touches an obstacle at the period's end, or a person during it
+    collided: bool  # the robot touches an obstacle at the period's end, or a mover during it
     diverged: bool  # the physics blew up; the episode was reset to its start
     reason: str = ""  # what diverged, when (empty otherwise)
 
@@ -190,7 +190,7 @@ class Engine:
         touched = False
         if not walks:  # a static world: contact with it lasts while the servos push
             mujoco.mj_step(m, d, nstep=self.config.substeps)
-        else:  # people move smoothly, and a bump that bounces the robot off still counts
+        else:  # people and obstacles move smoothly; a bump that bounces the robot off counts
             for k in range(1, self.config.substeps + 1):
                 for mocap, start, per_substep in walks:
                     d.mocap_pos[mocap] = start + per_substep * k
