@@ -12,7 +12,7 @@ the next frontier on arrival: when within ``ARRIVE_M`` of the target, or when th
 longer a frontier (seen round it). A
 target the explorer's plan finds no way to (its fallback, straight on through what was seen),
 or one it has not come ``PROGRESS_M`` nearer to in ``PATIENCE_STEPS``, is given up for the rest
-of the episode. With no frontier left it stops.
+of the episode. With no frontier left it stops (and looks again every ``IDLE_STEPS``).
 
 ``RandomWalk`` drives straight at full speed until an obstacle is within ``STOP_M`` of its
 footprint's circumscribed disc ahead, then turns in place, a random way, for a random 0.5 to 3
@@ -43,6 +43,7 @@ ARRIVE_M = 0.4  # a target this near is reached
 PROGRESS_M = 0.2  # ... and one not come this much nearer to
 PATIENCE_STEPS = 60  # in this many steps is given up
 _BAN_M = 0.5  # frontier cells this near a given-up target are not picked again
+IDLE_STEPS = 10  # with no frontier found, the search is made again this many steps later
 _TRIES = 3  # targets tried in one step before driving to the last (its plan straight on)
 STOP_M = 0.35  # the random walk turns when an obstacle is this near its disc, ahead
 
@@ -89,7 +90,7 @@ class FrontierExplorer:
                 found = self.nearest_frontier(frame)
                 self.target, self._frontier = found or (None, None)
                 self.targets += found is not None
-                self._best_m, self._since = math.inf, 0
+                self._best_m, self._since = math.inf, 0 if found else 1
             if self.target is None:
                 return 0.0, 0.0
             path, s = self.plan.update(frame, self.target)
@@ -104,9 +105,12 @@ class FrontierExplorer:
                                max_linear_m_s=self.max_linear_m_s)
 
     def _arrived(self, frame: SensorFrame) -> bool:
-        """Whether to pick a new target: none yet, reached, no longer a frontier, or given up."""
+        """Whether to pick a new target: none yet (searched again every ``IDLE_STEPS`` while
+        none is found), reached, no longer a frontier, or given up."""
         if self.target is None:
-            return True
+            due = self._since == 0 or self._since >= IDLE_STEPS
+            self._since += 1
+            return due
         d = math.hypot(self.target[0] - frame.pose.x, self.target[1] - frame.pose.y)
         if d <= ARRIVE_M:
             return True

@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "bridge.md"
 INTERFACES = ROOT / "docs" / "interfaces.md"
 TASK_SECTIONS = {"goToPose": "goToPose", "vineyard": "vineyard",
-                 "personMonitoring": "personMonitoring"}
+                 "personMonitoring": "personMonitoring", "explore": "explore"}
 
 
 @pytest.fixture(scope="module")
