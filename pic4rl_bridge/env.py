@@ -160,8 +160,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
                               "simulated world (a 'sim:' section); a real robot's goals come "
                               "from its operator or episodes.file")
         sensors = self.task.required & BY_NAME.keys()
-        if self.scenario.spec.lidar is not None:
-            sensors |= {"scan"}
+        crowd = self.scenario.sim is not None and self.scenario.sim.engine.crowd.count > 0
+        sensors |= {s for s, on in (("scan", self.scenario.spec.lidar), ("people", crowd)) if on}
         self.transport = self._make_transport(frozenset(sensors), node)
         self.metadata = {**self.metadata,
                          "render_fps": round(1.0 / self.scenario.robot.control_dt_s, 6)}

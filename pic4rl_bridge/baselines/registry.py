@@ -20,6 +20,10 @@ package adds its own without editing it: a ``BaselineSpec`` named in the entry-p
 - ``dwa_heading`` (personMonitoring): DWA follows the person and a proportional law on its
   bearing turns the base (``pic4rl_bridge.baselines.follow``): the classical version of the RL-DWA
   hybrid.
+- ``orca``: Optimal Reciprocal Collision Avoidance (``pic4rl_bridge.baselines.orca``), the
+  velocity-obstacle reference for crowds: the people of the ``people`` reading (their
+  velocities by finite difference) and the scan's nearest returns as half-planes of
+  velocities, goal-seeking otherwise.
 - ``frontier`` and ``random_walk`` (explore): Yamauchi's frontier-based exploration on the
   robot's own grids and a random-walk floor (``pic4rl_bridge.baselines.exploration``).
 
@@ -115,6 +119,13 @@ def _explorer(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
     return ExplorerController.for_env(robot, config, settings.explorer)
 
 
+def _orca(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+          settings: BaselinesConfig) -> Baseline:
+    from .orca import OrcaController
+
+    return OrcaController(robot)
+
+
 def _row_follower(name: str) -> Callable[..., Baseline]:
     def make(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
              settings: BaselinesConfig) -> Baseline:
@@ -165,6 +176,7 @@ BASELINE_TABLE: dict[str, BaselineSpec] = {
     "dwa": BaselineSpec(("goToPose",), _dwa),
     "planner": BaselineSpec(("goToPose",), _planner, one_world=True, expert="planner"),
     "explorer": BaselineSpec(("goToPose",), _explorer, expert="explorer"),
+    "orca": BaselineSpec(("goToPose",), _orca),
     "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True,
                                expert="centerline"),
     "row_follower": BaselineSpec(("vineyard",), _row_follower("row_follower"), one_world=True),

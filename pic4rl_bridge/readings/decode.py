@@ -48,6 +48,12 @@ def path(msg: Any) -> np.ndarray:
                     dtype=np.float64).reshape(-1, 2)
 
 
+def people(msg: Any) -> np.ndarray:
+    """A ``geometry_msgs/PoseArray`` of people as one (x, y, yaw) row each (n × 3, m and rad,
+    float64), in the array's order (their identity) and its header's frame."""
+    return np.array([tuple(planar_pose(p)) for p in msg.poses], dtype=np.float64).reshape(-1, 3)
+
+
 def odometry(msg: Any) -> tuple[Pose2D, Twist2D]:
     """Pose and body twist of a ``nav_msgs/Odometry``."""
     lin, ang = msg.twist.twist.linear, msg.twist.twist.angular

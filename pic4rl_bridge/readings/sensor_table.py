@@ -20,8 +20,8 @@ from pic4rl_base.plugins import load_group
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.sensor_kinds import sonar, stereo, uwb
-from pic4rl_sim.interfaces import (DEPTH_IMAGE, PERSON_POSE, PLAN, SCAN, SONAR, STEREO_DEPTH, UWB,
-                                   Interface)
+from pic4rl_sim.interfaces import (DEPTH_IMAGE, PEOPLE, PERSON_POSE, PLAN, SCAN, SONAR, STEREO_DEPTH,
+                                   UWB, Interface)
 
 from . import cdr, decode
 from .frame import ScanData, SensorFrame, as_published
@@ -99,6 +99,14 @@ def _read_person(engine: Any, mount: Pose2D) -> Pose2D | None:
     return None if seen is None else as_published(seen[0])
 
 
+def _read_people(engine: Any, mount: Pose2D) -> np.ndarray | None:
+    people = engine.people()
+    if people is None:
+        return None
+    return np.array([tuple(as_published(Pose2D(float(x), float(y), float(yaw))))
+                     for (x, y), yaw in zip(*people)], dtype=np.float64).reshape(-1, 3)
+
+
 def _depth_cdr(data: bytes, mount: Pose2D, topic: str) -> np.ndarray | None:
     image = cdr.image(data)
     return None if image is None else decode.depth_image(image, topic=topic)
@@ -112,6 +120,8 @@ READING_TABLE = (
                 topic_note=" (32FC1)", read_cdr=_depth_cdr),
     FrameSensor("person", PERSON_POSE, lambda msg, mount, topic: decode.planar_pose(msg.pose),
                 _read_person, topic_note=" (personMonitoring)"),
+    FrameSensor("people", PEOPLE, lambda msg, mount, topic: decode.people(msg), _read_people,
+                topic_note=": the crowd, one (x, y, yaw) row a person in the world frame"),
     FrameSensor("plan", PLAN, lambda msg, mount, topic: decode.path(msg),
                 lambda engine, mount: engine.plan(), episodic=True,
                 topic_note=": the global plan of goal_input plan (the sim's, or any planner's, "

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pic4rl_sim.engine.core import Engine
+from pic4rl_sim.engine.crowd.params import CrowdParams
+from pic4rl_sim.engine.engine_config import EngineConfig
 from pic4rl_base.geometry import Pose2D
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import OMNI, DepthCameraSpec, LidarSpec
@@ -83,14 +85,16 @@ def test_build_frame_fills_only_the_wanted_sensors() -> None:
 @pytest.fixture(scope="module")
 def engine() -> Engine:
     """An omni robot with a noisy LiDAR, a depth camera, a sonar ring, a UWB tag ranging to
-    four anchors and the goal and a stereo camera, next to a walking person."""
+    four anchors and the goal and a stereo camera, next to a walking person and a crowd of
+    three."""
     robot = OMNI.with_sensors(lidar=LidarSpec(beams=90, noise_std_m=0.01),
                               depth=DepthCameraSpec(width=16, height=12, noise_std_m=0.01),
                               sonar=SonarSpec(noise_std_m=0.01),
                               uwb=UwbSpec(anchors_xy_m=(1.0, 1.0, -1.0, 1.0, 1.0, -1.0, 0.0, 5.0),
                                           dropout_prob=0.1),
                               stereo=StereoCameraSpec(width=16, height=12))
-    return Engine(robot, make_world("person", seed=3), seed=5)
+    return Engine(robot, make_world("person", seed=3),
+                  EngineConfig(crowd=CrowdParams(count=3)), seed=5)
 
 
 def replay(engine: Engine) -> None:
