@@ -26,8 +26,8 @@ from typing import Any
 from pic4rl_base import params_file
 from pic4rl_base.goal import GOAL_TOLERANCE_M
 from pic4rl_base.params_file import ENV_NODE, SIM_NODE
-from pic4rl_base.schema import (NON_NEGATIVE, POSITIVE, ParamEnum, Range, check, flatten,
-                                from_params, param, section, to_params)
+from pic4rl_base.schema import (NON_NEGATIVE, POSITIVE, ParamEnum, check, flatten, from_params,
+                                param, section, to_params)
 from pic4rl_metrics.contract import STORAGES
 from pic4rl_sim.engine.sampling import PAIR_KINDS, check_pair_filter
 from pic4rl_sim.interfaces import CMD_VEL, GOAL_POSE, ODOM, RECORDED
@@ -36,6 +36,7 @@ from .errors import ConfigError, require
 from .readings.sensor_table import READING_TABLE
 from .settings.baselines import PREFIX as BASELINES_PREFIX
 from .settings.baselines import ExplorerConfig
+from .settings.observations import DepthObsConfig, LidarObsConfig, MemoryObsConfig
 from .settings.tasks import (TASK_TABLE, ExploreConfig, GoalInput, PersonConfig, RewardConfig,
                              SensorName, TaskName, VineyardConfig)
 
@@ -62,58 +63,6 @@ class CmdVelType(ParamEnum):
 class SensorQos(ParamEnum):
     BEST_EFFORT = "best_effort"
     RELIABLE = "reliable"
-
-
-class DepthEncoding(ParamEnum):
-    UINT8 = "uint8"
-    FLOAT32 = "float32"
-
-
-@dataclass(frozen=True)
-class LidarObsConfig:
-    """The LiDAR observation: ``sectors`` of equal width over ``fov_deg`` centred on the
-    robot's forward axis, each the minimum range of the sim's rays (its ``lidar.beams``)
-    pointing into it, clipped at ``clip_m`` (the sensor's own range is the sim's
-    ``lidar.range_max_m``)."""
-
-    sectors: int = param(36, doc="sectors of the observation, each the minimum range of the "
-                         "scan's rays in it", range=POSITIVE)
-    clip_m: float = param(10.0, doc="the observation's ranges clipped here", unit="m",
-                          range=POSITIVE)
-    fov_deg: float = param(360.0, doc="the sectors' span, centred on the robot's forward axis "
-                           "(sector 0 starts at -fov_deg / 2)", unit="deg",
-                           range=Range(0.0, 360.0, lo_open=True))
-    history: int = param(1, doc="goToPose: the last N scans' sectors, newest first (a frame "
-                         "stack; 1: the current scan only)", range=POSITIVE)
-
-
-@dataclass(frozen=True)
-class DepthObsConfig:
-    """The depth observation: the camera's image (the sim's ``depth.width`` × ``depth.height``)
-    resized to ``obs_width`` × ``obs_height``, clipped at ``clip_m``; ``uint8`` scales
-    [0, clip_m] to [0, 255] so SB3's CNN treats it as an image."""
-
-    obs_width: int = param(80, doc="the observation's width (the image resized)", unit="px",
-                           range=POSITIVE)
-    obs_height: int = param(60, doc="the observation's height (the image resized)", unit="px",
-                            range=POSITIVE)
-    clip_m: float = param(5.0, doc="the observation's depths clipped here", unit="m",
-                          range=POSITIVE)
-    encoding: DepthEncoding = param(DepthEncoding.UINT8, doc="uint8 (an image for SB3's CNN) or "
-                                    "float32 (metres)")
-
-
-@dataclass(frozen=True)
-class MemoryObsConfig:
-    """goToPose's memory: an egocentric crop of an occupancy grid of the robot's own scans
-    (``pic4rl_bridge.perception.occupancy``), beside the usual observation in a Dict."""
-
-    enabled: bool = param(False, doc="goToPose: add the memory crop to the observation (a Dict: "
-                          "memory, and lidar or depth and goal)")
-    size_px: int = param(64, doc="the crop's width and height", unit="px", range=POSITIVE)
-    resolution_m: float = param(0.15, doc="the crop's pixel size", unit="m", range=POSITIVE)
-    depth_rows: int = param(0, doc="depth robots: the pseudo-scan's middle rows of the depth "
-                            "image (0: all; the floor's pixels never)", range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)
@@ -216,6 +165,10 @@ class EnvConfig:
     task: TaskName = param(TaskName(next(iter(TASK_TABLE))), doc=" | ".join(TASK_TABLE))
     sensor: SensorName = param(SensorName(next(iter(SensorName)).value),
                                doc=" | ".join(s.value for s in SensorName))
+    sensors: tuple[str, ...] = param((), doc="goToPose: the sensors observed together, each "
+                                     "with its own section (lidar.*, depth.*), `sensor` among "
+                                     "them; two or more: a Dict observation, a key each beside "
+                                     "goal; empty: `sensor` alone")
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
                                      "this process) | ros (topics and services)")
     agent: str = param("", doc="the agent's name, recorded in each bag")
@@ -271,10 +224,23 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         check(self)
+        known, given = [s.value for s in SensorName], list(self.sensors)
+        require(set(given) <= set(known) and len(set(given)) == len(given) and (
+            not given or self.sensor in given), "sensors", given, f"distinct sensors of "
+            f"{', '.join(known)}, sensor ({self.sensor}: the explorer's, the memory's) among them")
         require(math.isfinite(self.min_linear_m_s) and (
             self.max_linear_m_s == 0 or self.min_linear_m_s <= self.max_linear_m_s),
             "min_linear_m_s", self.min_linear_m_s,
             f"a finite speed <= max_linear_m_s={self.max_linear_m_s}")
+
+    @property
+    def observed(self) -> tuple[str, ...]:
+        """The sensors the observation holds: ``sensors``, or ``sensor`` alone."""
+        return self.sensors or (self.sensor,)
+
+    @property
+    def sensor_label(self) -> str:  # bags' task fact, runs' names: lidar, lidar+depth
+        return "+".join(self.observed)
 
     @property
     def simulated(self) -> bool:
@@ -294,26 +260,31 @@ class EnvConfig:
 
 
 #: The settings that shape what a trained agent observes and what its actions do: with the
-#: section of its ``sensor`` (``lidar.*`` or ``depth.*``), ``agent_keys`` gives them. A test
-#: takes them from the agent's own config; ``pic4rl-test`` and ``pic4rl-bench`` refuse an env
-#: file or override that contradicts one (``agent_conflicts``). Another ``task`` or ``sensor``
-#: gives other spaces, which the model's own space check refuses.
+#: section of each sensor it observes (``lidar.*``, ``depth.*``), ``agent_keys`` gives them. A
+#: test takes them from the agent's own config; ``pic4rl-test`` and ``pic4rl-bench`` refuse an
+#: env file or override that contradicts one, or observes other sensors (``agent_conflicts``).
+#: Another ``task`` gives other spaces, which the model's own space check refuses.
 AGENT_KEYS = ("normalize_observations", "goal_input", "plan_lookahead_m", "max_linear_m_s",
               "min_linear_m_s", "max_angular_rad_s", "max_lateral_m_s", "person.", "explorer.")
 
 
 def agent_keys(config: EnvConfig) -> tuple[str, ...]:
     """The dotted names of ``AGENT_KEYS`` (a name ending in a dot is a section) and of the
-    section of ``config``'s sensor."""
-    wanted = (*AGENT_KEYS, f"{config.sensor}.")
+    section of each sensor ``config`` observes."""
+    wanted = (*AGENT_KEYS, *(f"{s}." for s in config.observed))
     return tuple(k for k in config.to_params()
                  if any(k == w or (w.endswith(".") and k.startswith(w)) for w in wanted))
 
 
 def agent_conflicts(trained: EnvConfig, test: EnvConfig) -> list[tuple[str, Any, Any]]:
-    """``(key, trained value, test value)`` of every ``agent_keys`` setting ``test`` changes."""
+    """``(key, trained value, test value)`` of every ``agent_keys`` setting ``test`` changes,
+    the observed sensors first (``sensors``: ``sensor: lidar`` and ``sensors: [lidar]`` are
+    alike)."""
     mine, theirs = trained.to_params(), test.to_params()
-    return [(k, mine[k], theirs[k]) for k in agent_keys(trained) if mine[k] != theirs[k]]
+    observed = ([("sensors", list(trained.observed), list(test.observed))]
+                if trained.observed != test.observed else [])
+    return observed + [(k, mine[k], theirs[k]) for k in agent_keys(trained)
+                       if mine[k] != theirs[k]]
 
 
 def env_config_from_params(params: Mapping[str, Any], *,

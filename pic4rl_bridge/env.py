@@ -345,6 +345,6 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             raise BridgeError("episode_facts() before the first reset()")
         return episode_facts(
             self.config, self.scenario.robot, self._frame, self._context, seed=self._seed_used,
-            task=self._task_spec.fact_name(self.config.sensor), world=self.transport.world_name,
-            index=self._episode - 1, sampler=self._sampler,
+            task=self._task_spec.fact_name(self.config.sensor_label),
+            world=self.transport.world_name, index=self._episode - 1, sampler=self._sampler,
             task_facts=self.task.facts(self._context))

@@ -289,13 +289,13 @@ class RunConfig:
 
     @property
     def name(self) -> str:
-        return self.train.run or f"{self.train.algorithm}_{self.env.sensor}"
+        return self.train.run or f"{self.train.algorithm}_{self.env.sensor_label}"
 
     @property
     def origin(self) -> str:
         """Its sensor and sources, for messages: ``sensor lidar, from a.yaml + command line``."""
         parts = [*self.sources, *(["command line"] if self.overridden else [])]
-        return f"sensor {self.env.sensor}, from {' + '.join(parts) or 'the defaults'}"
+        return f"sensor {self.env.sensor_label}, from {' + '.join(parts) or 'the defaults'}"
 
     def sections(self) -> dict[str, dict[str, Any]]:  # as params_file.load gives them
         return {SIM_NODE: dict(self.env.sim_params), ENV_NODE: self.env.to_params(),

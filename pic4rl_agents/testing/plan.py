@@ -142,8 +142,8 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
 
 
 #: The ``sim:`` settings that shape what an agent observes or what its actions do: its robot,
-#: the control period, and the fields of its sensor (``lidar.*`` or ``depth.*``: the agent's
-#: ``sensor``) that set the beams, field of view, ranges and image. A test takes them from the
+#: the control period, and the fields of its sensors (``lidar.*``, ``depth.*``: the agent's
+#: ``sensors``) that set the beams, field of view, ranges and image. A test takes them from the
 #: agent's own config, as it takes ``pic4rl_bridge.config.agent_keys`` (``check_trained``);
 #: the others (the world, its variant, seeds, sensor noise) are the test's to choose.
 AGENT_SIM_KEYS = ("robot", "control_dt_s",
@@ -155,14 +155,14 @@ AGENT_SIM_KEYS = ("robot", "control_dt_s",
 
 def sim_conflicts(trained: Scenario, test: Scenario) -> list[tuple[str, Any, Any]]:
     """``(key, trained value, test value)`` of every ``AGENT_SIM_KEYS`` setting of
-    ``trained``'s sensor that the simulator of ``test`` changes (both as their ``Scenario``
+    ``trained``'s sensors that the simulator of ``test`` changes (both as their ``Scenario``
     resolved them: the sim's defaults for their robot filled in); none when either drives no
     pic4rl simulator."""
     mine, theirs = trained.values, test.values
     if not (mine and theirs):
         return []
     keys = [k for k in AGENT_SIM_KEYS
-            if "." not in k or k.startswith(f"{trained.config.sensor}.")]
+            if "." not in k or k.split(".")[0] in trained.config.observed]
     return [(k, mine[k], theirs[k]) for k in keys if mine[k] != theirs[k]]
 
 

@@ -12,8 +12,10 @@ own scans and poses and kept in its context: mapless, a classical global planner
 learned local one). With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
 (``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps
-no state), to the LiDAR vector (``lidar``) or the depth image and goal. Every term is reported every
-step (0 when not triggered) so that ``info["reward_terms"]`` keeps one shape through an episode.
+no state), to the LiDAR vector (``lidar``) or the depth image and goal. With ``sensors: [lidar,
+depth]`` the observation is a Dict of each sensor's part (``lidar``, ``depth``) and ``goal``.
+Every term is reported every step (0 when not triggered) so that ``info["reward_terms"]`` keeps
+one shape through an episode.
 """
 
 from __future__ import annotations
@@ -158,10 +160,48 @@ def _goal(context: EpisodeContext) -> tuple[float, float]:
 
 
 def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> _GoToPose:
-    """goToPose through ``config.sensor`` (its registry entry's ``build``)."""
+    """goToPose through ``config.observed`` (its registry entry's ``build``): one sensor in
+    its own layout, several in a Dict."""
+    if len(config.observed) > 1:
+        return GoToPoseSensors(config, robot)
     if config.sensor == "depth":
         return GoToPoseDepth(config, robot)
     return GoToPoseLidar(config, robot)
+
+
+def _sectors_space(config: EnvConfig) -> gym.spaces.Box:
+    """The LiDAR part: ``lidar.sectors`` × ``lidar.history`` ranges (m, or / clip_m)."""
+    far = 1.0 if config.normalize_observations else config.lidar.clip_m
+    return gym.spaces.Box(0.0, far, (config.lidar.sectors * config.lidar.history,), np.float32)
+
+
+def _sectors(config: EnvConfig, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
+    """The LiDAR part of ``frame``: its sectors, normalised if asked, stacked with the
+    episode's last scans' when ``lidar.history`` > 1 (the episode's first scan fills it)."""
+    if frame.scan is None:
+        raise ValueError("goToPose (lidar): the frame has no scan")
+    lidar = config.lidar
+    sectors = lidar_sectors(frame.scan, lidar)
+    if config.normalize_observations:
+        sectors /= np.float32(lidar.clip_m)
+    if lidar.history > 1:
+        stack = context.extra["scan_history"]
+        stack.extendleft([sectors] * (lidar.history if not stack else 1))
+        sectors = np.concatenate(stack)
+    return sectors
+
+
+def _depth_space(config: EnvConfig) -> gym.spaces.Box:
+    """The depth part: the image under the ``depth`` section."""
+    return depth_space(config.depth)
+
+
+def _depth_image(config: EnvConfig, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
+    """The depth part of ``frame``: its image resized, clipped and encoded."""
+    if frame.depth is None:
+        raise ValueError("goToPose (depth): the frame has no depth image")
+    c = config.depth
+    return depth_observation(frame.depth, c.obs_width, c.obs_height, c.clip_m, c.encoding)
 
 
 class GoToPoseLidar(_GoToPose):
@@ -174,25 +214,15 @@ class GoToPoseLidar(_GoToPose):
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        beams, goal = config.lidar.sectors * config.lidar.history, self._goal_space()
-        far = 1.0 if config.normalize_observations else config.lidar.clip_m
-        low = np.concatenate((np.zeros(beams, np.float32), goal.low))
-        high = np.concatenate((np.full(beams, far, np.float32), goal.high))
+        sectors, goal = _sectors_space(config), self._goal_space()
+        low, high = (np.concatenate((sectors.low, goal.low)),
+                     np.concatenate((sectors.high, goal.high)))
         self.observation_space = self._memory_space(gym.spaces.Box(low, high, dtype=np.float32))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> Any:
-        if frame.scan is None:
-            raise ValueError("goToPose (lidar): the frame has no scan")
-        lidar = self.config.lidar
-        sectors = lidar_sectors(frame.scan, lidar)
-        if self.config.normalize_observations:
-            sectors /= np.float32(lidar.clip_m)
-        if lidar.history > 1:  # the frame stack: the episode's first scan fills it
-            stack = context.extra["scan_history"]
-            stack.extendleft([sectors] * (lidar.history if not stack else 1))
-            sectors = np.concatenate(stack)
-        vector = np.concatenate((sectors, self._goal_vector(frame, context, last_action)))
+        vector = np.concatenate((_sectors(self.config, frame, context),
+                                 self._goal_vector(frame, context, last_action)))
         return self._remember(vector, frame, context)
 
 
@@ -205,14 +235,37 @@ class GoToPoseDepth(_GoToPose):
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
         self.observation_space = self._memory_space(gym.spaces.Dict(
-            {"depth": depth_space(config.depth), "goal": self._goal_space()}))
+            {"depth": _depth_space(config), "goal": self._goal_space()}))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> dict[str, Any]:
-        if frame.depth is None:
-            raise ValueError("goToPose (depth): the frame has no depth image")
-        c = self.config.depth
-        image = depth_observation(frame.depth, c.obs_width, c.obs_height, c.clip_m, c.encoding)
-        return self._remember({"depth": image,
+        return self._remember({"depth": _depth_image(self.config, frame, context),
                                "goal": self._goal_vector(frame, context, last_action)},
+                              frame, context)
+
+
+#: Each sensor's part of a several-sensor observation: its space, its value of a frame, and the
+#: frame's reading it needs.
+_PARTS = {"lidar": (_sectors_space, _sectors, "scan"),
+          "depth": (_depth_space, _depth_image, "depth")}
+
+
+class GoToPoseSensors(_GoToPose):
+    """goToPose from several sensors at once (``sensors: [lidar, depth]``): a Dict with a key
+    per sensor, each as its one-sensor env has it (``lidar``: the sectors, ``depth``: the
+    image), beside ``goal``: [distance (m), angle (rad), last action (2)]."""
+
+    required = frozenset({"goal"})
+
+    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
+        super().__init__(config, robot)
+        self.required = self.required | {_PARTS[s][2] for s in config.observed}
+        self.observation_space = self._memory_space(gym.spaces.Dict(
+            {**{s: _PARTS[s][0](config) for s in config.observed},
+             "goal": self._goal_space()}))
+
+    def observe(self, frame: SensorFrame, context: EpisodeContext,
+                last_action: np.ndarray) -> dict[str, Any]:
+        parts = {s: _PARTS[s][1](self.config, frame, context) for s in self.config.observed}
+        return self._remember({**parts, "goal": self._goal_vector(frame, context, last_action)},
                               frame, context)
