@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -117,10 +117,10 @@ class NavEnv(gym.Env[Any, np.ndarray]):
 
     ``config``: a ``Scenario`` (resolved once, at the edge: used as it is when nothing below
     is given), a config file path, an ``EnvConfig``, or a mapping of dotted env parameters (the
-    sim's under ``"sim"``). ``task``, ``sensor``, ``transport`` and then ``overrides`` (dotted:
-    ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are ``sim_defaults`` (the
-    registered env's), then the config's, then ``sim``. ``node``: an rclpy node for the ROS
-    transport (default: its own, in its own context).
+    sim's under ``"sim"``). ``task``, ``sensor``, ``sensors``, ``transport`` and then
+    ``overrides`` (dotted: ``{"reward.goal": 500.0}``) apply on top; the sim's parameters are
+    ``sim_defaults`` (the registered env's), then the config's, then ``sim``. ``node``: an
+    rclpy node for the ROS transport (default: its own, in its own context).
     ``render_mode="rgb_array"``: ``render()`` returns a picture (``pic4rl_bridge.render``),
     the top-down view or, with ``render_view="mujoco"``, MuJoCo's camera; ``metadata``'s
     ``render_fps`` is one frame per control period.
@@ -129,8 +129,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - Gymnasium's way
 
     def __init__(self, config: Config = None, *, task: str | None = None,
-                 sensor: str | None = None, transport: str | None = None,
-                 sim: Mapping[str, Any] | None = None,
+                 sensor: str | None = None, sensors: Sequence[str] | None = None,
+                 transport: str | None = None, sim: Mapping[str, Any] | None = None,
                  sim_defaults: Mapping[str, Any] | None = None,
                  overrides: Mapping[str, Any] | None = None, render_mode: str | None = None,
                  render_view: str = "top", node: Any = None) -> None:
@@ -138,8 +138,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             raise ConfigError(f"render_mode: {render_mode!r} is invalid; expected 'rgb_array' "
                               "or None")
         self.render_mode = render_mode
-        given = {k: v for k, v in (("task", task), ("sensor", sensor), ("transport", transport))
-                 if v is not None}
+        given = {k: v for k, v in (("task", task), ("sensor", sensor), ("sensors", sensors),
+                                   ("transport", transport)) if v is not None}
         self.scenario = _scenario(config, {**given, **(overrides or {})}, sim or {},
                                   sim_defaults or {})
         self.config = self.scenario.config

@@ -148,12 +148,14 @@ class ExploreConfig:
 
 @dataclass(frozen=True)
 class EnvId:
-    """A registered Gymnasium id: its sensor, and sim parameters for keys a config's sim
-    section leaves unset."""
+    """A registered Gymnasium id: its sensor, sim parameters for keys a config's sim section
+    leaves unset, and the sensors it observes together (the env's ``sensors``; empty: its
+    ``sensor`` alone)."""
 
     id: str
     sensor: str
     sim_defaults: Mapping[str, Any] = field(default_factory=dict)
+    sensors: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -183,9 +185,10 @@ class TaskSpec:
 
     def __post_init__(self) -> None:
         for env in self.env_ids:
-            if env.sensor not in self.sensors:
-                raise ConfigError(f"task {self.name!r}: id {env.id!r} observes through "
-                                  f"{env.sensor!r}; expected one of {', '.join(self.sensors)}")
+            for sensor in (env.sensor, *env.sensors):
+                if sensor not in self.sensors:
+                    raise ConfigError(f"task {self.name!r}: id {env.id!r} observes through "
+                                      f"{sensor!r}; expected one of {', '.join(self.sensors)}")
 
     def make(self, config: Any, robot: Any, world: Any) -> Any:
         """The task for ``config`` (its code imported now, not at registration)."""
@@ -200,7 +203,9 @@ class TaskSpec:
 TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
     TaskSpec("goToPose",
              (EnvId("pic4rl/GoToPoseLidar-v0", "lidar"),
-              EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True})),
+              EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True}),
+              EnvId("pic4rl/GoToPoseLidarDepth-v0", "lidar", {"depth.enabled": True},
+                    sensors=("lidar", "depth"))),
              sensors=("lidar", "depth"), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
              experts=("planner", "explorer"), per_sensor=True),
@@ -260,6 +265,8 @@ def env_ids() -> dict[str, dict[str, Any]]:
             kwargs: dict[str, Any] = {"task": spec.name, "sensor": env.sensor}
             if env.sim_defaults:
                 kwargs["sim_defaults"] = dict(env.sim_defaults)
+            if env.sensors:
+                kwargs["sensors"] = list(env.sensors)
             out[env.id] = kwargs
     return out
 

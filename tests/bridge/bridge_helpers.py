@@ -9,6 +9,7 @@ LIDAR_CONFIG = REPO / "config" / "env_goto_lidar.yaml"
 ENV_CONFIGS = {
     "pic4rl/GoToPoseLidar-v0": LIDAR_CONFIG,
     "pic4rl/GoToPoseDepth-v0": REPO / "config" / "env_goto_depth.yaml",
+    "pic4rl/GoToPoseLidarDepth-v0": REPO / "config" / "env_goto_lidar_depth.yaml",
     "pic4rl/Vineyard-v0": REPO / "config" / "env_vineyard_depth.yaml",
     "pic4rl/PersonMonitoring-v0": REPO / "config" / "env_person_omni.yaml",
 }

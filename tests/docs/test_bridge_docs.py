@@ -46,9 +46,9 @@ def emitted() -> dict[str, Any]:
     configs = {}
     for path in sorted((ROOT / "config").glob("env_*.yaml")):
         loaded = load_env_config(path)
-        configs.setdefault((loaded.task, loaded.sensor), path)
+        configs.setdefault((loaded.task, loaded.sensor, loaded.sensors), path)
     for env_id, spec in ENV_IDS.items():
-        config = configs[spec["task"], spec["sensor"]]
+        config = configs[spec["task"], spec["sensor"], tuple(spec.get("sensors", ()))]
         env = gym.make(env_id, config=str(config), overrides={"episode_max_steps": 2})
         try:
             _, info = env.reset(seed=0)
@@ -117,11 +117,14 @@ def test_every_registered_id_is_named_with_its_task_sensor_file_and_sim_defaults
     assert ids == set(ENV_IDS), f"the quick-start table names {sorted(ids)}, not the registry"
     for env_id, spec in ENV_IDS.items():
         task, sensor, config, sim_defaults = rows[env_id]
-        assert (task, sensor) == (f"`{spec['task']}`", f"`{spec['sensor']}`"), env_id
+        sensors = spec.get("sensors", [spec["sensor"]])  # the table names every observed one
+        assert (task, sensor) == (f"`{spec['task']}`", ", ".join(f"`{s}`" for s in sensors)), (
+            env_id)
         path = re.fullmatch(r"`(config/env_[a-z_]+\.yaml)`", config)
         assert path is not None, f"{env_id}: no config file named in {config!r}"
         loaded = load_env_config(ROOT / path.group(1))
-        assert (loaded.task, loaded.sensor) == (spec["task"], spec["sensor"]), env_id
+        assert (loaded.task, loaded.sensor, loaded.observed) == (
+            spec["task"], spec["sensor"], tuple(sensors)), env_id
         defaults = spec.get("sim_defaults", {})
         named = [f"`{key}: {literal(value)}`" for key, value in defaults.items()]
         assert named == re.findall(r"`[^`]+`", sim_defaults) or (

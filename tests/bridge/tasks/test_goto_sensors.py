@@ -15,6 +15,7 @@ import pytest
 from pic4rl_bridge.config import EnvConfig, agent_conflicts, agent_keys
 from pic4rl_bridge.env import NavEnv
 from pic4rl_bridge.errors import ConfigError
+from pic4rl_bridge.settings.tasks import EnvId, GoToPoseReward, TaskSpec
 from pic4rl_bridge.tasks.goto import GoToPoseSensors
 
 CONFIG = Path(__file__).resolve().parents[3] / "config" / "env_goto_lidar.yaml"
@@ -103,3 +104,16 @@ def test_the_task_needs_each_sensors_reading() -> None:
         assert {"goal", "scan", "depth"} <= env.task.required
     finally:
         env.close()
+
+
+def test_the_registered_id_observes_both_and_an_entry_names_only_its_tasks_sensors() -> None:
+    env = gym.make("pic4rl/GoToPoseLidarDepth-v0",
+                   config=str(CONFIG.with_name("env_goto_lidar_depth.yaml")))
+    try:
+        assert env.unwrapped.config.observed == ("lidar", "depth")
+        assert set(env.observation_space) == {"lidar", "depth", "goal"}
+    finally:
+        env.close()
+    with pytest.raises(ConfigError, match="'sonar'"):
+        TaskSpec("toy", (EnvId("pic4rl/Toy-v0", "lidar", sensors=("lidar", "sonar")),),
+                 sensors=("lidar",), reward=GoToPoseReward, build="pic4rl_bridge.tasks.goto:build")

@@ -34,6 +34,9 @@ def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaul
         "pic4rl/GoToPoseLidar-v0": {"task": "goToPose", "sensor": "lidar"},
         "pic4rl/GoToPoseDepth-v0": {"task": "goToPose", "sensor": "depth",
                                     "sim_defaults": {"depth.enabled": True}},
+        "pic4rl/GoToPoseLidarDepth-v0": {"task": "goToPose", "sensor": "lidar",
+                                         "sim_defaults": {"depth.enabled": True},
+                                         "sensors": ["lidar", "depth"]},
         "pic4rl/Vineyard-v0": {"task": "vineyard", "sensor": "depth",
                                "sim_defaults": {"world": "vineyard", "depth.enabled": True}},
         "pic4rl/PersonMonitoring-v0": {"task": "personMonitoring", "sensor": "lidar",
@@ -43,7 +46,7 @@ def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaul
     for env_id, kwargs in pic4rl_bridge.ENV_IDS.items():
         assert gym.spec(env_id).kwargs == kwargs
         spec = TASK_TABLE[kwargs["task"]]
-        assert kwargs["sensor"] in spec.sensors
+        assert {kwargs["sensor"], *kwargs.get("sensors", ())} <= set(spec.sensors)
 
 
 def test_an_entry_alone_adds_an_id(monkeypatch):
