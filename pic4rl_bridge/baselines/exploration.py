@@ -12,7 +12,9 @@ the next frontier on arrival: when within ``ARRIVE_M`` of the target, or when th
 longer a frontier (seen round it). A
 target the explorer's plan finds no way to (its fallback, straight on through what was seen),
 or one it has not come ``PROGRESS_M`` nearer to in ``PATIENCE_STEPS``, is given up for the rest
-of the episode. With no frontier left it stops (and looks again every ``IDLE_STEPS``).
+of the episode. With no frontier left it stops (and looks again every ``IDLE_STEPS``). A
+return ahead within the circumscribed radius plus ``GUARD_M`` stops its forward motion (it
+only turns): what its grid had not seen yet, a corner its pursuit cut.
 
 ``RandomWalk`` drives straight at full speed until an obstacle is within ``STOP_M`` of its
 footprint's circumscribed disc ahead, then turns in place, a random way, for a random 0.5 to 3
@@ -43,6 +45,7 @@ ARRIVE_M = 0.4  # a target this near is reached
 PROGRESS_M = 0.2  # ... and one not come this much nearer to
 PATIENCE_STEPS = 60  # in this many steps is given up
 _BAN_M = 0.5  # frontier cells this near a given-up target are not picked again
+GUARD_M = 0.1  # the frontier explorer drives no nearer than this to a return ahead
 IDLE_STEPS = 10  # with no frontier found, the search is made again this many steps later
 _TRIES = 3  # targets tried in one step before driving to the last (its plan straight on)
 STOP_M = 0.35  # the random walk turns when an obstacle is this near its disc, ahead
@@ -99,10 +102,11 @@ class FrontierExplorer:
             if not pick:
                 break
             self._banned.append(self.target)
-        return pursuit_command(self.robot, frame.pose, path, s, self.plan.visible,
+        v, w = pursuit_command(self.robot, frame.pose, path, s, self.plan.visible,
                                lookahead_m=self.lookahead_m,
                                turn_in_place_rad=self.turn_in_place_rad,
                                max_linear_m_s=self.max_linear_m_s)
+        return (0.0 if _too_near(frame, self.robot) else v), w
 
     def _arrived(self, frame: SensorFrame) -> bool:
         """Whether to pick a new target: none yet (searched again every ``IDLE_STEPS`` while
@@ -215,3 +219,13 @@ class RandomWalk:
         radius = self.robot.footprint.bounding_radius_m
         ahead = (points[:, 0] > 0) & (np.abs(points[:, 1]) < radius)
         return bool(ahead.any() and points[ahead, 0].min() < radius + STOP_M)
+
+
+def _too_near(frame: SensorFrame, robot: RobotInfo) -> bool:
+    """Whether a return ahead (x > 0 in the base frame) lies within the circumscribed radius
+    plus ``GUARD_M`` of the robot's centre: it stops there and only turns."""
+    if frame.scan is None:
+        return False
+    x, y = frame.scan.points().T
+    reach = robot.footprint.bounding_radius_m + GUARD_M
+    return bool(((x > 0) & (np.hypot(x, y) < reach)).any())
