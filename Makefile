@@ -53,10 +53,19 @@ VINEYARD_DEMO := --agent checkpoints/vineyard_td3 --agent checkpoints/vineyard_s
 # one run each, through the sim node over ROS 2 (config/suite_barn_demo.yaml): a bag per
 # episode, the BARN table (bags/demo_barn/results.md) and a video per bag in bags/demo_barn/videos/.
 BARN_DEMO := bags/demo_barn
+# `make demo CASE=crowd`: the shipped TD3-LiDAR agent, DWA and ORCA on the paper's 5 indoor test
+# pairs among 10 walking people, in process (config/suite_crowd_demo.yaml, a cut of
+# config/suite_crowd.yaml): a bag per episode, the table with the social columns and the report
+# (bags/demo_crowd/results.md, report.html) and a video per bag, the people drawn with their
+# tracks' tails (bags/demo_crowd/videos/).
+CROWD_DEMO := bags/demo_crowd
 demo: setup
 ifeq ($(CASE),barn)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_barn_demo.yaml
 	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(BARN_DEMO)/videos $(BARN_DEMO)
+else ifeq ($(CASE),crowd)
+	$(VENV)/bin/pic4rl-bench --no-progress config/suite_crowd_demo.yaml
+	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(CROWD_DEMO)/videos $(CROWD_DEMO)
 else ifeq ($(CASE),person)
 	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
 else ifeq ($(CASE),vineyard)

@@ -34,14 +34,18 @@ from ..tables.paired import (N_BOOT, NOT_DISTINGUISHABLE, PAIRED_COLUMNS, groupe
 from ..tables.results import ROW_COLUMNS
 from ..tables.text import plain_text, short_bag
 from . import html_page as hp
+from .coverage_plot import coverage_section
 from .report_export import leaderboard_downloads
 from .report_inputs import inputs_section, provenance
 from .report_logs import goal_less, logs_section
 from .report_maps import PALETTE, Sketch, failure_map, pair_map, png_uri, sketch
 
+#: The social columns (an episode with people), shown as the task's own.
+SOCIAL_COLUMNS = ("personal_intrusion_time_s", "people_dist_min_m", "people_ttc_min_s",
+                  "people_collision_count")
 #: A task's own columns, shown in the leaderboard when some episode has them.
 TASK_COLUMNS = ("barn_score", *ROW_COLUMNS, "follow_heading_mae_rad", "person_in_view_fraction",
-                "person_dist_error_mae_m")
+                "person_dist_error_mae_m", *SOCIAL_COLUMNS)
 #: The leaderboard's mean columns besides success (quality ones: over successful episodes).
 BOARD_MEANS = ("spl", "clearance_time_s", "path_length_m")
 #: The episode table's metric columns.
@@ -215,7 +219,8 @@ def _pair_maps(frame: pd.DataFrame, names: pd.Series, pairs: pd.Series,
     tail = f"<p class=note>{more} more pairs are not drawn.</p>" if more > 0 else ""
     note = ("<p class=note>Each start–goal pair: every agent's path in its colour, the start "
             "(black ring), the goal (green ring: its tolerance), each end in its outcome's "
-            "colour, on the map its episodes' scans build.</p>")
+            "colour, on the map its episodes' scans build; with a crowd, each person's track (pink, a "
+            "ring where it was last seen).</p>")
     return note + key + f'<div class="maps">{"".join(figures)}</div>' + tail
 
 
@@ -270,12 +275,14 @@ def build_report(result: MetricsResult, out_dir: Path, *,
              "agents; every figure from the bags alone.</p>")
     free = goal_less(frame)  # logs without a goal: their own section, not ranked nor failed
     logs = logs_section(frame, names, sketches, _label)
+    coverage = coverage_section(result, names)  # exploration episodes' area seen over time
     ranked = ~free & (frame["error"].fillna("") == "")
     board = (_leaderboard(frame[~free]) + leaderboard_downloads(frame[~free]) if ranked.any()
              else "<p>No episode has a goal: nothing to rank (see Logs without a goal).</p>")
     sections = [
         ("leaderboard", "Leaderboard", board),
         *([("logs", "Logs without a goal", logs)] if logs else []),
+        *([("coverage", "Coverage over time", coverage)] if coverage else []),
         ("paired", "Paired comparisons", _paired(frame, pairs, references, n_boot)),
         ("failures", "How each agent fails", _failures(
             frame, names, {i: s for i, s in sketches.items() if not free[i]})),

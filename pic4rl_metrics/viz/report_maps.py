@@ -4,8 +4,9 @@ drawn on the map its episodes' scans build, as inline PNG images.
 A report of a thousand episodes holds a few hundred small maps, so they are drawn with numpy
 (``raster``, the drawing the episode videos use) on arrays and encoded by Pillow, not with a
 matplotlib figure each. Each episode is first reduced to a ``Sketch``: its path, a subsample
-of its scans' returns in the pose frame (``plots.scan_hits_world``, the videos' map) and its
-end, so an episode's arrays are walked once however many maps show it.
+of its scans' returns in the pose frame (``plots.scan_hits_world``, the videos' map), its end
+and its people's tracks (``people``), so an episode's arrays are walked once however many maps
+show it.
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from __future__ import annotations
 import base64
 import io
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from PIL import Image
 
 from ..core.series import Episode
+from . import people as crowd
 from . import raster
 from .plots import drawn_scans, scan_hits_world
 from .raster import COLORS, View
@@ -52,6 +54,7 @@ class Sketch:
     start: tuple[float, float]
     goal: tuple[float, float] | None
     goal_tolerance_m: float
+    people: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))  # crowd.tracks
 
     @property
     def end(self) -> tuple[float, float]:
@@ -77,7 +80,7 @@ def sketch(episode: Episode, outcome: str) -> Sketch:
     facts = episode.facts.with_defaults()
     start = (facts.start[0], facts.start[1]) if facts.start is not None else tuple(path[0])
     return Sketch(path, returns, outcome, (float(start[0]), float(start[1])), facts.goal,
-                  float(facts.goal_tolerance_m))
+                  float(facts.goal_tolerance_m), crowd.tracks(episode))
 
 
 def _bounds(sketches: Sequence[Sketch], with_returns: bool) -> tuple[float, float, float, float]:
@@ -111,11 +114,14 @@ def _marker(img: np.ndarray, view: View, xy: tuple[float, float], color: object,
 
 def pair_map(sketches: Sequence[tuple[Sketch, tuple[int, int, int]]],
              size: tuple[int, int] = MAP_SIZE) -> np.ndarray:
-    """One start–goal pair: the map of its episodes' scans, each episode's path in its agent's
+    """One start–goal pair: the map of its episodes' scans, the people's tracks of its
+    episodes (pink, a ring where each was last seen), each episode's path in its agent's
     colour, the start (ring), the goal (green ring: its tolerance) and each end in its
     outcome's colour."""
     only = [s for s, _ in sketches]
     img, view = _canvas(only, size)
+    for s in only:
+        crowd.draw_tracks(img, view, s.people)
     for s, color in sketches:
         raster.polyline(img, view, s.path, color, width=2)
     first = only[0]

@@ -4,9 +4,9 @@ The still parts are drawn once with matplotlib (axes, start, goal and its tolera
 centre line, the v and ω profiles, a title with the outcome); each frame is a copy of that
 picture with the moving parts drawn on it with numpy (``raster``): the map built up from the
 scans so far, the path so far, the current scan, the footprint at its heading, the walking
-person and a time cursor across v and ω. Frame ``k`` (of ``duration / speed × fps``) shows
-the episode at ``(k + 1) × speed / fps`` seconds after its first pose, so the last one shows
-its end.
+person, the crowd's people with short track tails (``people``) and a time cursor across v and
+ω. Frame ``k`` (of ``duration / speed × fps``) shows the episode at ``(k + 1) × speed / fps``
+seconds after its first pose, so the last one shows its end.
 """
 
 from __future__ import annotations
@@ -25,7 +25,9 @@ from pic4rl_base.errors import ConfigError
 
 from ..contract import Outcome
 from ..core.series import Episode
+from . import people as crowd
 from . import raster
+from .coverage_plot import seen_shade
 from .plots import END_STYLE, plot_trajectory, plot_velocity_profile, scan_hits_world
 from .raster import COLORS, View
 
@@ -141,7 +143,8 @@ class EpisodeScene:
                         color=tuple(c / 255 for c in COLORS["centerline"]))
         ax_map.update_datalim([bounds[:2], bounds[2:]])
         ax_map.autoscale_view()
-        ax_map.legend(handles=_legend_handles(self._person_track() is not None),
+        person = self._person_track() is not None or ep.people is not None
+        ax_map.legend(handles=_legend_handles(person),
                       loc="upper right", fontsize="x-small", framealpha=0.8)
         plot_velocity_profile(ax_v, ax_w, ep)
         ax_v.tick_params(labelbottom=False)
@@ -178,13 +181,17 @@ class EpisodeScene:
               if ep.scan is not None and len(rows) else np.zeros(0))
         seen = np.searchsorted(ts, self.t_s, side="right")
         person = self._person_track()
+        people = crowd.positions(ep, self.t_s, self.t0_ns)
         base = self.background.copy()
         rr, cc = self.map_box
         view = self.map_view
+        shade = seen_shade(ep, view, base[rr, cc].shape[:2], self.t0_ns)  # explore: area seen
         last_pose, last_scan = 0, 0
         path_end = (float(pose.x[0]), float(pose.y[0]))
         for k in range(self.n_frames):
             map_img = base[rr, cc]
+            if shade is not None:
+                shade.draw(map_img, self.t_s[k])
             raster.points(map_img, view, sx[last_scan:seen[k]], sy[last_scan:seen[k]],
                           COLORS["map"], size=2)
             path = [path_end, *zip(pose.x[last_pose:upto[k]], pose.y[last_pose:upto[k]]),
@@ -198,6 +205,8 @@ class EpisodeScene:
                               size=3)
             if person is not None:
                 raster.disc(sub, view, person[0][k], person[1][k], 0.25, COLORS["person"])
+            if people is not None:
+                crowd.draw_frame(sub, view, people, k, self.options.fps / self.options.speed)
             color = self._robot_color(k)
             raster.footprint(sub, view, float(x[k]), float(y[k]), float(yaw[k]),
                              facts.footprint, color)
