@@ -6,7 +6,9 @@ One implementation for both: ``protocol_cells`` aggregates a result frame by its
 (``wilson_interval``) and the layout's metric means, with their bootstrap 95 % intervals
 (``bootstrap_interval``) where the layout says so. ``barn``: success, collision and timeout
 rates, the mean BARN time (over the successes) and the mean BARN score (over every judged
-episode); ``paper``: success and the paper's columns with SPL. A task without a goal
+episode); ``paper``: success and the paper's columns with SPL; ``explore``: the BARN rates,
+then the mean coverage, area seen, times to 50 % and 90 % and path per area seen, ranked by
+coverage. A task without a goal
 (``groups.headline``) heads with its full runs: a ``full runs`` column after success. An agent
 is a row key like any other: a plugin's, a ROS stack's or a shipped agent's name is one more
 row. ``render_protocol`` lays the rows out per task and world set (``groups.split``), as
@@ -55,10 +57,15 @@ class Layout:
 
 #: The paper layout's means: Table 1's columns after success, then SPL.
 PAPER_MEANS = (*[c for c in TABLE1_COLUMNS if c != "success"], "spl")
+#: The explore layout's means: the coverage columns (``core.tasks.coverage``).
+EXPLORE_MEANS = ("coverage_pct", "area_seen_m2", "time_to_50pct_s", "time_to_90pct_s",
+                 "path_per_area_seen_mpm2")
 #: The layouts a suite's ``table`` and ``compare --table`` name.
 LAYOUTS = {"paper": Layout(("success",), PAPER_MEANS, False, "spl"),
            "barn": Layout(("success", "collision", "timeout"), ("barn_time_s", "barn_score"),
-                          True, "barn_score", worlds="barn_world")}
+                          True, "barn_score", worlds="barn_world"),
+           "explore": Layout(("success", "collision", "timeout"), EXPLORE_MEANS, True,
+                             "coverage_pct")}
 #: The header of the full runs' column (``aggregate``'s ``full_runs``: a task without a goal).
 FULL_RUNS_LABEL = "full runs"
 #: Where the BARN layout's worlds are told apart, in words (for its notes and errors).

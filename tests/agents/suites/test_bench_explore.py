@@ -1,0 +1,64 @@
+"""``config/suite_explore.yaml``: the exploration baselines on held-out worlds (none of the
+env's training variants), and a reduced copy (one indoor world, one episode per baseline) run
+in process end to end into the explore table's coverage columns, equal to the bags'."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from pic4rl_agents.suites import runner as bench
+from pic4rl_agents.suites.suite import load_suite
+from pic4rl_metrics import compute
+
+REPO = Path(__file__).resolve().parents[3]
+SUITE = REPO / "config" / "suite_explore.yaml"
+
+
+def _training_variants() -> set[int]:
+    env = yaml.safe_load((REPO / "config" / "env_explore.yaml").read_text())
+    text = env["nav_env"]["ros__parameters"]["episodes"]["world_variants"]
+    low, high = (int(v) for v in text.split(":"))
+    return set(range(low, high))
+
+
+def test_the_suite_is_both_baselines_on_held_out_worlds(tmp_path: Path) -> None:
+    suite = load_suite(SUITE, bags_dir=tmp_path)
+    assert suite.table == "explore" and len(suite.cells) == 2 * 5
+    assert sorted({c.agent for c in suite.cells}) == ["frontier", "random_walk"]
+    indoor = {c.variant for c in suite.cells if c.world == "indoor"}
+    assert indoor == {1000, 1001, 1002} and not indoor & _training_variants()
+    assert {c.variant for c in suite.cells if c.world == "barn_like"} == {1000, 1001}
+    assert {c.pairs.episodes for c in suite.cells} == {2}
+    assert {c.row["world"] for c in suite.cells} == {"indoor:heldout", "barn_like:fields"}
+
+
+@pytest.mark.heavy
+def test_a_reduced_suite_runs_in_process_into_the_coverage_columns(tmp_path: Path) -> None:
+    data = yaml.safe_load(SUITE.read_text())
+    task = data["tasks"][0]
+    task.update(env=str(REPO / "config" / "env_explore.yaml"), pairs=[{"episodes": 1}],
+                worlds=[{"world": "indoor", "label": "heldout", "variants": [1000]}])
+    path = tmp_path / "suite.yaml"
+    path.write_text(yaml.safe_dump(data))
+    suite = load_suite(path, bags_dir=tmp_path / "bags")
+    table = bench.bench_suite(suite, workers=2, local=True, progress=False)
+    h = table.header
+    assert h[6:12:2] == ("success", "collision", "timeout")
+    assert h[12:22:2] == ("coverage [%]", "area seen [m²]", "time to 50 % seen [s]",
+                          "time to 90 % seen [s]", "path per area seen [m/m²]")
+    assert [r[1] for r in table.rows] == ["frontier", "random_walk"]
+    for row in table.rows:
+        cells = dict(zip(h, row))
+        assert cells["status"] == "ok" and cells["n"] == "1"
+        bags = sorted(suite.root.glob(f"explore-{cells['agent']}-*/*/episode_*"))
+        frame = compute(bags).frame
+        assert len(frame) == 1 and (frame["error"] == "").all()
+        coverage = float(frame["coverage_pct"].iloc[0])
+        assert 0.0 < coverage <= 105.0  # up to the walls' faces: a few cells past the floor
+        assert cells["coverage [%]"] == f"{coverage:.2f}"
+        assert cells["area seen [m²]"] == f"{float(frame['area_seen_m2'].iloc[0]):.2f}"
+    report = (suite.root / "report.html").read_text()
+    assert 'id="sec-coverage"' in report and 'data-agent="frontier"' in report
