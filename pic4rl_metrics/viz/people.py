@@ -1,15 +1,17 @@
-"""The crowd on the pictures: people as discs with short track tails in the episode videos, and
-their whole tracks on the report's trajectory maps.
+"""The crowd on the pictures: people as discs with short track tails in the episode videos, their
+whole tracks on the report's trajectory maps and on ``pic4rl-metrics plot``'s trajectory.
 
 An episode with a ``people`` topic (``Episode.people``: one column per person, NaN where a
 message lacks that person) is drawn where the robot met them, so a video or a map shows why a
-path bent or a social metric is what it is. Drawing is numpy (``raster``), as the rest of the
-videos' and maps' moving parts.
+path bent or a social metric is what it is. Videos and maps are drawn with numpy (``raster``),
+as the rest of their moving parts; the episode figure with matplotlib, as the rest of it.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.patches import Circle
 
 from ..core.series import Episode
 from . import raster
@@ -73,3 +75,15 @@ def draw_tracks(img: np.ndarray, view: View, people: np.ndarray) -> None:
             x, y = track[np.flatnonzero(present)[-1]]
             raster.disc(img, view, float(x), float(y), PERSON_RADIUS_M, COLORS["person"],
                         ring_px=1.5)
+
+
+def plot_tracks(ax: Axes, episode: Episode) -> None:
+    """Every person's track on the episode figure's trajectory axes: a thin line (gid
+    ``people``), a disc where it was last seen."""
+    rgb = tuple(c / 255 for c in COLORS["person"])
+    for track in tracks(episode):
+        present = np.flatnonzero(np.isfinite(track).all(axis=1))
+        if len(present):
+            ax.plot(track[:, 0], track[:, 1], color=rgb, lw=0.8, zorder=1.5, gid="people")
+            ax.add_patch(Circle(tuple(track[present[-1]]), PERSON_RADIUS_M, color=rgb,
+                                zorder=1.5, gid="person"))

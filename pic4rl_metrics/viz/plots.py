@@ -27,6 +27,7 @@ from ..core.registry import METRICS
 from ..core.scan_summary import ScanSummary
 from ..core.series import Episode, ScanSeries
 from ..tables.results import EpisodeMetrics
+from .people import plot_tracks
 
 #: End marker (marker, colour, legend text) per outcome; ``None`` reads as unknown.
 END_STYLE: dict[Outcome, tuple[str, str, str]] = {
@@ -225,8 +226,8 @@ def episode_figure(episode: Episode, metrics: EpisodeMetrics | None = None) -> F
     right = [ax_v] + [fig.add_subplot(grid[i, 1], sharex=ax_v) for i in (1, 2, 3)]
 
     plot_trajectory(ax_traj, episode)
-    names = {"path": "path", "start": "start", "goal": "goal",
-             "end": END_STYLE[_outcome(facts)][2]}
+    plot_tracks(ax_traj, episode)
+    names = {"path": "path", "start": "start", "goal": "goal", "end": END_STYLE[_outcome(facts)][2]}
     handles = [a for a in ax_traj.lines if a.get_gid() in names]
     ax_traj.legend(handles, [names[h.get_gid()] for h in handles], loc="lower right",
                    fontsize="small")
@@ -281,8 +282,7 @@ def trajectories_figure(episodes: Sequence[Episode], *, group_by: str = "agent")
         labelled.add(group)
         plot_trajectory(ax_traj, ep, label=label, color=colors[group])
         vel = velocity_series(ep.pose)
-        ax_speed.plot(seconds(vel.t_ns, _t0(ep)), vel.vx, color=colors[group], lw=1,
-                      alpha=0.8)
+        ax_speed.plot(seconds(vel.t_ns, _t0(ep)), vel.vx, color=colors[group], lw=1, alpha=0.8)
     ax_traj.legend(title=group_by, fontsize="small")
     ax_speed.set_xlabel("t [s]")
     ax_speed.set_ylabel(FORWARD_SPEED_LABEL)

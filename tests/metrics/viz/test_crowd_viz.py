@@ -1,6 +1,7 @@
 """The crowd on the pictures (issue 41 item 6), from synthetic bags with people: the report's
 leaderboard has the social columns and its pair map draws the people's tracks, a video frame
-has the person colour where a person stands, and pictures of a bag without people have none."""
+has the person colour where a person stands, the episode plot draws each track, and pictures of
+a bag without people have none."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from pic4rl_metrics.synthetic.synthetic import Obstacles, Track, straight_line, 
 from pic4rl_metrics.synthetic.synthetic_crowd import standing
 from pic4rl_metrics.viz.html_report import write_report
 from pic4rl_metrics.viz.people import PERSON_RADIUS_M
+from pic4rl_metrics.viz.plots import episode_figure
 from pic4rl_metrics.viz.raster import COLORS, View
 from pic4rl_metrics.viz.report_maps import SKETCH_SCANS, _bounds, pair_map, sketch
 from pic4rl_metrics.viz.video import EpisodeScene, VideoOptions
@@ -88,3 +90,15 @@ def test_a_video_frame_draws_a_person_where_it_stands(tmp_path: Path) -> None:
                                       full_scans=True), VideoOptions(fps=10))
     last = list(plain.frames())[-1][plain.map_box]
     assert not np.all(last == COLORS["person"], axis=-1).any()
+
+
+def test_the_episode_plot_draws_each_persons_track(tmp_path: Path) -> None:
+    fig = episode_figure(read_episode(_bag(tmp_path / "ep", "orca"), full_scans=True))
+    ax = fig.axes[0]
+    tracks = [line for line in ax.lines if line.get_gid() == "people"]
+    assert len(tracks) == 2
+    ends = sorted(tuple(np.round(p.center, 2)) for p in ax.patches if p.get_gid() == "person")
+    assert ends == [PERSON, (5.0, round(-2.0 + 0.3 * 12.0, 2))]
+    bare = episode_figure(read_episode(_bag(tmp_path / "bare", "dwa", people=False),
+                                       full_scans=True))
+    assert not [line for line in bare.axes[0].lines if line.get_gid() == "people"]
