@@ -43,7 +43,7 @@ def positions(episode: Episode, t_s: np.ndarray, t0_ns: int) -> np.ndarray | Non
 def draw_frame(img: np.ndarray, view: View, xy: np.ndarray, k: int, frames_per_s: float) -> None:
     """Frame ``k`` of ``xy`` (``positions`` at the frames' times): each person present a disc,
     behind it a tail over the last ``TAIL_S`` seconds of frames."""
-    first = max(0, k - int(round(TAIL_S * frames_per_s)))
+    first = max(0, k - round(TAIL_S * frames_per_s))
     for person in range(xy.shape[1]):
         raster.polyline(img, view, xy[first:k + 1, person], COLORS["person"])
         x, y = xy[k, person]

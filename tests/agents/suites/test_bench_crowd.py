@@ -55,5 +55,5 @@ def test_two_episodes_run_in_process_into_the_social_columns(tmp_path: Path) -> 
     assert frame["people_dist_min_m"].notna().all() and (frame["people_dist_min_m"] > 0).all()
     assert (frame["personal_intrusion_time_s"] >= 0).all()
     board = re.search(r'<table id="leaderboard".*?</table>',
-                      (suite.root / "report.html").read_text(), re.S)
+                      (suite.root / "report.html").read_text(), re.DOTALL)
     assert board is not None and "min person distance [m]" in board.group(0)

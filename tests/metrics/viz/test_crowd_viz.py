@@ -39,7 +39,7 @@ def _bag(path: Path, agent: str, people: bool = True) -> Path:
 
 
 def _pixel(view: View, x: float, y: float) -> tuple[int, int]:
-    col, row = (int(round(float(v))) for v in view.pixels(x, y))
+    col, row = (round(float(v)) for v in view.pixels(x, y))
     return row, col
 
 
@@ -49,7 +49,7 @@ def test_the_report_has_the_social_columns_and_draws_the_people(tmp_path: Path) 
     out = tmp_path / "report.html"
     write_report(result, out)
     text = out.read_text()
-    board = re.search(r'<table id="leaderboard".*?</table>', text, re.S)
+    board = re.search(r'<table id="leaderboard".*?</table>', text, re.DOTALL)
     assert board is not None
     for label in ("personal zone time [s]", "min person distance [m]", "people collisions"):
         assert label in board.group(0), label
