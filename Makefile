@@ -59,6 +59,12 @@ BARN_DEMO := bags/demo_barn
 # (bags/demo_crowd/results.md, report.html) and a video per bag, the people drawn with their
 # tracks' tails (bags/demo_crowd/videos/).
 CROWD_DEMO := bags/demo_crowd
+# `make demo CASE=explore`: the two exploration baselines, frontier and random walk, on held-out
+# indoor worlds and BARN-like fields, in process (config/suite_explore.yaml): a bag per episode,
+# the explore table (coverage %, times to 50 % and 90 %; bags/explore/results.md), the report
+# with the coverage curves (bags/explore/report.html) and a video per bag shading the floor
+# seen (bags/explore/videos/).
+EXPLORE_DEMO := bags/explore
 demo: setup
 ifeq ($(CASE),barn)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_barn_demo.yaml
@@ -66,6 +72,9 @@ ifeq ($(CASE),barn)
 else ifeq ($(CASE),crowd)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_crowd_demo.yaml
 	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(CROWD_DEMO)/videos $(CROWD_DEMO)
+else ifeq ($(CASE),explore)
+	$(VENV)/bin/pic4rl-bench --no-progress config/suite_explore.yaml
+	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(EXPLORE_DEMO)/videos $(EXPLORE_DEMO)
 else ifeq ($(CASE),person)
 	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
 else ifeq ($(CASE),vineyard)

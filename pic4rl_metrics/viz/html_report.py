@@ -1,7 +1,8 @@
 """``pic4rl-metrics report``: one self-contained HTML page of a benchmark, from its bags alone.
 
 In order: the leaderboard (``aggregate``'s counts and means, the Wilson interval), the logs
-without a goal (``report_logs``: real-robot bags, not ranked), the paired comparisons on shared
+without a goal (``report_logs``: real-robot bags, not ranked), an exploration's coverage curves
+(``coverage_plot``), the paired comparisons on shared
 start–goal pairs (``paired``) — leaderboard and comparisons per task and world set
 (``groups``) —, how each agent fails (outcome counts, the ends of its failed episodes on the
 scan-built map), each pair's trajectories on one small map (``report_maps``), every episode

@@ -5,7 +5,8 @@ centre line, the v and ω profiles, a title with the outcome); each frame is a c
 picture with the moving parts drawn on it with numpy (``raster``): the map built up from the
 scans so far, the path so far, the current scan, the footprint at its heading, the walking
 person, the crowd's people with short track tails (``people``) and a time cursor across v and
-ω. Frame ``k`` (of ``duration / speed × fps``) shows the episode at ``(k + 1) × speed / fps``
+ω; an exploration's floor seen so far is tinted (``coverage_plot``). Frame ``k`` (of
+``duration / speed × fps``) shows the episode at ``(k + 1) × speed / fps``
 seconds after its first pose, so the last one shows its end.
 """
 
