@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from pic4rl_base import atomic
+from pic4rl_base.params_file import ENV_NODE
 from pic4rl_bridge.errors import ConfigError
 
 CONFIG = "config.yaml"
@@ -33,6 +34,15 @@ SUMMARY = "summary.yaml"
 REWARD_CURVE = "reward_curve.png"
 EVALUATIONS = "evaluations.csv"
 CHECKPOINT_PREFIX = "model"  # SB3's CheckpointCallback name_prefix
+
+
+def agent_sections(sections: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """A trained agent's saved sections without its run's ``record.*`` choices: a test records
+    what its own files ask (topics added since the agent was trained included)."""
+    return {node: {k: v for k, v in params.items()
+                   if not (node == ENV_NODE and k.startswith("record."))}
+            for node, params in sections.items()}
+
 
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
 

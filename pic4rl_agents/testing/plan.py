@@ -122,7 +122,7 @@ def _agents(plan: TestPlan, files: Sections) -> list[AgentSpec]:
         if config is None and not plan.params_files:
             raise ConfigError(f"--agent {path}: no {rundir.CONFIG} beside the model; give the "
                               "env with --ros-args --params-file FILE and --algorithm")
-        own = params_file.load([config], NODES) if config else {}
+        own = rundir.agent_sections(params_file.load([config], NODES)) if config else {}
         sources = ([str(config)] if config else []) + list(plan.params_files)
         run = run_config(params_file.merge(own, files), sources, train=train_overrides,
                          env=plan.env_overrides, sim=plan.sim_overrides)

@@ -198,3 +198,16 @@ def test_the_input_shaping_sim_keys_are_sim_parameters() -> None:
     names = {spec.name for spec in parameter_table(load_robot("jackal"))}
     assert set(AGENT_SIM_KEYS) <= names
     assert not {"world", "world_variant", "seed", "lidar.noise_std_m"} & set(AGENT_SIM_KEYS)
+
+
+def test_an_agents_saved_record_settings_are_not_the_tests() -> None:
+    """td3_lidar's config lists the topics recorded when it was trained (no people, no tf): a
+    test records what the test asks, so a crowd's people reach the agent's bags too."""
+    saved = yaml.safe_load((TD3_LIDAR / "config.yaml").read_text())["nav_env"]["ros__parameters"]
+    assert "people" not in saved["record.topics"]
+    plan = testplan.TestPlan(agents=(str(TD3_LIDAR),), baselines=("dwa",),
+                             params_files=(str(ROOT / "config" / "env_crowd.yaml"),))
+    specs = resolve_agents(plan)
+    assert [s.name for s in specs] == ["td3_lidar", "dwa"]
+    for spec in specs:
+        assert {"people", "tf", "tf_static", "scan"} <= set(spec.run.env.record.topics), spec.name
