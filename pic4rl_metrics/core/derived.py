@@ -22,7 +22,7 @@ from .kinematics import (Derivative, PathTurning, VelocitySeries, bearing_in_bod
 from .roles import SERIES_ROLES
 from .scan_summary import ROW_TASK, ScanClearance, ScanSummary, summarize
 from .series import Episode
-from .tasks.seen import SeenCurve, seen_curve
+from .tasks.seen import SeenCurve, seen_curve, wants_seen
 
 NAN = float("nan")
 #: Positions closer than this are merged before the path's turning is measured (m).
@@ -122,8 +122,10 @@ class Derived:
     def success(self) -> float:
         """1 or 0; NaN when the end says nothing of the agent (``UNJUDGED``) or the episode
         has no goal (no goal fact, no recorded ``goal`` outcome: person monitoring, a real log
-        without one), where a table heads with the full runs instead."""
-        goal_less = self.facts.goal is None and self.outcome is not Outcome.GOAL
+        without one), where a table heads with the full runs instead. A simulated exploration
+        (its world's ``free_area_m2`` known) has its coverage target for a goal: judged."""
+        target = wants_seen(self.facts) and self.facts.free_area_m2 is not None
+        goal_less = self.facts.goal is None and self.outcome is not Outcome.GOAL and not target
         if self.outcome in UNJUDGED or goal_less:
             return NAN
         return float(self.outcome is Outcome.GOAL)

@@ -53,6 +53,9 @@ def test_a_reduced_suite_runs_in_process_into_the_coverage_columns(tmp_path: Pat
     for row in table.rows:
         cells = dict(zip(h, row))
         assert cells["status"] == "ok" and cells["n"] == "1"
+        # every episode judged: reaching the coverage target is its goal, anything else not
+        rates = [cells[r] for r in ("success", "collision", "timeout")]
+        assert all(r in ("0/1", "1/1") for r in rates) and rates.count("1/1") == 1, rates
         bags = sorted(suite.root.glob(f"explore-{cells['agent']}-*/*/episode_*"))
         frame = compute(bags).frame
         assert len(frame) == 1 and (frame["error"] == "").all()
