@@ -14,24 +14,14 @@ The last lines are ``RESULT <name> <value>`` for ``docs/performance.md``.
 from __future__ import annotations
 
 import argparse
-import time
+
+from _engine_rtf import best_rtf
 
 from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.engine.crowd.params import CrowdParams
 from pic4rl_sim.engine.engine_config import EngineConfig
-from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.worlds.generators import make_world
-
-
-def rtf(engine: Engine, steps: int) -> float:
-    """Simulated seconds per wall second over ``steps`` control steps (a slow turn)."""
-    command = Twist2D(0.3, 0.0, 0.2)
-    start = time.perf_counter()
-    for _ in range(steps):
-        engine.step(command)
-        engine.scan()
-    return steps * engine.config.control_dt_s / (time.perf_counter() - start)
 
 
 def main() -> None:
@@ -44,11 +34,7 @@ def main() -> None:
     crowd = Engine(JACKAL, world, EngineConfig(crowd=CrowdParams(count=args.people,
                                                                  max_group_size=3)), seed=0)
     empty = Engine(JACKAL, world, EngineConfig(), seed=0)
-    best = {"crowd": 0.0, "empty": 0.0}
-    for _ in range(args.repeat):
-        for name, engine in (("crowd", crowd), ("empty", empty)):
-            engine.reset(seed=0)
-            best[name] = max(best[name], rtf(engine, args.steps))
+    best = best_rtf({"crowd": crowd, "empty": empty}, args.steps, args.repeat)
     print(f"crowd of {args.people}: {best['crowd']:.1f} x real time; no people: "
           f"{best['empty']:.1f} x; ratio {best['crowd'] / best['empty']:.2f}")
     print(f"RESULT crowd_empty_rtf {best['empty']:.1f}")

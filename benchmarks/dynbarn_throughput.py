@@ -14,22 +14,12 @@ moving ÷ still says what the motion costs. The last lines are ``RESULT <name> <
 from __future__ import annotations
 
 import argparse
-import time
+
+from _engine_rtf import best_rtf
 
 from pic4rl_sim.engine.core import Engine
-from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.robot_specs import JACKAL
 from pic4rl_sim.engine.worlds.generators import make_world
-
-
-def rtf(engine: Engine, steps: int) -> float:
-    """Simulated seconds per wall second over ``steps`` control steps (a slow turn)."""
-    command = Twist2D(0.3, 0.0, 0.2)
-    start = time.perf_counter()
-    for _ in range(steps):
-        engine.step(command)
-        engine.scan()
-    return steps * engine.config.control_dt_s / (time.perf_counter() - start)
 
 
 def main() -> None:
@@ -40,11 +30,7 @@ def main() -> None:
     args = parser.parse_args()
     engines = {"moving": Engine(JACKAL, make_world("dynbarn", seed=1, moving_count=args.moving)),
                "still": Engine(JACKAL, make_world("dynbarn", seed=1, moving_count=0))}
-    best = dict.fromkeys(engines, 0.0)
-    for _ in range(args.repeat):
-        for name, engine in engines.items():
-            engine.reset(seed=0)
-            best[name] = max(best[name], rtf(engine, args.steps))
+    best = best_rtf(engines, args.steps, args.repeat)
     ratio = best["moving"] / best["still"]
     print(f"dynbarn, {args.moving} moving: {best['moving']:.1f} x real time; still: "
           f"{best['still']:.1f} x; ratio {ratio:.2f}")
