@@ -28,7 +28,8 @@ from .paths import plan_path
 from .robot_specs import Drive, RobotSpec
 from .sampling import check_free, sample_start_goal
 from .sensor_kinds import NAMES as KIND_NAMES
-from .sensors import KINDS_BY_NAME, SENSOR_TABLE, DepthCamera, Imu, ImuReading, Lidar, WheelOdometry
+from .sensors import (KINDS_BY_NAME, OWN_KINDS, SENSOR_TABLE, DepthCamera, Imu, ImuReading, Lidar,
+                      WheelOdometry)
 from .worlds.spec import WorldSpec
 
 log = logging.getLogger(__name__)
@@ -36,11 +37,12 @@ log = logging.getLogger(__name__)
 _DIVERGED_SPEED = 1e3  # m/s or rad/s: no robot gets near, a blown-up solver does
 _BAD_STATE_WARNINGS = [int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADQPOS),
                        int(mujoco.mjtWarning.mjWARN_BADQVEL)]
-# Independent random streams per purpose: reading one sensor never shifts another's noise
-# (a sensor kind added at the end of SENSOR_TABLE leaves the others' streams as they were;
-# the crowd's comes after a user's sensors', for the same reason, and ``sensor_kinds``' after it).
-_STREAMS = ("sampling", *(kind.name for kind in SENSOR_TABLE if kind.name not in KIND_NAMES),
-            "crowd", *KIND_NAMES)
+# Independent random streams per purpose: reading one sensor never shifts another's noise.
+# The order is the order streams were added in (pic4rl's first sensors, the crowd, then
+# ``sensor_kinds``'), and a user's sensors come last, so installing one leaves every
+# stream of pic4rl's as it was.
+_STREAMS = ("sampling", *(name for name in OWN_KINDS if name not in KIND_NAMES), "crowd",
+            *KIND_NAMES, *(kind.name for kind in SENSOR_TABLE if kind.name not in OWN_KINDS))
 _SAMPLING_ROUNDS = 200  # pairs drawn to find a partner for a given start or goal
 
 

@@ -218,6 +218,8 @@ SENSOR_TABLE = (
     SensorKind(stereo.NAME, stereo.StereoCameraSpec, stereo.build, stereo.read, optional=True,
                carried=False, label="stereo depth camera", publishes="stereo/*"),
 )
+#: pic4rl's own kinds, before any user's.
+OWN_KINDS = tuple(kind.name for kind in SENSOR_TABLE)
 #: A user's sensors, after pic4rl's: each a ``SensorKind`` that its package names in this
 #: entry-point group under the kind's name (its topic in ``pic4rl.interfaces``, its reading
 #: in ``pic4rl.readings``).

@@ -273,6 +273,23 @@ def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
     _ranges_are_the_goal_distance(tmp_path / "bags" / "r", 20)
 
 
+def test_a_sensor_from_outside_leaves_every_random_stream_of_pics_as_it_was(
+        tmp_path: Path) -> None:
+    """A user's sensor draws from a stream of its own, after every stream of pic4rl's, so the
+    same seed gives the same sampling, noise and crowd with it installed."""
+    import json
+
+    code = "import json; from pic4rl_sim.engine import core; print(json.dumps(core._STREAMS))"
+    run = [sys.executable, "-c", code]
+    plain = subprocess.run(run, capture_output=True, text=True, timeout=120, check=True)
+    mine = json.loads(plain.stdout.splitlines()[-1])
+    user = subprocess.run(run, env=_install("sensor", tmp_path / "site"), capture_output=True,
+                          text=True, timeout=120, check=True)
+    theirs = json.loads(user.stdout.splitlines()[-1])
+    assert {"sampling", "lidar", "crowd", "sonar"} <= set(mine)
+    assert theirs == [*mine, "goal_range"]
+
+
 #: The same over ROS 2: the sim node publishes the user's topic, the ROS transport records it.
 SENSE_ROS = """
 import sys
