@@ -1,5 +1,5 @@
-"""One ``ConfigError`` for every package: the metrics define it (the lowest room), the sim and
-the bridge re-export it, so a bad value met anywhere below ``pic4rl-test`` or ``pic4rl-train``
+"""One ``ConfigError`` for every package: the shared base defines it (``pic4rl_base.errors``),
+the metrics, the sim and the bridge re-export it, so a bad value met anywhere below ``pic4rl-test`` or ``pic4rl-train``
 (the bag contract's checks inside ``NavEnv`` included) is one line and exit 2."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 from agents_helpers import LIDAR_TD3
 
+import pic4rl_base.errors
 import pic4rl_bridge.errors
 import pic4rl_metrics
 import pic4rl_metrics.errors
@@ -23,11 +24,14 @@ MESSAGE = "outcome: 'won' is not an outcome; expected one of goal, collision, ti
 
 
 def test_every_package_names_the_same_class() -> None:
-    one = pic4rl_metrics.errors.ConfigError
+    one = pic4rl_base.errors.ConfigError
+    assert pic4rl_metrics.errors.ConfigError is one
     assert pic4rl_sim.errors.ConfigError is one
     assert pic4rl_bridge.errors.ConfigError is one
     assert pic4rl_metrics.ConfigError is one
-    assert issubclass(one, pic4rl_metrics.errors.MetricsError)
+    # what a console script catches as bad input: every package's own errors too
+    assert issubclass(one, pic4rl_base.errors.Pic4rlError)
+    assert issubclass(pic4rl_metrics.errors.MetricsError, pic4rl_base.errors.Pic4rlError)
 
 
 def _main(main, argv: list[str]) -> tuple[int, str, str]:

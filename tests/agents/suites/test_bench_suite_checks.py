@@ -12,6 +12,7 @@ import yaml
 from pic4rl_agents.suites import runner as bench
 from pic4rl_agents.suites import table as benchtable
 from pic4rl_agents.suites.suite import load_suite
+from pic4rl_sim.engine.worlds.generators import WORLD_TABLE
 
 REPO = Path(__file__).resolve().parents[3]
 
@@ -36,8 +37,8 @@ BARN_300 = ("tasks[0].worlds: barn:300: sim parameters: world_variant: 300 is in
 @pytest.mark.parametrize(("task", "message"), [
     ({"worlds": ["barn:300"]}, BARN_300),
     ({"worlds": ["barnx:3"]}, "tasks[0].worlds: barnx:3: sim parameters: world: 'barnx' is "
-     "invalid; expected a generator (indoor, obstacles, vineyard, person, barn, barn_like) or "
-     "a path ending in .xml; did you mean 'barn'?"),
+     f"invalid; expected a generator ({', '.join(WORLD_TABLE)}) or a path ending in .xml; "
+     "did you mean 'barn'?"),
     # a group's good variant does not hide its bad one
     ({"worlds": [{"world": "barn", "variants": [0, 300], "label": "t"}]}, BARN_300),
     ({"worlds": ["indoor:1", "missing.xml"]}, "tasks[0].worlds: missing.xml: sim parameters: "),
