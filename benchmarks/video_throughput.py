@@ -120,7 +120,9 @@ def env_worker(steps: int, repeat: int) -> None:
     loops of ``steps`` steps with rendering off."""
     from pic4rl_bridge.env import NavEnv
 
-    env = NavEnv(CONFIG, transport="inprocess", overrides={"episode_max_steps": steps})
+    # the env file of this tree (the working folder: the old tree's own, whose keys it knows)
+    env = NavEnv(CONFIG.relative_to(REPO), transport="inprocess",
+                 overrides={"episode_max_steps": steps})
     best = min(env_loop(env, steps) for _ in range(repeat))
     print(len(NavEnv.metadata["render_modes"]), best)
     env.close()
@@ -137,11 +139,11 @@ def base_revision(against: str | None) -> str | None:
 
 
 def old_packages(rev: str, folder: Path) -> Path:
-    """The bridge and the packages it runs on (sim, metrics) at ``rev``, unpacked into
-    ``folder``: an old bridge does not run on today's sim and metrics."""
+    """The bridge and the packages it runs on (sim, metrics) and its env file at ``rev``,
+    unpacked into ``folder``: an old bridge does not run on today's sim, metrics or keys."""
     archive = folder / "old.tar"
     subprocess.run(["git", "archive", "-o", str(archive), rev, "pic4rl_bridge", "pic4rl_sim",
-                    "pic4rl_metrics"], cwd=REPO, check=True)
+                    "pic4rl_metrics", str(CONFIG.relative_to(REPO))], cwd=REPO, check=True)
     with tarfile.open(archive) as tar:
         tar.extractall(folder / "old", filter="data")
     return folder / "old"

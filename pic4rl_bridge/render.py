@@ -44,6 +44,7 @@ class TopDownView:
 
     def __init__(self, scenario: Scenario, goal_tolerance_m: float, *,
                  depth: bool = False) -> None:
+        self.scenario = scenario
         self.world = scenario.world
         self.footprint = scenario.robot.footprint
         self.goal_tolerance_m = goal_tolerance_m
@@ -52,9 +53,13 @@ class TopDownView:
         self.background: np.ndarray | None = None
         self.path: list[tuple[float, float]] = []
         if self.world is not None:
-            xmin, ymin, xmax, ymax = self.world.bounds
-            height = _multiple_of_16(VIEW_PX * (ymax - ymin) / (xmax - xmin))
-            self._draw_world(View.fit(self.world.bounds, VIEW_PX, height))
+            self._fit_world()
+
+    def _fit_world(self) -> None:
+        """The still picture of the current world, fitted to its bounds."""
+        xmin, ymin, xmax, ymax = self.world.bounds
+        height = _multiple_of_16(VIEW_PX * (ymax - ymin) / (xmax - xmin))
+        self._draw_world(View.fit(self.world.bounds, VIEW_PX, height))
 
     def _draw_world(self, view: View) -> None:
         """The still picture: the band, then the map in ``view`` (of the map alone)."""
@@ -75,9 +80,13 @@ class TopDownView:
                                         (xmin, ymin)], COLORS["obstacle"])
 
     def begin(self, frame: SensorFrame, context: EpisodeContext) -> None:
-        """A new episode: its path restarts; without a world, the view centres on its start
-        and reaches the scan's range and the goal."""
+        """A new episode: its path restarts; its world is drawn anew when it has one of its own
+        (``episodes.world_variants``); without a world, the view centres on its start and
+        reaches the scan's range and the goal."""
         self.path = [(frame.pose.x, frame.pose.y)]
+        if self.scenario.world is not self.world:  # a world per episode: this one's
+            self.world = self.scenario.world
+            self._fit_world()
         if self.world is None:
             reach = min(frame.scan.range_max_m, 10.0) if frame.scan is not None else 5.0
             if context.goal is not None:
@@ -198,9 +207,6 @@ def make_view(view: str, scenario: Scenario, transport: Any, goal_tolerance_m: f
     """The picture-maker ``render_view`` names: ``top`` (default; ``depth``: the frames carry
     a depth image to show) or ``mujoco``."""
     if view == "top":
-        if scenario.variants:
-            raise ConfigError("render_view: 'top' draws one world; this env draws its world "
-                              "per episode (episodes.world_variants): unset it to render")
         return TopDownView(scenario, goal_tolerance_m, depth=depth)
     if view != "mujoco":
         raise ConfigError(f"render_view: {view!r} is invalid; expected one of "

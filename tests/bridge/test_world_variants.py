@@ -59,7 +59,7 @@ def test_a_world_per_episode_refuses_one_worlds_pairs_and_map_tasks(overrides: d
 
 
 @pytest.mark.bad_input
-def test_map_aware_baselines_and_the_top_view_refuse_a_world_per_episode() -> None:
+def test_map_aware_baselines_refuse_a_world_per_episode() -> None:
     env = NavEnv(BARN, overrides={"episodes.world_variants": "1,2"})
     try:
         with pytest.raises(ConfigError, match=r"^--baseline planner: it drives on one world's "
@@ -68,8 +68,24 @@ def test_map_aware_baselines_and_the_top_view_refuse_a_world_per_episode() -> No
         make_baseline("explorer", env.config, env.scenario.robot)  # mapless: it fits
     finally:
         env.close()
-    with pytest.raises(ConfigError, match="^render_view: 'top' draws one world"):
-        NavEnv(BARN, overrides={"episodes.world_variants": "1,2"}, render_mode="rgb_array")
+
+
+def test_the_top_view_draws_each_episodes_own_world() -> None:
+    """The still picture (the world's obstacles) is the episode's world's: two variants, two
+    pictures, and a variant met again gives its picture again."""
+    env = NavEnv(BARN, overrides={"episodes.world_variants": "1,2"}, render_mode="rgb_array")
+    try:
+        stills: dict[str, list] = {}
+        for i in range(6):
+            env.reset(seed=5 if i == 0 else None)
+            assert env.render().shape[2] == 3
+            stills.setdefault(env.transport.world_name, []).append(env._view.background.copy())
+        assert len(stills) == 2
+        (a, *a_again), (b, *_) = stills.values()
+        assert (a != b).any()
+        assert all((a == other).all() for other in a_again)
+    finally:
+        env.close()
 
 
 def _worlds(env: NavEnv, seed: int, episodes: int) -> list[tuple[str, int]]:
