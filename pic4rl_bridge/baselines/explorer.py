@@ -31,10 +31,9 @@ class ExplorerController:
 
     def __init__(self, robot: RobotInfo, config: ExplorerConfig | None = None, *,
                  lookahead_m: float = 0.4, turn_in_place_rad: float = 0.8,
-                 depth_first: bool = False, depth_rows: int = 0) -> None:
+                 sensors: tuple[str, ...] = (), depth_rows: int = 0) -> None:
         self.robot, self.config = robot, config or ExplorerConfig()
-        self.plan = ExplorerPlan(robot, self.config, depth_first=depth_first,
-                                 depth_rows=depth_rows)
+        self.plan = ExplorerPlan(robot, self.config, sensors=sensors, depth_rows=depth_rows)
         self.lookahead_m, self.turn_in_place_rad = lookahead_m, turn_in_place_rad
         cap = self.config.max_linear_m_s
         self.max_linear_m_s = min(cap, robot.max_linear_m_s) if cap > 0 else robot.max_linear_m_s
@@ -42,11 +41,11 @@ class ExplorerController:
     @classmethod
     def for_env(cls, robot: RobotInfo, env: EnvConfig,
                 config: ExplorerConfig | None = None) -> ExplorerController:
-        """The explorer that sees what ``env``'s agent sees: in a depth env, the depth image's
-        pseudo-scan (its LiDAR, if any, serves only the collision test), as a depth student's
-        memory and plan do; else the scan."""
-        return cls(robot, config, depth_first=env.sensor == "depth",
-                   depth_rows=env.memory.depth_rows)
+        """The explorer that sees what ``env``'s agent sees (its observed sensors): in a depth
+        env, the depth image's pseudo-scan (its LiDAR, if any, serves only the collision test),
+        as a depth student's memory and plan do; with ``sensors: [lidar, depth]``, both fused
+        in one grid; else the scan."""
+        return cls(robot, config, sensors=env.observed, depth_rows=env.memory.depth_rows)
 
     def reset(self) -> None:
         """Forget the grid and the plan (a new episode)."""

@@ -28,7 +28,7 @@ from pic4rl_base.geometry import project
 from pic4rl_sim.engine.paths import grid_search, grid_steps, segment_samples
 from pic4rl_sim.engine.taut_path import pull_taut
 
-from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scan
+from ..perception.occupancy import GRID_RESOLUTION_M, OccupancyGrid, sensed_scans
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
 from ..settings.baselines import ExplorerConfig
@@ -100,10 +100,10 @@ class ExplorerPlan:
     grid."""
 
     def __init__(self, robot: RobotInfo, config: ExplorerConfig | None = None, *,
-                 depth_first: bool = False, depth_rows: int = 0) -> None:
+                 sensors: tuple[str, ...] = (), depth_rows: int = 0) -> None:
         self.robot, self.config = robot, config or ExplorerConfig()
-        #: a depth agent's plan: the depth image's pseudo-scan even where a scan is there
-        self.depth_first, self.depth_rows = depth_first, depth_rows
+        #: what the grid marks (``sensed_scans``): the agent's observed sensors, fused
+        self.sensors, self.depth_rows = tuple(sensors), depth_rows
         self.radius_m = robot.footprint.bounding_radius_m
         self.grid = OccupancyGrid(GRID_RESOLUTION_M)
         self.plans = 0  # paths planned since the plan was made
@@ -128,11 +128,11 @@ class ExplorerPlan:
     def observe(self, frame: SensorFrame) -> np.ndarray:
         """Mark ``frame``'s returns (once per frame); the cells new to the grid (k, 2)."""
         key = (frame.stamp_ns, frame.pose)
-        scan = sensed_scan(frame, self.robot, self.depth_rows, depth_first=self.depth_first)
-        if scan is None or self._seen == key:
+        scans = sensed_scans(frame, self.robot, self.sensors, self.depth_rows)
+        if not scans or self._seen == key:
             return np.zeros((0, 2), dtype=np.int64)
         self._seen = key
-        new = self.grid.mark_scan(scan, frame.pose)
+        new = np.concatenate([self.grid.mark_scan(scan, frame.pose) for scan in scans])
         if self._field is not None and len(new):
             if self._field.holds(new):
                 self._field.add(new)

@@ -18,7 +18,7 @@ _EXPORTS = {
     "lidar_sectors": "observations", "depth_observation": "observations",
     "depth_space": "observations", "target_polar": "observations",
     "clipped_action": "observations",
-    "OccupancyGrid": "occupancy", "sensed_scan": "occupancy",
+    "OccupancyGrid": "occupancy", "sensed_scans": "occupancy",
     "centerlines": "rows", "row_centerline": "rows",
 }
 __all__ = sorted(_EXPORTS)

@@ -37,18 +37,22 @@ def to_world(points: np.ndarray, pose: Pose2D) -> np.ndarray:
     return np.column_stack((pose.x + c * x - s * y, pose.y + s * x + c * y))
 
 
-def sensed_scan(frame: SensorFrame, robot: RobotInfo, depth_rows: int = 0, *,
-                depth_first: bool = False) -> ScanData | None:
-    """What the grid marks from ``frame``: its scan, else the depth image's pseudo-scan
-    (``depth_scan`` of its ``depth_rows`` middle rows, 0: all), else ``None``; with
-    ``depth_first`` the depth image's even when a scan is there (a depth agent's memory)."""
-    if frame.scan is not None and not (depth_first and frame.depth is not None):
-        return frame.scan
-    if frame.depth is not None:
-        return depth_scan(frame.depth, robot.depth_mount or Pose2D(0.0, 0.0, 0.0),
-                          robot.depth_hfov_rad, depth_rows, height_m=robot.depth_height_m,
-                          pitch_rad=robot.depth_pitch_rad)
-    return None
+def sensed_scans(frame: SensorFrame, robot: RobotInfo, sensors: tuple[str, ...] = (),
+                 depth_rows: int = 0) -> list[ScanData]:
+    """What the grid marks from ``frame``: the scans of ``sensors`` (``lidar``: the scan;
+    ``depth``: the depth image's pseudo-scan, ``depth_scan`` of its ``depth_rows`` middle rows,
+    0: all), each that the frame holds, so an agent's memory and plan hold what it observes
+    (``[lidar, depth]``: both, a fused grid). With no ``sensors`` (a real robot's frames): the
+    scan, else the depth image's pseudo-scan."""
+    scans: list[ScanData] = []
+    lidar = "lidar" in sensors or not sensors
+    if frame.scan is not None and lidar:
+        scans.append(frame.scan)
+    if frame.depth is not None and ("depth" in sensors or not scans):
+        scans.append(depth_scan(frame.depth, robot.depth_mount or Pose2D(0.0, 0.0, 0.0),
+                                robot.depth_hfov_rad, depth_rows, height_m=robot.depth_height_m,
+                                pitch_rad=robot.depth_pitch_rad))
+    return scans
 
 
 class OccupancyGrid:

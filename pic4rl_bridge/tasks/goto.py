@@ -38,7 +38,7 @@ from ..perception.collision import assess
 from ..perception.observations import (MAX_TARGET_DISTANCE_M, NORMALIZED_GOAL_DISTANCE_M,
                                        clipped_action, depth_observation, depth_space,
                                        lidar_sectors, target_polar)
-from ..perception.occupancy import OccupancyGrid, sensed_scan
+from ..perception.occupancy import OccupancyGrid, sensed_scans
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
 from ..settings.tasks import GoalInput, GoToPoseReward
@@ -67,7 +67,7 @@ class _GoToPose(Task):
         extra: dict[str, Any] = {"memory": OccupancyGrid()} if self.config.memory.enabled else {}
         if self._explorer:
             extra["explorer"] = ExplorerPlan(self.robot, self.config.explorer,
-                                             depth_first=self.config.sensor == "depth",
+                                             sensors=self.config.observed,
                                              depth_rows=self.config.memory.depth_rows)
         if self.config.lidar.history > 1:
             extra["scan_history"] = collections.deque(maxlen=self.config.lidar.history)
@@ -84,15 +84,13 @@ class _GoToPose(Task):
 
     def _remember(self, obs: Any, frame: SensorFrame, context: EpisodeContext) -> Any:
         """``obs`` with the memory crop: the episode's grid (its context's) marked with the
-        frame's returns (the scan, else the depth image's pseudo-scan), then cropped round the
+        frame's returns (its observed sensors', ``sensed_scans``), then cropped round the
         pose, heading up. Marking is idempotent: observing a frame twice changes nothing."""
         m = self.config.memory
         if not m.enabled:
             return obs
         grid: OccupancyGrid = context.extra["memory"]
-        scan = sensed_scan(frame, self.robot, m.depth_rows,
-                           depth_first=self.config.sensor == "depth")
-        if scan is not None:
+        for scan in sensed_scans(frame, self.robot, self.config.observed, m.depth_rows):
             grid.mark_scan(scan, frame.pose)
         crop = grid.crop(frame.pose, m.size_px, m.resolution_m)[None]
         return {"memory": crop, **(obs if isinstance(obs, dict) else {"lidar": obs})}

@@ -128,6 +128,26 @@ def test_in_a_depth_env_it_plans_on_what_the_camera_sees_not_the_lidar():
     assert np.allclose(depth.path, [(0.0, 0.0), (3.0, 0.0)])
 
 
+def test_with_lidar_and_depth_observed_it_plans_on_both_fused_in_one_grid():
+    # The LiDAR sees a wall 1 m ahead over its quarter circle; the camera, a nearer return
+    # 0.6 m ahead (a low box under the LiDAR's plane): the fused grid holds both, each
+    # one-sensor grid only its own.
+    scan = ScanData(np.full(90, 1.0, np.float32), -math.pi / 4, math.pi / 180, 0.05, 10.0)
+    depth = np.full((6, 8), np.inf, np.float32)
+    depth[2:4, 3:5] = 0.6
+    frame = SensorFrame(0, Pose2D(0.0, 0.0, 0.0), Twist2D(), goal=(3.0, 0.0), scan=scan,
+                        depth=depth)
+    grids = {}
+    for sensors in (("lidar",), ("depth",), ("lidar", "depth")):
+        explorer = make_baseline("explorer", EnvConfig(sensor=sensors[0], sensors=sensors),
+                                 ROBOT, world=None)
+        explorer.command(frame)
+        grids[sensors] = {tuple(c) for c in explorer.grid.cells}
+    lidar, depth_cells, fused = grids[("lidar",)], grids[("depth",)], grids[("lidar", "depth")]
+    assert lidar and depth_cells and not lidar & depth_cells
+    assert fused == lidar | depth_cells
+
+
 def test_its_own_speed_limit_caps_the_pursuit_and_never_raises_the_robots():
     # An open world, the goal straight ahead: full speed is the robot's, or the cap below it.
     world = WorldSpec("open", (-5.0, -5.0, 5.0, 5.0), boxes=(Box(4.5, 0.0, 0.1, 2.0, 1.0),))
