@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from pic4rl_base.geometry import Footprint, Pose2D
 from pic4rl_sim.engine.robot_specs import DepthCameraSpec, Drive, RobotSpec
@@ -32,6 +33,9 @@ class RobotInfo:
     max_lateral_m_s: float
     control_dt_s: float
     mounts: Mapping[str, Pose2D] = field(default_factory=dict, hash=False)
+    #: The spec of each sensor it carries, by sensor kind (what a sensor's observation and
+    #: collision part read: a sonar ring's cones, a camera's field of view).
+    specs: Mapping[str, Any] = field(default_factory=dict, hash=False)
     depth_hfov_rad: float = _STOCK_HFOV_RAD
     #: the depth camera's height above the floor (m; ``None``: unknown, so no pixel is taken
     #: for the floor) and downward pitch (rad): where its lower rows see the floor
@@ -56,6 +60,7 @@ class RobotInfo:
             max_angular_rad_s=_limit(c.max_angular_rad_s, spec.max_angular_rad_s),
             max_lateral_m_s=_limit(c.max_lateral_m_s, spec.max_lateral_m_s) if omni else 0.0,
             control_dt_s=control_dt_s, mounts=mounts,
+            specs={k: s for k, s in spec.sensors.items() if s is not None},
             depth_hfov_rad=math.radians(spec.depth.hfov_deg) if spec.depth else _STOCK_HFOV_RAD,
             depth_height_m=spec.depth.mount_xyz_m[2] if spec.depth else None,
             depth_pitch_rad=spec.depth.mount_pitch_rad if spec.depth else 0.0,
