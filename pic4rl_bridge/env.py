@@ -344,7 +344,7 @@ class NavEnv(gym.Env[Any, np.ndarray]):
         if self._frame is None or self._context is None:
             raise BridgeError("episode_facts() before the first reset()")
         return episode_facts(
-            self.config, self.scenario.robot, self._frame, self._context, seed=self._seed_used,
+            self.config, self.scenario, self._frame, self._context, seed=self._seed_used,
             task=self._task_spec.fact_name(self.config.sensor_label),
             world=self.transport.world_name, index=self._episode - 1, sampler=self._sampler,
             task_facts=self.task.facts(self._context))

@@ -1,5 +1,6 @@
 """What ``NavEnv`` tells a recorder of each episode: its facts, as the bag contract states them
-(``pic4rl_metrics.contract.EpisodeFacts``), from the env's config, robot, world and task."""
+(``pic4rl_metrics.contract.EpisodeFacts``), from the env's config, scenario (robot, crowd),
+world and task."""
 
 from __future__ import annotations
 
@@ -11,22 +12,24 @@ from pic4rl_metrics.contract import EpisodeFacts, parse_facts
 from .config import EnvConfig
 from .episodes import PairSampler
 from .readings.frame import SensorFrame
-from .robot_info import RobotInfo
+from .scenario import Scenario
 from .tasks.base import EpisodeContext
 
 
-def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,
+def episode_facts(config: EnvConfig, scenario: Scenario, frame: SensorFrame,
                   context: EpisodeContext, *, seed: int, task: str, world: str,
                   index: int, sampler: PairSampler | None,
                   task_facts: Mapping[str, Any]) -> EpisodeFacts:
     """The facts of episode ``index`` (named so; a recorder names it after its bag, and its
     run), with the start-goal path lengths (a search: only a recorder asks). The env's
     ``warning_tolerance_m`` (closer is unsafe) is the contract's ``safety_margin_m``; the
-    task's facts are decoded by the contract."""
+    task's facts are decoded by the contract. With a simulated crowd, its people's radius
+    (``person_radius_m``: the social metrics measure from their bodies' edge)."""
     lengths: tuple[float | None, float | None] = (None, None)
     if context.goal is not None and sampler is not None:
         lengths = sampler.path_lengths(context.start, context.goal)
-    c = config
+    c, robot = config, scenario.robot
+    crowd = scenario.sim.engine.crowd if scenario.sim is not None else None
     mount = frame.scan.mount if frame.scan is not None else None  # the collision test's
     facts = EpisodeFacts(
         agent=c.agent, task=task, world=world, robot=robot.name,
@@ -40,6 +43,7 @@ def episode_facts(config: EnvConfig, robot: RobotInfo, frame: SensorFrame,
         reference_path_m=_reference_path_m(sampler),
         scan_mount=mount,
         time_budget_s=c.episode_max_steps * robot.control_dt_s,
+        person_radius_m=crowd.radius_m if crowd is not None and crowd.count > 0 else None,
     )
     parsed, given = parse_facts(task_facts, source=f"task {c.task}")
     return facts.merged(parsed, given=given)

@@ -205,6 +205,8 @@ class EpisodeFacts:
     camera_fov_rad: float | None = _fact(decode.positive)
     #: Exploration: the world's free floor area (m²), which coverage is the share of.
     free_area_m2: float | None = _fact(decode.positive)
+    #: Crowds: the radius of each person's body disc (m), for the social metrics' distances.
+    person_radius_m: float | None = _fact(decode.positive)
     outcome: Outcome | None = _fact(_outcome)
     #: Why the env cut the episode short (an ``aborted`` outcome), in words.
     end_reason: str | None = _fact(decode.text)

@@ -3,11 +3,15 @@
 Hall's proxemic zones (intimate 0.45 m, personal 1.2 m, social 3.6 m; Hall 1966), the closest
 approach, the time to collision of the constant-velocity model (Karamouzas et al. 2014),
 contacts with people apart from the scan's collisions, the robot's speed near people and the
-path irregularity (Guzzi et al. 2013). A simulated crowd and a real robot's tracker are
-judged alike: everything is evaluated at the people messages' stamps within the pose span,
-the robot's pose and velocity interpolated there; a person is a column of the
-``PeopleSeries`` (the PoseArray's index), its velocity the finite difference of its column.
-Registered here in table order, imported by ``metrics``; docs/metrics.md, "Social metrics".
+path irregularity (Guzzi et al. 2013). Distances are body to body, as HuNavSim's evaluator
+measures them (Pérez-Higueras et al. 2023): the footprint's edge to the person's disc, whose
+radius is the ``person_radius_m`` fact (the sim's crowd writes it) or ``PERSON_RADIUS_M``;
+centre to centre, a robot touching a person would never be in the intimate zone. A simulated
+crowd and a real robot's tracker are judged alike: everything is evaluated at the people
+messages' stamps within the pose span, the robot's pose and velocity interpolated there; a
+person is a column of the ``PeopleSeries`` (the PoseArray's index), its velocity the finite
+difference of its column. Registered here in table order, imported by ``metrics``;
+docs/metrics.md, "Social metrics".
 """
 
 from __future__ import annotations
@@ -27,8 +31,9 @@ if TYPE_CHECKING:
 NAN = float("nan")
 #: Hall's (1966) zones around a person, by their outer radius (m): closer than it intrudes.
 ZONES_M: dict[str, float] = {"intimate": 0.45, "personal": 1.2, "social": 3.6}
-#: A person's body as a disc of this radius (m), for contacts and the time to collision.
-PERSON_RADIUS_M = 0.3
+#: A person's body disc radius (m) where the bag records no ``person_radius_m`` fact (a real
+#: tracker's bag; a topic map's ``facts:`` may give one): the sim's ``crowd.radius_m`` default.
+PERSON_RADIUS_M = 0.25
 #: A time to collision beyond this (s), or none at all, reads as this: no collision course.
 TTC_HORIZON_S = 10.0
 #: The robot's speed "near people" is its speed while someone is within this zone.
@@ -39,7 +44,7 @@ class Crowd(NamedTuple):
     """The people from the robot at the people messages' stamps within the pose span."""
 
     t_s: np.ndarray  # (n,)
-    dist_m: np.ndarray  # (n, k) robot centre to each person, NaN where absent
+    gap_m: np.ndarray  # (n, k) footprint edge to person's body edge (< 0: overlap), NaN absent
     rel: np.ndarray  # (n, k, 2) person minus robot, world frame (m)
     rel_vel: np.ndarray  # (n, k, 2) person's velocity minus the robot's (m/s)
     body: np.ndarray  # (n, k, 2) person in the robot's body frame (m)
@@ -51,14 +56,15 @@ _CROWDS: WeakKeyDictionary[Derived, Crowd | None] = WeakKeyDictionary()
 
 def crowd(d: Derived) -> Crowd | None:
     """The episode's ``Crowd`` (computed once per ``Derived``); ``None`` when the people and
-    the poses do not overlap in time or no message holds a person."""
+    the poses do not overlap in time or no message holds a person. Without a footprint its
+    ``gap_m`` is NaN: the columns measured between bodies need one (``_BODIES``)."""
     if d not in _CROWDS:
         _CROWDS[d] = _crowd(d)
     return _CROWDS[d]
 
 
 def _crowd(d: Derived) -> Crowd | None:
-    pose, people = d.pose, d.episode.people
+    pose, people, footprint = d.pose, d.episode.people, d.facts.footprint
     assert people is not None  # the registry checks the "people" input first
     inside = (people.t_ns >= pose.t_ns[0]) & (people.t_ns <= pose.t_ns[-1])
     if inside.sum() == 0 or people.x.shape[1] == 0:
@@ -83,13 +89,27 @@ def _crowd(d: Derived) -> Crowd | None:
     cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
     body = np.stack([cos * rel[..., 0] + sin * rel[..., 1],
                      -sin * rel[..., 0] + cos * rel[..., 1]], axis=-1)
-    return Crowd(seconds(people.t_ns[inside], t0), np.hypot(rel[..., 0], rel[..., 1]), rel,
-                 p_vel - robot_v[:, None, :], body, np.hypot(robot_v[:, 0], robot_v[:, 1]))
+    gap = (np.full(body.shape[:2], NAN) if footprint is None else
+           footprint.signed_distance_xy(body[..., 0], body[..., 1]) - person_radius_m(d))
+    return Crowd(seconds(people.t_ns[inside], t0), gap, rel, p_vel - robot_v[:, None, :], body,
+                 np.hypot(robot_v[:, 0], robot_v[:, 1]))
+
+
+def person_radius_m(d: Derived) -> float:
+    """The people's body radius (m): the ``person_radius_m`` fact, else ``PERSON_RADIUS_M``."""
+    radius = d.facts.person_radius_m
+    return PERSON_RADIUS_M if radius is None else radius
+
+
+def distances(c: Crowd) -> np.ndarray:
+    """Body-to-body distance (m) to each person, 0 while they overlap, +inf where absent."""
+    return np.where(np.isnan(c.gap_m), np.inf, np.maximum(c.gap_m, 0.0))
 
 
 def nearest(c: Crowd) -> np.ndarray:
-    """Distance (m) to the nearest person at each stamp, +inf where nobody is reported."""
-    return np.min(np.where(np.isnan(c.dist_m), np.inf, c.dist_m), axis=1)
+    """Body-to-body distance (m) to the nearest person at each stamp, +inf where nobody is
+    reported."""
+    return np.min(distances(c), axis=1)
 
 
 def time_within(t_s: np.ndarray, dist_m: np.ndarray, radius_m: float) -> float:
@@ -130,8 +150,12 @@ def time_to_collision(rel: np.ndarray, rel_vel: np.ndarray, radius_m: float) -> 
     return np.where(np.isnan(c) | np.isnan(a), np.nan, tau)
 
 
+#: What a column measured between bodies needs: the people and the robot's footprint.
+_BODIES = ("people", "footprint")
+
+
 def _register(name: str, unit: str, label: str, stat: Callable[[Crowd, Derived], float],
-              position: int | None, needs: tuple[str, ...] = ("people",)) -> None:
+              position: int | None, needs: tuple[str, ...] = _BODIES) -> None:
     """Register a column; ``position``: its place in the comparison tables' social section."""
     def value(d: Derived) -> float:
         c = crowd(d)
@@ -143,10 +167,10 @@ def _register(name: str, unit: str, label: str, stat: Callable[[Crowd, Derived],
 
 for _i, (_zone, _radius) in enumerate(ZONES_M.items()):
     _register(f"{_zone}_intrusion_count", "count", f"{_zone} zone entries",
-              lambda c, d, r=_radius: entries(np.nan_to_num(c.dist_m, nan=np.inf) < r), None)
+              lambda c, d, r=_radius: entries(distances(c) < r), None, _BODIES)
     _register(f"{_zone}_intrusion_time_s", "s", f"{_zone} zone time",
               lambda c, d, r=_radius: time_within(c.t_s, nearest(c), r),
-              _i if _i < 2 else None)
+              _i if _i < 2 else None, _BODIES)
 
 
 def _min_distance(c: Crowd, _d: Derived) -> float:
@@ -157,19 +181,15 @@ def _min_distance(c: Crowd, _d: Derived) -> float:
 def _ttc_min(c: Crowd, d: Derived) -> float:
     footprint = d.facts.footprint
     assert footprint is not None  # the registry checks the "footprint" input first
-    radius = footprint.bounding_radius_m + PERSON_RADIUS_M
+    radius = footprint.bounding_radius_m + person_radius_m(d)
     tau = time_to_collision(c.rel, c.rel_vel, radius)
-    return float(min(np.nanmin(tau), TTC_HORIZON_S)) if np.isfinite(c.dist_m).any() else NAN
+    return float(min(np.nanmin(tau), TTC_HORIZON_S)) if np.isfinite(c.gap_m).any() else NAN
 
 
 def _people_collisions(c: Crowd, d: Derived) -> float:
-    """Contacts: a person's centre within ``PERSON_RADIUS_M`` plus the collision tolerance
-    of the footprint's boundary; each person's rising edges, summed."""
-    footprint = d.facts.footprint
-    assert footprint is not None  # the registry checks the "footprint" input first
-    gap = footprint.signed_distance_xy(c.body[..., 0], c.body[..., 1])
-    contact_m = PERSON_RADIUS_M + d.facts.collision_tolerance_m
-    return float(entries(np.nan_to_num(gap, nan=np.inf) < contact_m))
+    """Contacts: a person's body within the collision tolerance of the footprint's boundary;
+    each person's rising edges, summed."""
+    return float(entries(np.nan_to_num(c.gap_m, nan=np.inf) < d.facts.collision_tolerance_m))
 
 
 def _speed_near_people(c: Crowd, _d: Derived) -> float:
@@ -190,10 +210,9 @@ def _path_irregularity(_c: Crowd, d: Derived) -> float:
 
 
 _register("people_dist_min_m", "m", "min person distance", _min_distance, 2)
-_register("people_ttc_min_s", "s", "min time to collision", _ttc_min, 3,
-          ("people", "footprint"))
-_register("people_collision_count", "count", "people collisions", _people_collisions, 4,
-          ("people", "footprint"))
+_register("people_ttc_min_s", "s", "min time to collision", _ttc_min, 3)
+_register("people_collision_count", "count", "people collisions", _people_collisions, 4)
 _register("speed_near_people_mean_mps", "m/s", "speed near people", _speed_near_people, 5)
-_register("path_irregularity_radpm", "rad/m", "path irregularity", _path_irregularity, None)
+_register("path_irregularity_radpm", "rad/m", "path irregularity", _path_irregularity, None,
+          ("people",))
 del _i, _zone, _radius
