@@ -36,7 +36,8 @@ from .errors import ConfigError, require
 from .readings.sensor_table import READING_TABLE
 from .settings.baselines import PREFIX as BASELINES_PREFIX
 from .settings.baselines import ExplorerConfig
-from .settings.observations import DepthObsConfig, LidarObsConfig, MemoryObsConfig
+from .settings.observations import (DepthObsConfig, LidarObsConfig, MemoryObsConfig,
+                                     SonarObsConfig, StereoObsConfig)
 from .settings.tasks import (TASK_TABLE, ExploreConfig, GoalInput, PersonConfig, RewardConfig,
                              SensorName, TaskName, VineyardConfig)
 
@@ -166,7 +167,8 @@ class EnvConfig:
     sensor: SensorName = param(SensorName(next(iter(SensorName)).value),
                                doc=" | ".join(s.value for s in SensorName))
     sensors: tuple[str, ...] = param((), doc="goToPose: the sensors observed together, each "
-                                     "with its own section (lidar.*, depth.*), `sensor` among "
+                                     "with its own section (lidar.*, depth.*, sonar.*, "
+                                     "stereo.*), `sensor` among "
                                      "them; two or more: a Dict observation, a key each beside "
                                      "goal; empty: `sensor` alone")
     transport: TransportName = param(TransportName.INPROCESS, doc="inprocess (the engine in "
@@ -208,6 +210,8 @@ class EnvConfig:
     reward: RewardConfig = section(RewardConfig)
     lidar: LidarObsConfig = section(LidarObsConfig)
     depth: DepthObsConfig = section(DepthObsConfig)
+    sonar: SonarObsConfig = section(SonarObsConfig)
+    stereo: StereoObsConfig = section(StereoObsConfig)
     memory: MemoryObsConfig = section(MemoryObsConfig)
     explorer: ExplorerConfig = section(ExplorerConfig, "goal_input explorer: the plan's "
                                        "settings, as the explorer baseline's (its speed limit "

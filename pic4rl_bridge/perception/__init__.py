@@ -2,7 +2,8 @@
 
 ``collision`` (scan and depth image → points, the footprint's clearance, the step's safety),
 ``observations`` (the encoders: LiDAR sectors, the depth image, the target in polar
-coordinates, and their spaces), ``occupancy`` (the rolling occupancy grid of the robot's
+coordinates, and their spaces), ``sensor_parts`` (each observable sensor's part: its
+readings, observation and obstacle points), ``occupancy`` (the rolling occupancy grid of the robot's
 own scans: the memory observation's and the explorer's, whose plan on it is a planner's:
 ``pic4rl_bridge.baselines.explorer_plan``) and ``rows`` (the vineyard's centre lines, the
 row being driven). Pure numpy; names are imported on first use.
@@ -18,6 +19,7 @@ _EXPORTS = {
     "lidar_sectors": "observations", "depth_observation": "observations",
     "depth_space": "observations", "target_polar": "observations",
     "clipped_action": "observations",
+    "SensorPart": "sensor_parts", "observable": "sensor_parts",
     "OccupancyGrid": "occupancy", "sensed_scans": "occupancy",
     "centerlines": "rows", "row_centerline": "rows",
 }

@@ -5,10 +5,11 @@ The paper's collision test: any scan point closer to the footprint than
 every step on every beam, so it is plain vectorized numpy:
 beams to points in the base frame (``ScanData.points``), then the exact signed distance to the
 footprint, a circle or a box (``Footprint.signed_distance``).
-Robots without a LiDAR fall back on the depth image (each column's nearest pixel that is not
-the floor). Any range
-sensor whose reading decodes to a ``ScanData`` (a sonar's fan, a point cloud's slice) senses
-obstacles the same way, in the sensor table's order, with no change here.
+Which sensor's points count is the observed sensors' table's (``OBSERVED_TABLE``, each
+entry's part's ``points``, ``pic4rl_bridge.perception.sensor_parts``): the first that gives
+points for the frame, so robots without a LiDAR fall back on the depth image (each column's
+nearest pixel that is not the floor), then on a sonar ring's echoes or a stereo image; a
+sensor added to the table adds its points with no change here.
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from pic4rl_metrics.contract import CollisionRule
 
 from ..config import EnvConfig
 from ..readings.frame import ScanData, SensorFrame
-from ..readings.sensor_table import READING_TABLE
 from ..robot_info import RobotInfo
+from ..settings.observations import OBSERVED_TABLE
 
 #: Pixels whose point lies this high above the floor or lower are the floor, not an obstacle
 #: (``pointcloud_to_laserscan``'s ``min_height``): a camera sees the floor in its lower rows,
@@ -96,17 +97,14 @@ def depth_scan(depth: np.ndarray, mount: Pose2D, hfov_rad: float, rows: int = 0,
 
 
 def sensed_points(frame: SensorFrame, robot: RobotInfo) -> np.ndarray:
-    """The obstacle points (n, 2, base frame, m) the robot senses: those of the first reading,
-    in the sensor table's order, that is a scan (the LiDAR's, or any range sensor's decoded
-    to ``ScanData``) or the depth image; none without one."""
-    for sensor in READING_TABLE:
-        reading = frame.readings.get(sensor.name)
-        if isinstance(reading, ScanData):
-            return reading.points()
-        if sensor.name == "depth" and reading is not None:
-            mount = robot.depth_mount or Pose2D(0.0, 0.0, 0.0)
-            return depth_points(reading, mount, robot.depth_hfov_rad,
-                                height_m=robot.depth_height_m, pitch_rad=robot.depth_pitch_rad)
+    """The obstacle points (n, 2, base frame, m) the robot senses: those of the first sensor
+    of ``OBSERVED_TABLE`` whose part gives points for the frame (its readings there: the
+    LiDAR's scan, else the depth image, else the sonar ring, else the stereo image, else a
+    user's sensor's); none without one."""
+    for entry in OBSERVED_TABLE.values():
+        points = entry.part.points(frame, robot)
+        if points is not None:
+            return points
     return np.empty((0, 2))
 
 

@@ -26,6 +26,7 @@ from pic4rl_base.schema import NON_NEGATIVE, POSITIVE, ParamEnum, param, section
 
 from ..errors import ConfigError, require
 from .baselines import DwaConfig
+from .observations import OBSERVED_TABLE
 
 
 @dataclass(frozen=True)
@@ -206,7 +207,7 @@ TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
               EnvId("pic4rl/GoToPoseDepth-v0", "depth", {"depth.enabled": True}),
               EnvId("pic4rl/GoToPoseLidarDepth-v0", "lidar", {"depth.enabled": True},
                     sensors=("lidar", "depth"))),
-             sensors=("lidar", "depth"), reward=GoToPoseReward,
+             sensors=tuple(OBSERVED_TABLE), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
              experts=("planner", "explorer"), per_sensor=True),
     TaskSpec("vineyard",

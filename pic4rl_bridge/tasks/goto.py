@@ -13,7 +13,8 @@ learned local one). With ``memory.enabled`` the observation is a Dict
 that adds ``memory``, an egocentric crop of an occupancy grid of the episode's own scans
 (``pic4rl_bridge.perception.occupancy``; the grid lives in the episode's context, so the task keeps
 no state), to the LiDAR vector (``lidar``) or the depth image and goal. With ``sensors: [lidar,
-depth]`` the observation is a Dict of each sensor's part (``lidar``, ``depth``) and ``goal``.
+depth]`` (or ``[lidar, sonar]``, ``[stereo]``, any of ``OBSERVED_TABLE``) the observation is a
+Dict of each sensor's part (``pic4rl_bridge.perception.sensor_parts``) and ``goal``.
 Every term is reported every step (0 when not triggered) so that ``info["reward_terms"]`` keeps
 one shape through an episode.
 """
@@ -36,11 +37,12 @@ from ..config import EnvConfig
 from ..control.actions import planar_action_space, planar_command
 from ..perception.collision import assess
 from ..perception.observations import (MAX_TARGET_DISTANCE_M, NORMALIZED_GOAL_DISTANCE_M,
-                                       clipped_action, depth_observation, depth_space,
-                                       lidar_sectors, target_polar)
+                                       clipped_action, target_polar)
 from ..perception.occupancy import OccupancyGrid, sensed_scans
+from ..perception.sensor_parts import observable
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
+from ..settings.observations import OBSERVED_TABLE
 from ..settings.tasks import GoalInput, GoToPoseReward
 from .base import EpisodeContext, Judgement, Task
 
@@ -158,112 +160,61 @@ def _goal(context: EpisodeContext) -> tuple[float, float]:
 
 
 def build(config: EnvConfig, robot: RobotInfo, world: object = None) -> _GoToPose:
-    """goToPose through ``config.observed`` (its registry entry's ``build``): one sensor in
-    its own layout, several in a Dict."""
-    if len(config.observed) > 1:
-        return GoToPoseSensors(config, robot)
-    if config.sensor == "depth":
-        return GoToPoseDepth(config, robot)
-    return GoToPoseLidar(config, robot)
-
-
-def _sectors_space(config: EnvConfig) -> gym.spaces.Box:
-    """The LiDAR part: ``lidar.sectors`` × ``lidar.history`` ranges (m, or / clip_m)."""
-    far = 1.0 if config.normalize_observations else config.lidar.clip_m
-    return gym.spaces.Box(0.0, far, (config.lidar.sectors * config.lidar.history,), np.float32)
-
-
-def _sectors(config: EnvConfig, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
-    """The LiDAR part of ``frame``: its sectors, normalised if asked, stacked with the
-    episode's last scans' when ``lidar.history`` > 1 (the episode's first scan fills it)."""
-    if frame.scan is None:
-        raise ValueError("goToPose (lidar): the frame has no scan")
-    lidar = config.lidar
-    sectors = lidar_sectors(frame.scan, lidar)
-    if config.normalize_observations:
-        sectors /= np.float32(lidar.clip_m)
-    if lidar.history > 1:
-        stack = context.extra["scan_history"]
-        stack.extendleft([sectors] * (lidar.history if not stack else 1))
-        sectors = np.concatenate(stack)
-    return sectors
-
-
-def _depth_space(config: EnvConfig) -> gym.spaces.Box:
-    """The depth part: the image under the ``depth`` section."""
-    return depth_space(config.depth)
-
-
-def _depth_image(config: EnvConfig, frame: SensorFrame, context: EpisodeContext) -> np.ndarray:
-    """The depth part of ``frame``: its image resized, clipped and encoded."""
-    if frame.depth is None:
-        raise ValueError("goToPose (depth): the frame has no depth image")
-    c = config.depth
-    return depth_observation(frame.depth, c.obs_width, c.obs_height, c.clip_m, c.encoding)
+    """goToPose through ``config.observed`` (its registry entry's ``build``), each a sensor of
+    ``OBSERVED_TABLE`` the robot carries: one whose entry is ``flat_alone`` (the LiDAR) alone
+    in one vector with the goal, else a Dict of each sensor's part and the goal."""
+    entries = observable(config, robot)
+    if len(entries) == 1 and entries[0].flat_alone:
+        return GoToPoseLidar(config, robot)
+    return GoToPoseSensors(config, robot)
 
 
 class GoToPoseLidar(_GoToPose):
-    """goToPose from LiDAR: a flat vector [sectors (m), goal distance (m), goal angle (rad),
-    last action (2)]; normalised, sectors / ``lidar.clip_m`` and the goal as above. With
-    ``lidar.history`` N > 1 the sectors are the last N scans', newest first (a frame stack,
-    the episode's context's: the memory study's alternative to the occupancy crop)."""
+    """goToPose from LiDAR (the observed sensor ``flat_alone``): a flat vector [sectors (m),
+    goal distance (m), goal angle (rad), last action (2)]; normalised, sectors /
+    ``lidar.clip_m`` and the goal as above. With ``lidar.history`` N > 1 the sectors are the
+    last N scans', newest first (a frame stack, the episode's context's: the memory study's
+    alternative to the occupancy crop)."""
 
     required = frozenset({"goal", "scan"})
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        sectors, goal = _sectors_space(config), self._goal_space()
-        low, high = (np.concatenate((sectors.low, goal.low)),
-                     np.concatenate((sectors.high, goal.high)))
+        self._part = OBSERVED_TABLE[config.observed[0]].part
+        self.required = self.required | self._part.readings(robot)
+        sensor, goal = self._part.space(config, robot), self._goal_space()
+        low, high = (np.concatenate((sensor.low, goal.low)),
+                     np.concatenate((sensor.high, goal.high)))
         self.observation_space = self._memory_space(gym.spaces.Box(low, high, dtype=np.float32))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> Any:
-        vector = np.concatenate((_sectors(self.config, frame, context),
+        vector = np.concatenate((self._part.value(self.config, self.robot, frame, context.extra),
                                  self._goal_vector(frame, context, last_action)))
         return self._remember(vector, frame, context)
 
 
-class GoToPoseDepth(_GoToPose):
-    """goToPose from a depth camera: {"depth": (1, H, W) image, "goal": [distance (m),
-    angle (rad), last action (2)]}. A scan, when present, still serves the collision test."""
-
-    required = frozenset({"goal", "depth"})
-
-    def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
-        super().__init__(config, robot)
-        self.observation_space = self._memory_space(gym.spaces.Dict(
-            {"depth": _depth_space(config), "goal": self._goal_space()}))
-
-    def observe(self, frame: SensorFrame, context: EpisodeContext,
-                last_action: np.ndarray) -> dict[str, Any]:
-        return self._remember({"depth": _depth_image(self.config, frame, context),
-                               "goal": self._goal_vector(frame, context, last_action)},
-                              frame, context)
-
-
-#: Each sensor's part of a several-sensor observation: its space, its value of a frame, and the
-#: frame's reading it needs.
-_PARTS = {"lidar": (_sectors_space, _sectors, "scan"),
-          "depth": (_depth_space, _depth_image, "depth")}
-
-
 class GoToPoseSensors(_GoToPose):
-    """goToPose from several sensors at once (``sensors: [lidar, depth]``): a Dict with a key
-    per sensor, each as its one-sensor env has it (``lidar``: the sectors, ``depth``: the
-    image), beside ``goal``: [distance (m), angle (rad), last action (2)]."""
+    """goToPose from a Dict of the observed sensors (``sensors: [lidar, depth]``, ``[depth]``,
+    ``[lidar, sonar]``, ``[stereo]``, ...): a key per sensor, its part's value (``lidar``: the
+    sectors, ``depth`` and ``stereo``: the image, ``sonar``: a range a cone), beside
+    ``goal``: [distance (m), angle (rad), last action (2)]. A scan, when present, still serves
+    the collision test."""
 
     required = frozenset({"goal"})
 
     def __init__(self, config: EnvConfig, robot: RobotInfo) -> None:
         super().__init__(config, robot)
-        self.required = self.required | {_PARTS[s][2] for s in config.observed}
+        self._parts = {s: OBSERVED_TABLE[s].part for s in config.observed}
+        for part in self._parts.values():
+            self.required = self.required | part.readings(robot)
         self.observation_space = self._memory_space(gym.spaces.Dict(
-            {**{s: _PARTS[s][0](config) for s in config.observed},
+            {**{s: part.space(config, robot) for s, part in self._parts.items()},
              "goal": self._goal_space()}))
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> dict[str, Any]:
-        parts = {s: _PARTS[s][1](self.config, frame, context) for s in self.config.observed}
+        parts = {s: part.value(self.config, self.robot, frame, context.extra)
+                 for s, part in self._parts.items()}
         return self._remember({**parts, "goal": self._goal_vector(frame, context, last_action)},
                               frame, context)

@@ -17,7 +17,9 @@ import numpy as np
 from pic4rl_base.errors import require
 from pic4rl_base.schema import FRACTION, Range, check, param
 
-from pic4rl_base.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
+
+from .sensor_kinds import optical
 
 if TYPE_CHECKING:
     import mujoco
@@ -85,6 +87,11 @@ class Lidar:
     """A planar LiDAR: all beams in one ``mj_multiRay`` call, skipping the robot's own body."""
 
     frame_id = "laser"
+
+    def frames(self) -> list[tuple[str, tuple[float, float, float],
+                                   tuple[float, float, float, float]]]:
+        """Its frame on the base for ``tf_static``: at the mount, turned by its yaw."""
+        return [(self.frame_id, self.spec.mount_xyz_m, yaw_to_quaternion(self.spec.mount_yaw_rad))]
 
     def __init__(self, model: mujoco.MjModel, spec: LidarSpec, *, exclude_body: int) -> None:
         import mujoco  # here, not above: see the module docstring
@@ -175,6 +182,11 @@ class DepthCamera:
     """A pinhole depth camera: one ray per pixel centre, depth along the optical axis."""
 
     frame_id = "camera_depth_optical_frame"
+
+    def frames(self) -> list[tuple[str, tuple[float, float, float],
+                                   tuple[float, float, float, float]]]:
+        """Its frame on the base for ``tf_static``: at the mount, pitched down, optical."""
+        return [(self.frame_id, self.spec.mount_xyz_m, optical(self.spec.mount_pitch_rad))]
 
     def __init__(self, model: mujoco.MjModel, spec: DepthCameraSpec, *,
                  exclude_body: int) -> None:

@@ -68,6 +68,11 @@ class Imu:
 
     frame_id = "imu_link"
 
+    def frames(self) -> list[tuple[str, tuple[float, float, float],
+                                   tuple[float, float, float, float]]]:
+        """Its frame on the base for ``tf_static``: the base's origin (it reads its motion)."""
+        return [(self.frame_id, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))]
+
     def __init__(self, spec: ImuSpec) -> None:
         self.spec = spec
         gyro_var = max(spec.gyro_noise_std_rad_s**2, EXACT_VARIANCE)

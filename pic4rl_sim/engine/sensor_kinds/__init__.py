@@ -13,6 +13,16 @@ NAMES = ("sonar", "uwb", "stereo")
 OPTICAL_XYZW = (-0.5, 0.5, -0.5, 0.5)
 
 
+def optical(pitch_rad: float = 0.0) -> tuple[float, float, float, float]:
+    """The optical frame of a camera pitched down by ``pitch_rad`` (about the body's +y), as a
+    quaternion (x, y, z, w) in the body frame: the pitch, then ``OPTICAL_XYZW``."""
+    import math
+
+    bx, by, bz, bw = OPTICAL_XYZW
+    ay, aw = math.sin(0.5 * pitch_rad), math.cos(0.5 * pitch_rad)
+    return (aw * bx + ay * bz, aw * by + ay * bw, aw * bz - ay * bx, aw * bw - ay * by)
+
+
 class Instant:
     """A sensor's last reading, kept for the instant it was made at: the robot's pose, the
     sim time and the random stream (an episode's), so that the several messages and readings

@@ -77,7 +77,7 @@ def test_normalised_history_and_memory_apply_to_the_lidar_part() -> None:
 
 @pytest.mark.parametrize(("params", "named"), [
     ({"sensors": ["lidar", "lidar"]}, "sensors"),
-    ({"sensors": ["lidar", "sonar"]}, "sensors"),
+    ({"sensors": ["lidar", "radar"]}, "sensors"),  # no such sensor
     ({"sensors": ["depth"]}, "sensors"),  # sensor (lidar by default) must be among them
 ])
 def test_a_bad_sensor_list_is_refused_in_one_line(params: dict[str, Any], named: str) -> None:

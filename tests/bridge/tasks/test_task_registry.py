@@ -22,11 +22,13 @@ from pic4rl_bridge.settings.tasks import (TASK_TABLE, EnvId, ExploreConfig, GoTo
                                           TaskName, TaskSpec, VineyardConfig, VineyardReward,
                                           env_ids, task_spec)
 from pic4rl_bridge.tasks import make_task
-from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
+from pic4rl_bridge.tasks.goto import GoToPoseLidar, GoToPoseSensors
+from pic4rl_sim.engine.robot_specs import DepthCameraSpec, LidarSpec
 
 JACKAL = RobotInfo(name="jackal", footprint=Footprint(length_m=0.5, width_m=0.43),
                    omni=False, min_linear_m_s=0.0, max_linear_m_s=0.5,
-                   max_angular_rad_s=1.0, max_lateral_m_s=0.0, control_dt_s=0.1)
+                   max_angular_rad_s=1.0, max_lateral_m_s=0.0, control_dt_s=0.1,
+                   specs={"lidar": LidarSpec(), "depth": DepthCameraSpec()})
 
 
 def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaults():
@@ -59,7 +61,7 @@ def test_an_entry_alone_adds_an_id(monkeypatch):
                                          "sim_defaults": {"world": "person"}}
     # its build is found by name: goToPose's, through the config's sensor
     task = toy.make(EnvConfig(sensor="depth"), JACKAL, None)
-    assert isinstance(task, GoToPoseDepth) and task.required == {"goal", "depth"}
+    assert isinstance(task, GoToPoseSensors) and task.required == {"goal", "depth"}
 
 
 def test_an_entrys_ids_observe_through_its_sensors():
@@ -80,7 +82,7 @@ def test_the_task_choice_is_the_registry():
 
 
 @pytest.mark.parametrize("sensor, cls, shape", [("lidar", GoToPoseLidar, (40,)),
-                                                ("depth", GoToPoseDepth, None)])
+                                                ("depth", GoToPoseSensors, None)])
 def test_make_task_builds_through_the_entry(sensor, cls, shape):
     task = make_task(EnvConfig(sensor=sensor), JACKAL)
     assert type(task) is cls

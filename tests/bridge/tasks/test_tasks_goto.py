@@ -16,18 +16,20 @@ from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
-from pic4rl_bridge.tasks.goto import GoToPoseDepth, GoToPoseLidar
+from pic4rl_bridge.tasks.goto import GoToPoseLidar, GoToPoseSensors
 from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
+from pic4rl_sim.engine.robot_specs import DepthCameraSpec, LidarSpec
 
 INC = 2 * math.pi / 360
+SENSORS = {"lidar": LidarSpec(), "depth": DepthCameraSpec()}  # what the robot carries
 TERMS = {"distance", "heading", "step", "proximity", "goal", "collision"}
 
 
 def robot(min_linear: float = 0.0) -> RobotInfo:
     return RobotInfo(name="test", footprint=Footprint(radius_m=0.3), omni=False,
                      min_linear_m_s=min_linear, max_linear_m_s=0.5, max_angular_rad_s=2.0,
-                     max_lateral_m_s=0.0, control_dt_s=0.1)
+                     max_lateral_m_s=0.0, control_dt_s=0.1, specs=SENSORS)
 
 
 def scan(ahead_m: float = math.inf) -> ScanData:
@@ -82,7 +84,7 @@ def test_normalized_lidar_observation_is_the_raw_one_scaled():
 
 
 def test_normalized_depth_goal_vector():
-    task = GoToPoseDepth(EnvConfig(sensor="depth", normalize_observations=True), robot())
+    task = GoToPoseSensors(EnvConfig(sensor="depth", normalize_observations=True), robot())
     start = frame(0.0, goal=(0.0, 5.0), depth=np.full((60, 80), 2.0, np.float32))
     obs = task.observe(start, task.begin(start), np.zeros(2))
     assert task.observation_space.contains(obs)
@@ -93,7 +95,7 @@ def test_normalized_depth_goal_vector():
 def test_depth_observation_is_a_dict_in_its_space(encoding):
     config = EnvConfig().replace(sensor="depth", **{"depth.encoding": encoding})
     task = make_task(config, robot())
-    assert isinstance(task, GoToPoseDepth) and task.required == {"goal", "depth"}
+    assert isinstance(task, GoToPoseSensors) and task.required == {"goal", "depth"}
     image = np.full((120, 160), 3.0, np.float32)
     f = frame(0.0, depth=image)
     obs = task.observe(f, task.begin(f), np.zeros(2))
