@@ -1,5 +1,5 @@
 """What a robot has seen, and region growing on boolean grids (pure numpy): a scan integrated
-into the seen grid as the metrics integrate a bag's (``integrate_scan``), the world's floor
+into the seen grid from its beams as the metrics place a bag's (``scan_beams``), the world's floor
 connected to a start, which the explore task counts as the free area to cover, and the
 frontiers of what a robot has seen (Yamauchi 1997: known free cells next to unknown ones),
 which the frontier baseline drives to.
@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from pic4rl_base.geometry import Pose2D
-from pic4rl_base.seen_area import SeenGrid
+from pic4rl_base.seen_area import SeenGrid, beam_reach
 
 from ..readings.frame import ScanData
 
@@ -79,15 +79,18 @@ def frontier_cells(seen: np.ndarray, occupied: np.ndarray) -> np.ndarray:
     return seen & ~neighbours(occupied, diagonal=True) & unknown_near
 
 
-def integrate_scan(grid: SeenGrid, scan: ScanData, pose: Pose2D) -> int:
-    """Add ``scan`` taken at ``pose`` to ``grid`` as the metrics read a bag's scan: each beam's
-    valid return, ``range_max`` for ``+inf``, nothing for NaN or ``-inf``; from the LiDAR's
-    mount. The cells added."""
-    ranges = np.asarray(scan.ranges, dtype=float)
-    valid = np.isfinite(ranges) & (ranges >= scan.range_min_m)
-    reach = np.where(valid, np.minimum(ranges, scan.range_max_m), np.nan)
-    reach = np.where(np.isposinf(ranges), scan.range_max_m, reach)
+def scan_beams(scan: ScanData, pose: Pose2D) -> tuple[float, float, float, np.ndarray,
+                                                      np.ndarray]:
+    """``scan`` taken at ``pose`` as ``SeenGrid.add`` takes it, placed as the metrics place a
+    bag's scan: the sensor's x, y and heading (its mount applied), each beam's bearing and
+    reach (``beam_reach``)."""
+    reach = beam_reach(scan.ranges, scan.range_min_m, scan.range_max_m)
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
     m = scan.mount
     x, y = pose.x + c * m.x - s * m.y, pose.y + s * m.x + c * m.y
-    return grid.add(x, y, pose.yaw + m.yaw, scan.angles(), reach)
+    return x, y, pose.yaw + m.yaw, scan.angles(), reach
+
+
+def integrate_scan(grid: SeenGrid, scan: ScanData, pose: Pose2D) -> int:
+    """Add ``scan`` taken at ``pose`` to ``grid`` (``scan_beams``); the cells added."""
+    return grid.add(*scan_beams(scan, pose))

@@ -2,10 +2,12 @@
 
 There is no goal: the simulator still draws one with each start (its sampler's pairs), and
 the task reads none of it (its context's goal is ``None``, so the bag's facts carry none).
-What the robot has seen is a ``pic4rl_base.seen_area.SeenGrid`` of its own scans at the
-metrics' resolution (``pic4rl_metrics``' ``SEEN_RESOLUTION_M``), kept in the episode's
-context, so the reward is the bags' area seen, live: ``reward.area`` times the m² newly seen
-this step, and ``reward.collision`` on the collision that ends the episode. The episode also
+What the robot has seen is its own scans counted by a ``pic4rl_base.seen_area.SeenTrack`` at
+the metrics' resolution (``pic4rl_metrics``' ``SEEN_RESOLUTION_M``), kept in the episode's
+context: the count the metrics make of the episode's bag, the same scans thinned the same way,
+so the reward is the bags' area seen, live (``reward.area`` times the m² newly seen this step),
+and an episode ended at its target reads at least that coverage from its bag. Add
+``reward.collision`` on the collision that ends the episode. The episode also
 ends, as a goal, once the area seen reaches ``explore.coverage_target`` of the world's free
 area: the floor (clearance > 0) connected to the start, on the simulated world's 5 cm
 clearance grid (``pic4rl_sim.engine.paths.clearance_grid``); it is the bag's
@@ -27,7 +29,7 @@ import gymnasium as gym
 import numpy as np
 
 from pic4rl_base.geometry import Pose2D
-from pic4rl_base.seen_area import SeenGrid
+from pic4rl_base.seen_area import SeenGrid, SeenTrack
 from pic4rl_metrics.contract import Outcome
 from pic4rl_metrics.core.tasks.seen import SEEN_RESOLUTION_M
 from pic4rl_sim.engine.geometry import Twist2D
@@ -36,7 +38,7 @@ from pic4rl_sim.engine.paths import clearance_grid
 from ..config import EnvConfig
 from ..control.actions import planar_action_space, planar_command
 from ..perception.collision import assess
-from ..perception.frontiers import component, integrate_scan
+from ..perception.frontiers import component, scan_beams
 from ..perception.observations import clipped_action, lidar_sectors
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
@@ -93,12 +95,11 @@ class ExploreLidar(Task):
         return planar_command(action, self.robot)
 
     def begin(self, frame: SensorFrame) -> EpisodeContext:
-        grid = SeenGrid(SEEN_RESOLUTION_M)
-        if frame.scan is not None:
-            integrate_scan(grid, frame.scan, frame.pose)
+        track = SeenTrack(SEEN_RESOLUTION_M)
+        _see(track, frame)
         free = (free_area_m2(self.world, (frame.pose.x, frame.pose.y))
                 if self.world is not None else None)
-        return EpisodeContext(start=frame.pose, extra={"seen": grid, "free_area_m2": free})
+        return EpisodeContext(start=frame.pose, extra={"seen": track, "free_area_m2": free})
 
     def observe(self, frame: SensorFrame, context: EpisodeContext,
                 last_action: np.ndarray) -> np.ndarray:
@@ -108,14 +109,14 @@ class ExploreLidar(Task):
         sectors = lidar_sectors(frame.scan, lidar)
         if self.config.normalize_observations:
             sectors /= np.float32(lidar.clip_m)
-        crop = seen_crop(context.extra["seen"], frame.pose, e.crop_px, e.crop_cell_m)
+        crop = seen_crop(context.extra["seen"].grid, frame.pose, e.crop_px, e.crop_cell_m)
         return np.concatenate((sectors, clipped_action(last_action, 2), crop.ravel()))
 
     def judge(self, previous: SensorFrame, frame: SensorFrame, context: EpisodeContext,
               collision_streak: int) -> Judgement:
         reward: ExploreReward = self.config.reward
-        grid: SeenGrid = context.extra["seen"]
-        new = integrate_scan(grid, frame.scan, frame.pose) if frame.scan is not None else 0
+        track: SeenTrack = context.extra["seen"]
+        new, grid = _see(track, frame), track.grid
         free, target = context.extra["free_area_m2"], self.config.explore.coverage_target
         covered = bool(free and target > 0 and grid.area_m2 >= target * free)
         safety = assess(frame, self.robot, self.config, collision_streak)
@@ -130,6 +131,13 @@ class ExploreLidar(Task):
     def facts(self, context: EpisodeContext) -> dict[str, Any]:
         free = context.extra["free_area_m2"]
         return {} if free is None else {"free_area_m2": free}
+
+
+def _see(track: SeenTrack, frame: SensorFrame) -> int:
+    """Offer ``frame``'s scan, stamped by the frame, to ``track``; the cells it added."""
+    if frame.scan is None:
+        return 0
+    return track.offer(frame.stamp_ns, *scan_beams(frame.scan, frame.pose))
 
 
 def build(config: EnvConfig, robot: RobotInfo, world: Any = None) -> ExploreLidar:

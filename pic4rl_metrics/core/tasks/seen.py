@@ -9,22 +9,22 @@ whole scans the same way (``seen_curve``), so both give the same numbers.
 A scan is placed at the pose interpolated at its stamp (the LiDAR's mount applied); one outside
 the poses' time span adds nothing. A beam's reach is its valid return, ``range_max`` where it
 returned nothing within range (``+inf``: free that far), nothing for NaN or a return closer than
-``range_min``. A scan is integrated only when the sensor has moved ``MOVE_CELLS`` cells or
-turned ``TURN_RAD`` since the last one integrated, or ``PERIOD_S`` has passed: a scan from the
-same place adds next to nothing and the work stays bounded for a robot standing still.
+``range_min`` (``pic4rl_base.seen_area.beam_reach``). The scans are counted by
+``pic4rl_base.seen_area.SeenTrack``, thinned as the live explore task counts them (a scan is
+integrated once the sensor has moved, turned or waited enough since the last one), so an
+episode the task ended at its coverage target reads that coverage from its bag.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pic4rl_base.geometry import Pose2D, wrap_angle
-from pic4rl_base.seen_area import SeenGrid
+from pic4rl_base.geometry import Pose2D
+from pic4rl_base.seen_area import SeenGrid, SeenTrack, beam_reach
 
 from ...contract import EpisodeFacts, task_name
 from ..series_kinds import PoseSeries, ScanSeries
@@ -33,12 +33,6 @@ from ..series_kinds import PoseSeries, ScanSeries
 EXPLORE_TASKS = frozenset({"explore"})
 #: Side of a grid cell (m), as the bridge's occupancy grid.
 SEEN_RESOLUTION_M = 0.05
-#: A scan is integrated after the sensor moved this many cells, turned this far (rad), or
-#: this long (s) passed since the last scan integrated: the time-to columns are late by at
-#: most that much (0.4 s at 0.5 m/s), and a 2-hour log of a moving robot costs minutes.
-MOVE_CELLS = 4
-TURN_RAD = math.radians(10.0)
-PERIOD_S = 1.0
 
 
 def wants_seen(facts: EpisodeFacts) -> bool:
@@ -55,15 +49,6 @@ class SeenCurve:
     resolution_m: float
 
 
-def _reach(scan: ScanSeries) -> np.ndarray:
-    """Per beam, how far it saw (m): its valid return, ``range_max`` for ``+inf``, else NaN."""
-    ranges = np.asarray(scan.ranges, dtype=float)
-    rmax = scan.range_max[:, None]
-    valid = np.isfinite(ranges) & (ranges >= scan.range_min[:, None])
-    reach = np.where(valid, np.minimum(ranges, rmax), np.nan)
-    return np.where(np.isposinf(ranges), np.broadcast_to(rmax, ranges.shape), reach)
-
-
 class SeenStream:
     """Scans integrated as they come (``add``, a chunk at a time, in arrival order), each placed
     by ``clock(start, n)``: the stamps (ns, the poses' time base) of the ``n`` scans from
@@ -71,18 +56,20 @@ class SeenStream:
 
     def __init__(self, pose: PoseSeries, mount: Pose2D | None,
                  clock: Callable[[int, int], np.ndarray]) -> None:
-        self.grid = SeenGrid(SEEN_RESOLUTION_M)
+        self.track = SeenTrack(SEEN_RESOLUTION_M)
         self.mount = mount or Pose2D(0.0, 0.0)
         self.clock = clock
         t0 = int(pose.t_ns[0])
         self._t0, self._pose_t = t0, (pose.t_ns - t0).astype(float)
         self._x, self._y, self._yaw = pose.x, pose.y, np.unwrap(pose.yaw)
-        self._last: tuple[float, float, float, float] | None = None  # x, y, yaw, t (s)
         self._stamps: list[np.ndarray] = []
         self._added: list[np.ndarray] = []
-        #: The last scan passed over while no later one was integrated (arrival index and its
-        #: placed beams): integrated at the end, so the final area is every scan's.
-        self._skipped: tuple[int, float, float, float, np.ndarray, np.ndarray] | None = None
+        self._held = -1  # arrival index of the scan the track holds (its cells come at the end)
+
+    @property
+    def grid(self) -> SeenGrid:
+        """The cells seen by the scans integrated so far."""
+        return self.track.grid
 
     def add(self, block: ScanSeries, start: int) -> None:
         t_ns = np.asarray(self.clock(start, len(block)), dtype=np.int64)
@@ -95,25 +82,14 @@ class SeenStream:
         sx = x + m.x * np.cos(yaw) - m.y * np.sin(yaw)
         sy = y + m.x * np.sin(yaw) + m.y * np.cos(yaw)
         heading = yaw + m.yaw
-        reach = _reach(block)
+        reach = beam_reach(block.ranges, block.range_min[:, None], block.range_max[:, None])
         for i in np.flatnonzero(inside):
-            if self._due(sx[i], sy[i], heading[i], at[i] * 1e-9):
-                added[i] = self.grid.add(sx[i], sy[i], heading[i], block.angles[i], reach[i])
-                self._skipped = None
-            else:
-                self._skipped = (start + i, sx[i], sy[i], heading[i], block.angles[i].copy(),
-                                 reach[i].copy())
+            added[i] = self.track.offer(int(t_ns[i]), float(sx[i]), float(sy[i]),
+                                        float(heading[i]), block.angles[i], reach[i])
+            if self.track.held is not None:
+                self._held = start + i
         self._stamps.append(t_ns)
         self._added.append(added)
-
-    def _due(self, x: float, y: float, yaw: float, t_s: float) -> bool:
-        last = self._last
-        due = (last is None or math.hypot(x - last[0], y - last[1])
-               >= MOVE_CELLS * SEEN_RESOLUTION_M or abs(wrap_angle(yaw - last[2])) >= TURN_RAD
-               or t_s - last[3] >= PERIOD_S)
-        if due:
-            self._last = (x, y, yaw, t_s)
-        return due
 
     def curve(self, t_ns: np.ndarray, keep: np.ndarray) -> SeenCurve | None:
         """The area seen after each scan at ``keep`` (arrival indices, in stamp order), whose
@@ -125,10 +101,9 @@ class SeenStream:
         if not np.array_equal(placed[keep], np.asarray(t_ns)[keep]):
             return None
         added = np.concatenate(self._added)
-        if self._skipped is not None:
-            index, *scan = self._skipped
-            added[index] += self.grid.add(*scan)
-            self._skipped = None
+        if self.track.held is not None:
+            added[self._held] += self.track.flush()
+            self._added = [added]
         cells = np.cumsum(added[keep])
         return SeenCurve(placed[keep], cells * SEEN_RESOLUTION_M**2, SEEN_RESOLUTION_M)
 

@@ -28,11 +28,13 @@ ROBOT = RobotInfo(name="test", footprint=Footprint(radius_m=0.2), omni=False,
 ROOM = WorldSpec("room", (0.0, 0.0, 4.0, 3.0), (Box(3.0, 1.5, 0.2, 3.0, 1.0),))
 
 
-def frame(reach_m: float, x: float = 1.5, y: float = 1.5, yaw: float = 0.0) -> SensorFrame:
-    """A 360° scan seeing a circle of ``reach_m`` round the robot (a wall all round)."""
+def frame(reach_m: float, t_s: float = 0.0, x: float = 1.5, y: float = 1.5,
+          yaw: float = 0.0) -> SensorFrame:
+    """A 360° scan at ``t_s`` seeing a circle of ``reach_m`` round the robot (a wall all round);
+    the area seen counts a scan from the same place once a second (``SeenTrack``)."""
     ranges = np.full(BEAMS, reach_m, np.float32)
     scan = ScanData(ranges, -math.pi, 2 * math.pi / BEAMS, 0.05, 10.0)
-    return SensorFrame(0, Pose2D(x, y, yaw), Twist2D(), scan=scan)
+    return SensorFrame(round(t_s * 1e9), Pose2D(x, y, yaw), Twist2D(), scan=scan)
 
 
 def task(world: WorldSpec | None = ROOM, **params: object) -> ExploreLidar:
@@ -54,12 +56,15 @@ def test_the_free_area_is_the_floor_connected_to_the_start():
 def test_the_reward_is_the_area_newly_seen():
     t = task(**{"reward.area": 2.0, "explore.coverage_target": 0.0})
     context = t.begin(frame(0.5))
-    grid = context.extra["seen"]
+    grid = context.extra["seen"].grid
     first = grid.area_m2
     assert first == pytest.approx(math.pi * 0.5**2, rel=0.03)
-    same = t.judge(frame(0.5), frame(0.5), context, 0)
+    same = t.judge(frame(0.5), frame(0.5, 1.0), context, 0)
     assert same.terms["area"] == 0.0 and same.outcome is None
-    wider = t.judge(frame(0.5), frame(1.0), context, 0)
+    # a wider circle from the same place 0.1 s later is held, as the bag's metric holds it
+    held = t.judge(frame(0.5, 1.0), frame(1.0, 1.1), context, 0)
+    assert held.terms["area"] == 0.0 and grid.area_m2 == first
+    wider = t.judge(frame(1.0, 1.1), frame(1.0, 2.0), context, 0)
     assert wider.terms["area"] == pytest.approx(2.0 * (grid.area_m2 - first), abs=1e-9)
     assert wider.terms["area"] == pytest.approx(2.0 * math.pi * (1.0**2 - 0.5**2), rel=0.03)
     assert wider.reward == pytest.approx(wider.terms["area"])
@@ -72,13 +77,13 @@ def test_the_episode_ends_at_the_coverage_target():
     t = task(**{"explore.coverage_target": target})
     context = t.begin(frame(0.6))
     assert context.goal is None and t.facts(context) == {"free_area_m2": free}
-    assert t.judge(frame(0.6), frame(0.8), context, 0).outcome is None
-    ended = t.judge(frame(0.8), frame(1.0), context, 0)
+    assert t.judge(frame(0.6), frame(0.8, 1.0), context, 0).outcome is None
+    ended = t.judge(frame(0.8, 1.0), frame(1.0, 2.0), context, 0)
     assert ended.outcome is Outcome.GOAL and ended.terms["collision"] == 0.0
     # no world (a real robot): no target, no fact
     blind = task(world=None)
     context = blind.begin(frame(0.6))
-    assert blind.judge(frame(0.6), frame(9.0), context, 0).outcome is None
+    assert blind.judge(frame(0.6), frame(9.0, 1.0), context, 0).outcome is None
     assert blind.facts(context) == {}
 
 
