@@ -184,7 +184,8 @@ class EnvConfig:
                                   "observation points at: goal (the final goal, mapless: the "
                                   "paper's) | plan (a look-ahead point on topics.plan) | "
                                   "explorer (a look-ahead point on the mapless explorer's plan, "
-                                  "made from the episode's own scans: mapless)")
+                                  "made from the episode's own scans: mapless) | uwb (the goal's "
+                                  "tag as the robot's UWB anchors range it: no pose used)")
     plan_lookahead_m: float = param(1.5, doc="goal_input plan or explorer: the point this far "
                                     "along the plan beyond the robot's projection on it",
                                     unit="m", range=POSITIVE)

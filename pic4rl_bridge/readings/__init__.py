@@ -4,7 +4,8 @@
 ``sensor_table`` (the frame's sensors in one table: each reading's name, sim topic, sensor
 kind, how its message decodes and how the in-process engine reads it; ``build_frame``, which
 both transports call), ``decode`` (messages → numpy) and ``cdr`` (a step's messages read
-straight from their CDR bytes). They sit in the bottom room with ``pic4rl_bridge.settings``:
+straight from their CDR bytes), ``uwb_goal`` (the goal from the robot's UWB anchors' ranges
+alone). They sit in the bottom room with ``pic4rl_bridge.settings``:
 perception, control, baselines and tasks read frames; the transports make them
 (``tests/bridge/test_layers.py``). Pure numpy; names are imported on first use.
 """

@@ -44,6 +44,7 @@ class GoalInput(ParamEnum):
     GOAL = "goal"
     PLAN = "plan"
     EXPLORER = "explorer"
+    UWB = "uwb"
 
 
 @dataclass(frozen=True)

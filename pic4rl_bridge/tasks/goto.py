@@ -41,6 +41,7 @@ from ..perception.observations import (MAX_TARGET_DISTANCE_M, NORMALIZED_GOAL_DI
 from ..perception.occupancy import OccupancyGrid, sensed_scans
 from ..perception.sensor_parts import observable
 from ..readings.frame import SensorFrame
+from ..readings.uwb_goal import UwbGoal
 from ..robot_info import RobotInfo
 from ..settings.observations import OBSERVED_TABLE
 from ..settings.tasks import GoalInput, GoToPoseReward
@@ -59,6 +60,10 @@ class _GoToPose(Task):
         self._explorer = config.goal_input == GoalInput.EXPLORER.value
         if self._plan:
             self.required = self.required | {"plan"}
+        self._uwb = (UwbGoal.of(robot.specs) if config.goal_input == GoalInput.UWB.value
+                     else None)
+        if self._uwb is not None:
+            self.required = self.required | set(self._uwb.readings)
 
     def command(self, action: np.ndarray) -> Twist2D:
         return planar_command(action, self.robot)
@@ -99,20 +104,27 @@ class _GoToPose(Task):
 
     def _goal_space(self) -> gym.spaces.Box:
         """Goal distance (m), goal angle (rad), last action: the vector beside the sensor;
-        normalised, distance / ``NORMALIZED_GOAL_DISTANCE_M`` clipped to 1 and angle / pi."""
+        normalised, distance / ``NORMALIZED_GOAL_DISTANCE_M`` clipped to 1 and angle / pi.
+        With ``goal_input: uwb`` the anchors' mask (1: range received) follows the angle."""
         far, turn = ((1.0, 1.0) if self.config.normalize_observations
                      else (MAX_TARGET_DISTANCE_M, math.pi))
-        return gym.spaces.Box(np.array([0.0, -turn, -1.0, -1.0], np.float32),
-                              np.array([far, turn, 1.0, 1.0], np.float32), dtype=np.float32)
+        n = 0 if self._uwb is None else len(self._uwb.readings)
+        return gym.spaces.Box(np.array([0.0, -turn, *[0.0] * n, -1.0, -1.0], np.float32),
+                              np.array([far, turn, *[1.0] * n, 1.0, 1.0], np.float32),
+                              dtype=np.float32)
 
     def _goal_vector(self, frame: SensorFrame, context: EpisodeContext,
                      last_action: np.ndarray) -> np.ndarray:
-        distance, angle = target_polar(frame.pose, *self._target(frame, context))
+        if self._uwb is not None:  # the tag's ranges alone: no pose, no goal
+            distance, angle, mask = self._uwb.estimate(self._uwb.ranges(frame.readings))
+        else:
+            distance, angle = target_polar(frame.pose, *self._target(frame, context))
+            mask = np.zeros(0, np.float32)
         if self.config.normalize_observations:
             distance, angle = min(distance / NORMALIZED_GOAL_DISTANCE_M, 1.0), angle / math.pi
         else:
             distance = min(distance, MAX_TARGET_DISTANCE_M)
-        return np.concatenate((np.array([distance, angle], np.float32),
+        return np.concatenate((np.array([distance, angle], np.float32), mask,
                                clipped_action(last_action, 2)))
 
     def _target(self, frame: SensorFrame, context: EpisodeContext) -> tuple[float, float]:

@@ -2,7 +2,9 @@
 and, with ``goal_tag``, to a tag at the episode's goal (relative goal sensing). Each range is
 one ``sensor_msgs/Range`` on ``uwb/<anchor>`` (anchors ``a0``…``a3``, the goal's tag
 ``goal``), read by the bridge as ``uwb_<anchor>``; the anchors' positions are published
-latched on ``uwb/anchors`` at each episode.
+latched on ``uwb/anchors`` at each episode. With ``anchors_on_robot`` the anchors ride on the
+robot instead and each ranges to the goal's tag (``uwb/a<i>``), as a person-following robot's
+anchors range to the person's tag: the range and bearing of the goal from ranges alone.
 
 Model, a two-way-ranging radio (Decawave DWM1000 class): the true 3-D distance between the
 tag's antenna and the anchor's, plus white noise ``noise_std_m``; when the line of sight is
@@ -43,8 +45,12 @@ class UwbSpec:
     anchors_xy_m: tuple[float, ...] = param(
         (), doc="UWB anchors fixed in the world, [x0, y0, x1, y1, ...] (at most 4, named a0, "
         "a1, ...); empty: none", unit="m")
-    anchor_height_m: float = param(2.0, doc="height of the world's UWB anchors", unit="m",
+    anchor_height_m: float = param(2.0, doc="height of the UWB anchors", unit="m",
                                    range=Range(0.0, 100.0))
+    anchors_on_robot: bool = param(False, doc="the anchors of uwb.anchors_xy_m are mounted on "
+                                   "the robot ([x, y] in its base frame) and range to the goal's "
+                                   "tag (relative goal sensing); false: fixed in the world, "
+                                   "ranging to the robot's tag")
     goal_tag: bool = param(True, doc="whether a UWB tag at the episode's goal is ranged "
                            "(uwb/goal)")
     goal_tag_height_m: float = param(1.0, doc="height of the goal's UWB tag", unit="m",
@@ -68,10 +74,13 @@ class UwbSpec:
                 f"[x0, y0, ...]: pairs of finite numbers, at most {MAX_ANCHORS} anchors")
         require(bool(xy) or self.goal_tag, f"{NAME}.goal_tag", self.goal_tag,
                 "true when uwb.anchors_xy_m is empty (a UWB tag ranges to something)")
+        require(bool(xy) or not self.anchors_on_robot, f"{NAME}.anchors_on_robot",
+                self.anchors_on_robot, "false when uwb.anchors_xy_m is empty (no anchors)")
 
     @property
     def anchors(self) -> tuple[tuple[float, float, float], ...]:
-        """The world's anchors, (x, y, z) m, in name order."""
+        """The anchors, (x, y, z) m, in name order: in the world, or in the robot's base
+        frame with ``anchors_on_robot``."""
         xy = self.anchors_xy_m
         return tuple((xy[i], xy[i + 1], self.anchor_height_m) for i in range(0, len(xy), 2))
 
@@ -119,13 +128,22 @@ class UwbTag:
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         mx, my, mz = spec.mount_xyz_m
         tag = np.array([pose.x + c * mx - s * my, pose.y + s * mx + c * my, mz])
+        goal_tag = np.array([goal[0], goal[1], spec.goal_tag_height_m])
         points = self._anchors
+        if spec.anchors_on_robot:  # each anchor on the robot ranges to the goal's tag
+            points = np.column_stack((pose.x + c * points[:, 0] - s * points[:, 1],
+                                      pose.y + s * points[:, 0] + c * points[:, 1], points[:, 2]))
         if spec.goal_tag:
-            points = np.vstack((points, [goal[0], goal[1], spec.goal_tag_height_m]))
-        offsets = points - tag
+            points = np.vstack((points, goal_tag))
+        # the rays leave the one point every range shares: the robot's tag, or the goal's tag
+        # when the robot's anchors range to it (then the robot's tag is a target too)
+        origin = goal_tag if spec.anchors_on_robot else tag
+        if spec.anchors_on_robot and spec.goal_tag:
+            points[-1] = tag
+        offsets = points - origin
         true = np.linalg.norm(offsets, axis=1)
         dirs = offsets / np.maximum(true, 1e-12)[:, None]
-        self._multi_ray(self._model, data, tag, dirs.reshape(-1), None, 1, self._exclude,
+        self._multi_ray(self._model, data, origin, dirs.reshape(-1), None, 1, self._exclude,
                         self._geomid, self._dist, None, len(true), float(true.max()))
         blocked = (self._geomid >= 0) & (self._dist < true)
         ranges = true.copy()
@@ -182,12 +200,16 @@ class RangeMessages:
 
 def anchors_message(engine: Any, header: Any) -> Any:
     """The anchors' positions as a ``geometry_msgs/PoseArray`` in ``header``'s (the world)
-    frame, in name order; ``None`` without a tag ranging to anchors."""
+    frame, or in ``base_link`` with ``anchors_on_robot``, in name order; ``None`` without a
+    tag ranging to anchors."""
     from geometry_msgs.msg import Pose, PoseArray
+    from std_msgs.msg import Header
 
     tag = engine.sensors.get(NAME)
     if tag is None or not tag.spec.anchors:
         return None
+    if tag.spec.anchors_on_robot:
+        header = Header(stamp=header.stamp, frame_id="base_link")
     poses = []
     for x, y, z in tag.spec.anchors:
         pose = Pose()
