@@ -36,8 +36,8 @@ from .errors import ConfigError, require
 from .readings.sensor_table import READING_TABLE
 from .settings.baselines import PREFIX as BASELINES_PREFIX
 from .settings.baselines import ExplorerConfig
-from .settings.observations import (DepthObsConfig, LidarObsConfig, MemoryObsConfig,
-                                     SonarObsConfig, StereoObsConfig)
+from .settings.observations import (OBSERVED_TABLE, DepthObsConfig, LidarObsConfig,
+                                     MemoryObsConfig, SonarObsConfig, StereoObsConfig)
 from .settings.tasks import (TASK_TABLE, ExploreConfig, GoalInput, PersonConfig, RewardConfig,
                              SensorName, TaskName, VineyardConfig)
 
@@ -246,6 +246,17 @@ class EnvConfig:
     @property
     def sensor_label(self) -> str:  # bags' task fact, runs' names: lidar, lidar+depth
         return "+".join(self.observed)
+
+    @property
+    def recorded_topics(self) -> tuple[str, ...]:
+        """What a bag records: ``record.topics``, then the topics of every observed sensor's
+        readings that the sim does not record by default (``topics.<reading>``: the sonar ring's
+        cones, the stereo camera's depth), so that every sensor an agent observes is in its
+        bags."""
+        kinds = {OBSERVED_TABLE[name].kind for name in self.observed}
+        extra = (getattr(self.topics, s.name) for s in READING_TABLE
+                 if s.kind in kinds and s.interface.record_order is None)
+        return tuple(dict.fromkeys((*self.record.topics, *extra)))
 
     @property
     def simulated(self) -> bool:

@@ -65,7 +65,7 @@ class InProcessTransport(Transport):
         self._mounts = scenario.robot.mounts
         self._scenario, self._variant = scenario, scenario.variant
         self._namespace = "/" + config.ros.namespace.strip("/") if config.ros.namespace else ""
-        self._record_topics = config.record.topics
+        self._record_topics = config.recorded_topics
         self._control_dt_ns = round(sim.engine.control_dt_s * 1e9)
         self._stamp_ns = 0
         self._writer: _MessageWriter | None = None

@@ -153,7 +153,7 @@ def _like(sim_topic: Interface, sensor_qos: SensorQos) -> tuple[str, QosSettings
 
 def wiring(config: EnvConfig, sensors: frozenset[str],
            resolve: Callable[[str], str]) -> Wiring:
-    """The subscriptions for ``sensors`` and ``config.record.topics`` (``resolve``: the
+    """The subscriptions for ``sensors`` and ``config.recorded_topics`` (``resolve``: the
     node's topic name resolution)."""
     t, out = config.topics, Wiring()
     sensor_qos = SensorQos(config.ros.sensor_qos)
@@ -186,7 +186,7 @@ def _add_recorded(config: EnvConfig, out: Wiring, sensor_qos: SensorQos,
     """Subscriptions for the recorded topics no frame needs, by their sim interface."""
     cmd_vel = resolve(config.topics.cmd_vel)
     taken = {resolve(name) for name in out.wanted}
-    for topic in config.record.topics:
+    for topic in config.recorded_topics:
         if resolve(topic) == cmd_vel or topic == "cmd_vel":
             out.record_cmd = True
             continue
@@ -200,7 +200,7 @@ def _add_recorded(config: EnvConfig, out: Wiring, sensor_qos: SensorQos,
         out.wanted[topic] = ((sim_topic.type, bridge_qos(QosKind.LATCHED))
                              if sim_topic.qos is QosKind.LATCHED
                              else _like(sim_topic, sensor_qos))
-    out.recorded = {resolve(name) for name in config.record.topics}
+    out.recorded = {resolve(name) for name in config.recorded_topics}
 
 
 def stale(topics: Iterable[Topic], max_age_s: float, now_s: float) -> str | None:
