@@ -173,7 +173,7 @@ def test_wrong_types_name_key_and_value(tmp_path: Path, params: dict[str, Any],
 
 @pytest.mark.parametrize(("key", "value", "choices"), [
     ("task", "goToPos", "goToPose, vineyard, personMonitoring"),
-    ("sensor", "sonar", "lidar, depth"),
+    ("sensor", "radar", "lidar, depth, sonar, stereo"),
     ("transport", "dds", "inprocess, ros"),
     ("ros.step_mode", "fast", "lockstep, rate"),
     ("record.storage", "bag", "sqlite3, mcap"),
