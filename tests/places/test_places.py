@@ -201,8 +201,8 @@ def test_a_task_from_outside_gets_an_env_id_an_episode_and_a_judged_bag(tmp_path
 # -- a sensor: its module and its entry points --------------------------------------------------
 
 #: A user's program: a goToPose env whose robot now carries the goal range finder (its sim
-#: parameter set like any other), one recorded episode of seeded random actions, then the
-#: engine's step messages decoded by the bridge's table.
+#: parameter set like any other) and that observes it beside the LiDAR, one recorded episode of
+#: seeded random actions, then the engine's step messages decoded by the bridge's table.
 SENSE = """
 import json, math, sys
 import gymnasium as gym
@@ -212,13 +212,14 @@ from pic4rl_bridge.readings.sensor_table import BY_NAME
 from pic4rl_sim.node.messages import StateMessages
 
 env = gym.make("pic4rl/GoToPoseLidar-v0", config=sys.argv[1], sim={"goal_range.noise_std_m": 0.0},
-               overrides={"episode_max_steps": 20, "record.enabled": True,
-                          "record.bags_dir": sys.argv[2], "record.run": "r"})
+               overrides={"sensors": ["lidar", "goal_range"], "episode_max_steps": 20,
+                          "record.enabled": True, "record.bags_dir": sys.argv[2],
+                          "record.run": "r"})
 env.reset(seed=3)
 env.action_space.seed(3)
 done = False
 while not done:
-    _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    obs, _, terminated, truncated, _ = env.step(env.action_space.sample())
     done = terminated or truncated
 engine = env.unwrapped.transport.engine
 messages = StateMessages(engine)
@@ -229,7 +230,8 @@ decoded = sensor.decode(dict(messages.published)[sensor.interface], origin, "goa
 pose = engine.robot_pose()
 print(json.dumps({"decoded": decoded, "read": sensor.read(engine, origin),
                   "true": math.hypot(engine.goal[0] - pose.x, engine.goal[1] - pose.y),
-                  "topic": env.unwrapped.config.topics.goal_range}))
+                  "topic": env.unwrapped.config.topics.goal_range,
+                  "keys": sorted(obs), "observed": float(obs["goal_range"][0])}))
 env.close()
 """
 
@@ -258,7 +260,7 @@ def _ranges_are_the_goal_distance(bags: Path, steps: int) -> None:
         assert msg.range == pytest.approx(math.hypot(goal.x - p.x, goal.y - p.y), rel=1e-6)
 
 
-def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
+def test_a_sensor_from_outside_is_simulated_published_recorded_decoded_and_observed(
         tmp_path: Path) -> None:
     import json
 
@@ -270,6 +272,8 @@ def test_a_sensor_from_outside_is_simulated_published_recorded_and_decoded(
     assert seen["topic"] == "goal_range"  # topics.goal_range, from the reading's entry
     assert seen["decoded"] == pytest.approx(seen["true"], rel=1e-6)
     assert seen["read"] == pytest.approx(seen["true"], rel=1e-6)  # in process, no message
+    assert seen["keys"] == ["goal", "goal_range", "lidar"]  # observed: a Dict key of its own
+    assert seen["observed"] == pytest.approx(seen["true"], rel=1e-6)
     _ranges_are_the_goal_distance(tmp_path / "bags" / "r", 20)
 
 

@@ -2,12 +2,13 @@
 to the episode's goal, m, with white noise), published as ``sensor_msgs/msg/Range`` on
 ``goal_range`` each step and read into ``SensorFrame.readings["goal_range"]``.
 
-Its three parts are made by functions that pic4rl's tables call when they load their entry
+Its four parts are made by functions that pic4rl's tables call when they load their entry
 points (``pyproject.toml`` beside it): ``kind`` (the sim's ``SENSOR_TABLE``: its spec, its
-read and its step message), ``topic`` (the sim's ``INTERFACE_TABLE``) and ``reading`` (the
+read and its step message), ``topic`` (the sim's ``INTERFACE_TABLE``), ``reading`` (the
 bridge's ``READING_TABLE``: its decoder and its in-process read, a float32 as the message
-holds it). Each imports pic4rl's class
-when called, so the module loads before any of those tables does."""
+holds it) and ``observation`` (the env's ``OBSERVED_TABLE``: ``sensors: [lidar, goal_range]``
+observes it as a Dict key, its ``part`` the value: the range, no obstacle points). Each
+imports pic4rl's class when called, so the module loads before any of those tables does."""
 
 import math
 from dataclasses import dataclass
@@ -81,3 +82,21 @@ def reading():
 
     return FrameSensor(NAME, topic(), lambda msg, mount, topic: float(msg.range),
                        lambda engine, mount: float(np.float32(engine.read(NAME))), kind=NAME)
+
+
+def part():
+    from gymnasium.spaces import Box
+
+    from pic4rl_bridge.perception.sensor_parts import SensorPart
+
+    return SensorPart(lambda robot: frozenset({NAME}),
+                      lambda config, robot: Box(0.0, MAX_RANGE_M, (1,), np.float32),
+                      lambda config, robot, frame, extra: np.array([frame.readings[NAME]],
+                                                                   np.float32),
+                      lambda frame, robot: None)
+
+
+def observation():
+    from pic4rl_bridge.settings.observations import ObservedSensor
+
+    return ObservedSensor(NAME, NAME, "goal_range:part")
