@@ -5,8 +5,9 @@
 seeded random stream), ``barn`` (BARN's 300 worlds, from ``data/``), ``barn_like`` (BARN-like
 fields from a seed), ``dynbarn`` (them crossed by moving obstacles), ``held_out`` (the
 benchmarks' test worlds, never trained on), ``clutter3d`` (obstacles below and above a LiDAR's
-plane), ``vineyard`` (the vineyard's rows and lanes) and ``mjcf`` (a user's MJCF world; loads
-MuJoCo). Names are imported on first use.
+plane), ``vineyard`` (the vineyard's rows and lanes), ``rooms`` (a house of rooms joined by
+seeded doors, for exploration; the walls with doors and the furniture ``indoor`` shares) and
+``mjcf`` (a user's MJCF world; loads MuJoCo). Names are imported on first use.
 """
 
 from __future__ import annotations

@@ -23,17 +23,16 @@ from pic4rl_base.schema import (POSITIVE, PROBABILITY, Range, check, param, para
                                 to_params)
 
 from ..person_walk import corner_occluders, leg_speeds
-from .arena import WALL_HEIGHT_M, WALL_THICKNESS_M, rng_for, walls
+from .arena import rng_for, walls
 from .barn import BarnParams, barn
 from .barn_like import BarnLikeParams, barn_like
 from .dynbarn import DynBarnParams, dynbarn
 from .clutter3d import Clutter3dParams, clutter3d
+from .rooms import JUNCTION_MARGIN_M, RoomsParams, furniture, rooms, wall_line
 from .spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 from .vineyard import VineyardParams, vineyard
 
 OBSTACLE_HEIGHT_M = 1.0
-JUNCTION_MARGIN_M = 0.4  # a door's edge to the nearest crossing wall
-FURNITURE_GAP_M = 0.7  # furniture to walls, doors' wall lines and other furniture: a robot fits
 PERSON_RADIUS_M = 0.25
 PERSON_MARGIN_M = 0.2  # a walking person's clearance from obstacles beyond its radius
 _COUNT = Range(0, 10)
@@ -124,22 +123,6 @@ class PersonParams(ObstaclesParams):
                 f"an integer in [0, {self.waypoints}] (a corner of the loop each)")
 
 
-def _wall_line(fixed: float, lo: float, hi: float, openings: list[tuple[float, float]],
-               along_x: bool) -> list[Box]:
-    """A straight interior wall from ``lo`` to ``hi`` broken by ``(centre, width)`` openings."""
-    edges = [lo]
-    for centre, width in sorted(openings):
-        edges += [centre - width / 2, centre + width / 2]
-    edges.append(hi)
-    boxes = []
-    for a, b in zip(edges[::2], edges[1::2]):
-        if b - a > 1e-6:
-            mid, size = 0.5 * (a + b), b - a
-            boxes.append(Box(mid, fixed, size, WALL_THICKNESS_M, WALL_HEIGHT_M) if along_x
-                         else Box(fixed, mid, WALL_THICKNESS_M, size, WALL_HEIGHT_M))
-    return boxes
-
-
 def indoor(seed: int, p: IndoorParams) -> WorldSpec:
     """Rooms in a grid above a corridor along the south wall (the paper's Figure 3).
 
@@ -170,13 +153,13 @@ def indoor(seed: int, p: IndoorParams) -> WorldSpec:
         y = y_rooms + j * room_y
         line = [opening(x0 + i * room_x, index + i) for i in range(rooms_x)]
         index += rooms_x
-        boxes += _wall_line(y, x0, -x0, line, along_x=True)
+        boxes += wall_line(y, x0, -x0, line, along_x=True)
         doors += [(c, y) for c, _ in line]
     for i in range(1, rooms_x):  # the walls between columns of rooms
         x = x0 + i * room_x
         line = [opening(y_rooms + j * room_y, index + j) for j in range(rooms_y)]
         index += rooms_y
-        boxes += _wall_line(x, y_rooms, -y0, line, along_x=False)
+        boxes += wall_line(x, y_rooms, -y0, line, along_x=False)
         doors += [(x, c) for c, _ in line]
     params.update(narrow_x_m=doors[narrow][0], narrow_y_m=doors[narrow][1],
                   narrow_along_x=float(narrow < rooms_x * rooms_y))
@@ -184,32 +167,8 @@ def indoor(seed: int, p: IndoorParams) -> WorldSpec:
     for j in range(rooms_y):
         for i in range(rooms_x):
             room = (x0 + i * room_x, y_rooms + j * room_y, room_x, room_y)
-            boxes += _furniture(rng, room, p.furniture_per_room, door_xy, door_width_m)
+            boxes += furniture(rng, room, p.furniture_per_room, door_xy, door_width_m)
     return WorldSpec("indoor", (x0, y0, -x0, -y0), tuple(boxes), seed=seed, params=params)
-
-
-def _furniture(rng: np.random.Generator, room: tuple[float, float, float, float], count: int,
-               door_xy: np.ndarray, door_width_m: float) -> list[Box]:
-    """Up to ``count`` tables and shelves in ``room`` (x, y, size x, size y), with a robot's
-    width free around each and off the doors."""
-    x, y, w, h = room
-    margin = WALL_THICKNESS_M / 2 + FURNITURE_GAP_M
-    placed: list[Box] = []
-    for _ in range(30 * count):
-        if len(placed) == count:
-            break
-        sx, sy = rng.uniform(0.4, 1.2, 2)
-        free_x, free_y = w - 2 * margin - sx, h - 2 * margin - sy
-        cx = x + margin + sx / 2 + rng.uniform(0, max(free_x, 0.0))
-        cy = y + margin + sy / 2 + rng.uniform(0, max(free_y, 0.0))
-        box = Box(float(cx), float(cy), float(sx), float(sy), float(rng.uniform(0.5, 1.5)),
-                  kind="furniture")
-        reach = 0.5 * math.hypot(sx, sy) + FURNITURE_GAP_M
-        if (free_x >= 0 and free_y >= 0
-                and clearance(np.array([[cx, cy]]), tuple(placed), ()).min() >= reach
-                and clearance(door_xy, (box,), ()).min() >= door_width_m):
-            placed.append(box)
-    return placed
 
 
 def _field(rng: np.random.Generator, p: ObstaclesParams, keep_off_xy: np.ndarray | None = None,
@@ -301,7 +260,8 @@ WORLD_TABLE: dict[str, Generator] = {g.params.KIND: g for g in (
     Generator(IndoorParams, indoor), Generator(ObstaclesParams, obstacles),
     Generator(VineyardParams, vineyard), Generator(PersonParams, person),
     Generator(BarnParams, barn), Generator(BarnLikeParams, barn_like),
-    Generator(Clutter3dParams, clutter3d), Generator(DynBarnParams, dynbarn))}
+    Generator(Clutter3dParams, clutter3d), Generator(DynBarnParams, dynbarn),
+    Generator(RoomsParams, rooms))}
 
 
 def world_params(kind: str, params: Mapping[str, Any] | None = None) -> Any:

@@ -9,6 +9,7 @@ from typing import NamedTuple
 
 from .barn import challenge_test_worlds
 from .dynbarn import TEST_SCENES
+from .rooms import TEST_LAYOUTS
 
 
 class HeldOut(NamedTuple):
@@ -25,4 +26,6 @@ HELD_OUT: dict[str, HeldOut] = {
                     "test worlds are 0, 6, ..., 294)"),
     "dynbarn": HeldOut("dynamic BARN", lambda: TEST_SCENES, "train and evaluate on other "
                        "variants (the 60 test scenes are 0, 5, ..., 295)"),
+    "rooms": HeldOut("rooms", lambda: TEST_LAYOUTS, "train and evaluate on layouts 0-999 (the "
+                     "20 test layouts are 1000-1019)"),
 }
