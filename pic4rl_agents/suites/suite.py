@@ -49,7 +49,8 @@ from . import checks
 
 SUITE_KEYS = ("suite", "bags", "transport", "retries", "table", "tasks")
 #: The results table's layouts (``pic4rl_metrics.tables.protocol.LAYOUTS``, which
-#: ``pic4rl-metrics compare --table`` names too): the paper's columns, or BARN's.
+#: ``pic4rl-metrics compare --table`` names too): the paper's columns, BARN's, the explore
+#: task's or the crowd's (social columns).
 TABLES = tuple(LAYOUTS)
 WORLD_GROUP_KEYS = ("world", "variants", "label")
 TASK_KEYS = ("name", "env", "agents", "baselines", "worlds", "robots", "pairs", "repetitions",

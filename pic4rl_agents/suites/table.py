@@ -2,7 +2,8 @@
 task × agent × world × robot × pair set, every repetition's episodes together) in the suite's
 layout (``LAYOUTS``): the paper's columns, SPL, the success rate's Wilson 95 % interval and n;
 or BARN's, success, collision and timeout rates with their Wilson intervals and the mean BARN
-time and score with bootstrap intervals. The cells are computed once, in the metrics
+time and score with bootstrap intervals; or another of ``LAYOUTS`` (the crowd's: BARN's rates,
+SPL and the social columns). The cells are computed once, in the metrics
 (``pic4rl_metrics.tables.protocol``: ``pic4rl-metrics compare --table`` gives the same numbers
 from the same bags); this module adds the suite's row keys and each row's status. A task without
 a goal (person monitoring; the metrics' rule, ``pic4rl_metrics.tables.groups.headline``) heads

@@ -8,7 +8,9 @@ One implementation for both: ``protocol_cells`` aggregates a result frame by its
 rates, the mean BARN time (over the successes) and the mean BARN score (over every judged
 episode); ``paper``: success and the paper's columns with SPL; ``explore``: the BARN rates,
 then the mean coverage, area seen, times to 50 % and 90 % and path per area seen, ranked by
-coverage. A task without a goal
+coverage; ``crowd``: the BARN rates, SPL and the social columns (``crowd.SOCIAL_COLUMNS``:
+each zone's entries and time, closest approach, time to collision, people contacts, speed
+near people), ranked by SPL. A task without a goal
 (``groups.headline``) heads with its full runs: a ``full runs`` column after success. An agent
 is a row key like any other: a plugin's, a ROS stack's or a shipped agent's name is one more
 row. ``render_protocol`` lays the rows out per task and world set (``groups.split``), as
@@ -29,6 +31,7 @@ from pic4rl_base.errors import ConfigError
 
 from ..core.derived import INPUT_TESTS, Derived
 from ..core.registry import METRICS
+from ..core.tasks.crowd import SOCIAL_COLUMNS
 from .aggregate import (FULL_RUN, FULL_RUNS, _error_mask, _group_keys, aggregate,
                         bootstrap_interval, wilson_interval)
 from .groups import headline, join, split, with_world_set
@@ -65,7 +68,9 @@ LAYOUTS = {"paper": Layout(("success",), PAPER_MEANS, False, "spl"),
            "barn": Layout(("success", "collision", "timeout"), ("barn_time_s", "barn_score"),
                           True, "barn_score", worlds="barn_world"),
            "explore": Layout(("success", "collision", "timeout"), EXPLORE_MEANS, True,
-                             "coverage_pct")}
+                             "coverage_pct"),
+           "crowd": Layout(("success", "collision", "timeout"), ("spl", *SOCIAL_COLUMNS),
+                           False, "spl")}
 #: The header of the full runs' column (``aggregate``'s ``full_runs``: a task without a goal).
 FULL_RUNS_LABEL = "full runs"
 #: Where the BARN layout's worlds are told apart, in words (for its notes and errors).

@@ -215,4 +215,11 @@ _register("people_collision_count", "count", "people collisions", _people_collis
 _register("speed_near_people_mean_mps", "m/s", "speed near people", _speed_near_people, 5)
 _register("path_irregularity_radpm", "rad/m", "path irregularity", _path_irregularity, None,
           ("people",))
+#: The crowd table's social columns (``tables.protocol``'s ``crowd`` layout): each zone's
+#: entries and time, the closest approach, the time to collision, the people contacts and the
+#: speed near people.
+SOCIAL_COLUMNS: tuple[str, ...] = (
+    *(f"{zone}_intrusion_{kind}" for zone in ZONES_M for kind in ("count", "time_s")),
+    "people_dist_min_m", "people_ttc_min_s", "people_collision_count",
+    "speed_near_people_mean_mps")
 del _i, _zone, _radius

@@ -1,6 +1,7 @@
 """``config/suite_crowd.yaml`` (issue 41 item 6): the shipped TD3-LiDAR agent, DWA, the planner
 and ORCA on the paper's 5 indoor pairs among 10 people with held-out seeds, and a cut-down
-suite run in process whose bags carry the social metrics into the report's leaderboard."""
+suite run in process whose bags carry the social metrics into the suite's table (``table:
+crowd``) and the report's leaderboard."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ DEMO = REPO / "config" / "suite_crowd_demo.yaml"
 
 def test_the_suite_is_four_agents_among_ten_people_on_held_out_seeds(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "paper" and len(suite.cells) == 4 * 4
+    assert suite.table == "crowd" and len(suite.cells) == 4 * 4
     assert {c.agent for c in suite.cells} == {"td3_lidar", "dwa", "planner", "orca"}
     assert {c.seed for c in suite.cells} == {1000, 1001, 1002, 1003}
     assert {c.pairs.label for c in suite.cells} == {"paper"}
@@ -50,6 +51,11 @@ def test_two_episodes_run_in_process_into_the_social_columns(tmp_path: Path) -> 
     table = bench.bench_suite(suite, workers=1, local=True, progress=False)
     cells = dict(zip(table.header, table.rows[0]))
     assert cells["status"] == "ok" and cells["n"] == "2"
+    # the suite's table carries the social columns, read from these bags (not 0 for want of
+    # people: ten walk in the indoor world, so someone comes within the social zone)
+    assert float(cells["social zone time [s]"]) > 0
+    assert float(cells["social zone entries [count]"]) > 0
+    assert cells["min person distance [m]"] is not None
     frame = compute(sorted(suite.root.glob("crowd-orca-*/*/episode_*"))).frame
     assert len(frame) == 2 and (frame["error"] == "").all()
     assert frame["people_dist_min_m"].notna().all() and (frame["people_dist_min_m"] > 0).all()
