@@ -294,28 +294,33 @@ def test_a_sensor_from_outside_leaves_every_random_stream_of_pics_as_it_was(
     assert theirs == [*mine, "goal_range"]
 
 
-#: The same over ROS 2: the sim node publishes the user's topic, the ROS transport records it.
+#: The same over ROS 2: the sim node publishes the user's topic, the ROS transport records it
+#: and observes it, each step's observed range the one its message carried.
 SENSE_ROS = """
-import sys
+import json, sys
 import gymnasium as gym
 import pic4rl_bridge
 
 env = gym.make("pic4rl/GoToPoseLidar-v0", config=sys.argv[1], transport="ros",
                overrides={"ros.domain_id": int(sys.argv[3]), "episode_max_steps": 15,
-                          "record.enabled": True, "record.bags_dir": sys.argv[2],
-                          "record.run": "r"})
-env.reset(seed=3)
+                          "sensors": ["lidar", "goal_range"], "record.enabled": True,
+                          "record.bags_dir": sys.argv[2], "record.run": "r"})
+obs, _ = env.reset(seed=3)
 env.action_space.seed(3)
-done = False
+observed, done = [float(obs["goal_range"][0])], False
 while not done:
-    _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    obs, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    observed.append(float(obs["goal_range"][0]))
     done = terminated or truncated
 env.close()
+print(json.dumps(observed))
 """
 
 
 @pytest.mark.integration
 def test_the_sensor_from_outside_goes_over_ros_too(tmp_path: Path) -> None:
+    import json
+
     from ros_helpers import SimProcess, next_domain, sim_command, sim_env
 
     env = _install("sensor", tmp_path / "site")
@@ -330,3 +335,6 @@ def test_the_sensor_from_outside_goes_over_ros_too(tmp_path: Path) -> None:
         sim.stop()
     assert done.returncode == 0, done.stderr
     _ranges_are_the_goal_distance(tmp_path / "bags" / "r", 15)
+    bag = next((tmp_path / "bags" / "r").rglob("metadata.yaml")).parent
+    sent = [msg.range for _, msg in _messages(bag, "/goal_range")]
+    assert json.loads(done.stdout.splitlines()[-1]) == pytest.approx(sent[-16:], rel=1e-6)
