@@ -70,12 +70,12 @@ def test_an_observed_sonar_or_stereo_camera_is_alike_through_both_and_recorded(
                   for run in ("ros", "local")}
     assert len(ros) == len(local) >= 12
     key = "sonar" if case == "lidar+sonar" else "stereo"
-    for step, (r, l) in enumerate(zip(ros, local)):
-        assert r[0].keys() == l[0].keys() and key in r[0]
+    for step, (r, here) in enumerate(zip(ros, local)):
+        assert r[0].keys() == here[0].keys() and key in r[0]
         for name in r[0]:
-            np.testing.assert_array_equal(r[0][name], l[0][name],
+            np.testing.assert_array_equal(r[0][name], here[0][name],
                                           err_msg=f"{name} differs at step {step}")
-        assert r[1:] == l[1:], f"reward or end differs at step {step}"
+        assert r[1:] == here[1:], f"reward or end differs at step {step}"
     assert len({r[0][key].tobytes() for r in ros}) > 1  # the sensor sees the robot move
     for run, episodes in counts.items():
         for i, episode in enumerate(episodes):
