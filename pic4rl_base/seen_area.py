@@ -132,10 +132,11 @@ class SeenGrid:
 class SeenTrack:
     """A sensor's scans, offered in time order, counted into ``grid`` thinned (the module's
     docstring): ``offer`` integrates a scan that is due and holds one that is not, ``flush``
-    integrates the one held last, so the final area is every scan's."""
+    integrates the one held last, so the final area is every scan's. Sensors of one robot each
+    have their track, on one ``grid`` (a fused count)."""
 
-    def __init__(self, resolution_m: float) -> None:
-        self.grid = SeenGrid(resolution_m)
+    def __init__(self, grid: SeenGrid) -> None:
+        self.grid = grid
         self._last: tuple[float, float, float, int] | None = None  # x, y, yaw, t_ns integrated
         #: The last scan passed over since one was integrated: ``add``'s arguments.
         self.held: tuple[float, float, float, np.ndarray, np.ndarray] | None = None

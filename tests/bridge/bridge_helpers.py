@@ -13,4 +13,5 @@ ENV_CONFIGS = {
     "pic4rl/Vineyard-v0": REPO / "config" / "env_vineyard_depth.yaml",
     "pic4rl/PersonMonitoring-v0": REPO / "config" / "env_person_omni.yaml",
     "pic4rl/ExploreLidar-v0": REPO / "config" / "env_explore.yaml",
+    "pic4rl/ExploreDepth-v0": REPO / "config" / "env_explore_depth.yaml",
 }

@@ -56,7 +56,7 @@ class SeenStream:
 
     def __init__(self, pose: PoseSeries, mount: Pose2D | None,
                  clock: Callable[[int, int], np.ndarray]) -> None:
-        self.track = SeenTrack(SEEN_RESOLUTION_M)
+        self.track = SeenTrack(SeenGrid(SEEN_RESOLUTION_M))
         self.mount = mount or Pose2D(0.0, 0.0)
         self.clock = clock
         t0 = int(pose.t_ns[0])

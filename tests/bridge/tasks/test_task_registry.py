@@ -44,6 +44,8 @@ def test_the_registered_ids_are_the_entries_ids_with_their_sensor_and_sim_defaul
         "pic4rl/PersonMonitoring-v0": {"task": "personMonitoring", "sensor": "lidar",
                                        "sim_defaults": {"robot": "omni", "world": "person"}},
         "pic4rl/ExploreLidar-v0": {"task": "explore", "sensor": "lidar"},
+        "pic4rl/ExploreDepth-v0": {"task": "explore", "sensor": "depth",
+                                   "sim_defaults": {"depth.enabled": True}},
     }
     for env_id, kwargs in pic4rl_bridge.ENV_IDS.items():
         assert gym.spec(env_id).kwargs == kwargs

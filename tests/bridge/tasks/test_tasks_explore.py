@@ -15,7 +15,7 @@ from pic4rl_bridge.perception.frontiers import frontier_cells
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_bridge.tasks import make_task
-from pic4rl_bridge.tasks.explore import ExploreLidar, free_area_m2
+from pic4rl_bridge.tasks.explore import Explore, free_area_m2
 from pic4rl_metrics.contract import Outcome
 from pic4rl_sim.engine.geometry import Twist2D
 from pic4rl_sim.engine.worlds.spec import Box, WorldSpec
@@ -37,10 +37,10 @@ def frame(reach_m: float, t_s: float = 0.0, x: float = 1.5, y: float = 1.5,
     return SensorFrame(round(t_s * 1e9), Pose2D(x, y, yaw), Twist2D(), scan=scan)
 
 
-def task(world: WorldSpec | None = ROOM, **params: object) -> ExploreLidar:
+def task(world: WorldSpec | None = ROOM, **params: object) -> Explore:
     config = EnvConfig(task="explore").replace(**params)
     built = make_task(config, ROBOT, world)
-    assert isinstance(built, ExploreLidar)
+    assert isinstance(built, Explore)
     return built
 
 
