@@ -11,6 +11,13 @@ ways round an obstacle near the middle, and a student imitating those labels ave
 and stalls (in a DAgger probe, such students reached 5 of 50 goals after two rounds, with 35
 timeouts, against 10 and 22 for students of this planner).
 
+Among people (a ``people`` reading: the env has one when its sim has a crowd) it checks its
+plan ahead every ``people_replan_s`` against each person's current position as a disc of its
+circumscribed radius plus ``people_margin_m``, and when one is in the way replans round them
+all on the world's map (``pic4rl_bridge.baselines.crowd_plan``; the world's plan when the
+people close every way); ``people_replan_s`` 0 plans on the world's map alone, as without
+people. It plans anew at every new goal and off its plan with the people too.
+
 The controller is the pursuit law of ``pic4rl_bridge.control.pursuit``: it steers toward the
 farthest point of the plan within ``lookahead_m`` that the robot sees in a straight line with
 ``clearance_m`` to spare. The commands stay within
@@ -32,6 +39,7 @@ from ..control.actions import normalized_action
 from ..control.pursuit import pursuit_command
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
+from .crowd_plan import blocks, plan_around_people
 
 
 class PlannerController:
@@ -40,7 +48,8 @@ class PlannerController:
     def __init__(self, robot: RobotInfo, world: WorldSpec, *, lookahead_m: float = 0.4,
                  turn_in_place_rad: float = 0.8, replan_distance_m: float = 0.3,
                  clearance_m: float = 0.07, plan_margin_m: float = 0.0,
-                 max_linear_m_s: float = 0.0) -> None:
+                 max_linear_m_s: float = 0.0, people_replan_s: float = 1.0,
+                 people_margin_m: float = 0.5) -> None:
         self.robot, self.world = robot, world
         self.margins_m = ((plan_margin_m, *PLAN_MARGINS_M) if plan_margin_m > 0
                           else PLAN_MARGINS_M)  # the widest that has a path
@@ -52,23 +61,38 @@ class PlannerController:
         self.turn_in_place_rad = turn_in_place_rad
         self.replan_distance_m = replan_distance_m
         self.plans = 0  # paths planned since the controller was made
+        self.people_plans = 0  # of which round the people
+        #: Steps between plans round the people (0: never).
+        self._people_every = (max(1, round(people_replan_s / robot.control_dt_s))
+                              if people_replan_s > 0 else 0)
+        self._keep_off_m = robot.footprint.bounding_radius_m + people_margin_m
+        self._since = 0  # steps since the plan was last made or checked
         self._path: np.ndarray | None = None
         self._goal: tuple[float, float] | None = None
 
     def reset(self) -> None:
         """Forget the plan: the next frame plans from the robot's position."""
-        self._path, self._goal = None, None
+        self._path, self._goal, self._since = None, None, 0
 
     @property
     def path(self) -> np.ndarray | None:
         """The plan being followed (k × 2, m), or ``None`` before the first frame."""
         return self._path
 
-    def _replan(self, xy: tuple[float, float], goal: tuple[float, float]) -> np.ndarray:
+    def _replan(self, xy: tuple[float, float], goal: tuple[float, float],
+                people: np.ndarray | None) -> np.ndarray:
         self.plans += 1
-        path = plan_path(self.world, xy, goal,
-                         robot_radius_m=self.robot.footprint.bounding_radius_m,
-                         margins_m=self.margins_m)
+        self._since = 0
+        radius = self.robot.footprint.bounding_radius_m
+        path = None
+        if people is not None and len(people) and self._people_every:
+            path = plan_around_people(self.world, xy, goal, np.asarray(people)[:, :2],
+                                      robot_radius_m=radius, margins_m=self.margins_m,
+                                      keep_off_m=self._keep_off_m)
+            self.people_plans += path is not None
+        if path is None:
+            path = plan_path(self.world, xy, goal, robot_radius_m=radius,
+                             margins_m=self.margins_m)
         self._path, self._goal = (path if len(path) else np.array([xy, goal])), goal
         return self._path
 
@@ -77,12 +101,18 @@ class PlannerController:
         if frame.goal is None:
             raise ValueError("PlannerController: the frame has no goal")
         xy, goal = (frame.pose.x, frame.pose.y), (float(frame.goal[0]), float(frame.goal[1]))
-        path = self._path
+        people = frame.readings.get("people")
+        path, self._since = self._path, self._since + 1
         if path is None or goal != self._goal:
-            path = self._replan(xy, goal)
+            path = self._replan(xy, goal, people)
         s, offset = project(path, xy) if len(path) > 1 else (0.0, 0.0)
-        if abs(offset) > self.replan_distance_m:
-            path = self._replan(xy, goal)
+        due = (people is not None and len(people) > 0 and self._people_every > 0
+               and self._since >= self._people_every)
+        if due:
+            self._since = 0
+        if abs(offset) > self.replan_distance_m or (due and blocks(
+                path, s, xy, np.asarray(people)[:, :2], self._keep_off_m)):
+            path = self._replan(xy, goal, people)
             s = 0.0
         return pursuit_command(self.robot, frame.pose, path, s, self._sight.visible,
                                lookahead_m=self.lookahead_m,

@@ -82,6 +82,11 @@ class PlannerConfig:
                                  unit="m", range=NON_NEGATIVE)
     max_linear_m_s: float = param(0.0, doc="its speed limit; 0: the env's", unit="m/s",
                                   range=NON_NEGATIVE)
+    people_replan_s: float = param(1.0, doc="among people (a people reading), plans round "
+                                   "their current positions this often; 0: never (the "
+                                   "world's map alone)", unit="s", range=NON_NEGATIVE)
+    people_margin_m: float = param(0.5, doc="beyond the bounding radius: the plan keeps this "
+                                   "from each person's centre", unit="m", range=NON_NEGATIVE)
 
 
 @dataclass(frozen=True)
