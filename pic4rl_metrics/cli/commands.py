@@ -8,22 +8,20 @@ code is 1 when any bag failed (after all bags were judged and reported), 2 on ba
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
-import re
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from pic4rl_base import atomic
 from pic4rl_base.entry import entry_point
-from pic4rl_base.errors import ConfigError, OutputError
+from pic4rl_base.errors import ConfigError
 
 from ..bags.inputs import discover
 from ..bags.topics import TopicMap, load_topic_map, parse_frames
 from ..contract import EpisodeFacts, parse_facts
-from ..core.registry import METRICS, METRIC_TABLE
+from ..core.registry import METRIC_TABLE, METRICS
 from ..core.roles import ROLE_TABLE, Role
 from ..tables.batch import MetricsResult, compute
 from ..tables.groups import BY_CHOICES, parse_by, render_groups
@@ -32,6 +30,7 @@ from ..tables.paired import render_paired
 from ..tables.protocol import LAYOUTS, protocol_table
 from ..tables.results import METRIC_COLUMNS, table_columns
 from ..tables.text import EPISODE_VIEW, render_episodes
+from .plot import run_plot, writing
 from .video import add_video_options, run_video_command
 
 
@@ -221,7 +220,7 @@ def _emit(text: str, out: Path | None, force: bool) -> None:
         msg = f"--out {str(out)!r} exists; pass --force to replace it"
         raise ConfigError(msg)
     data = (text if text.endswith("\n") else text + "\n").encode()
-    with _writing(out), atomic.replacing(out) as tmp, tmp.open("wb") as handle:
+    with writing(out), atomic.replacing(out) as tmp, tmp.open("wb") as handle:
         _write_all(handle, data)  # whole or not at all: a failed write leaves no file
     print(f"wrote {out}", file=sys.stderr)
 
@@ -230,17 +229,6 @@ def _write_all(handle: Any, data: bytes) -> None:
     handle.write(data)
     handle.flush()
     os.fsync(handle.fileno())
-
-
-@contextlib.contextmanager
-def _writing(path: Path) -> Iterator[None]:
-    """An OS error while writing ``path`` (a full disk, a parent that is a file, no
-    permission) as one ``OutputError`` line naming the path."""
-    try:
-        yield
-    except OSError as err:
-        raise OutputError(f"--out {str(path)!r}: cannot write it: "
-                          f"{err.strerror or err}") from err
 
 
 def _check_report_inputs(args: argparse.Namespace) -> None:
@@ -269,30 +257,6 @@ def _report_failures(result: MetricsResult) -> int:
               "directory)", file=sys.stderr)
         return 1
     return 1 if n_bad else 0
-
-
-def _plot(args: argparse.Namespace, result: MetricsResult) -> None:
-    from ..viz.plots import (  # matplotlib on demand
-        by_world, episode_figure, figure_names, save_figure, trajectories_figure)
-
-    out: Path = args.out
-    drawn = [r for r in result.results if r.episode is not None]
-    figures = [(out / f"{name}.png", lambda r=r: episode_figure(r.episode, r.metrics))
-               for name, r in zip(figure_names([r.bag for r in drawn]), drawn)]
-    worlds = by_world(result.episodes)
-    for world, episodes in worlds.items():  # one comparison per world, never overlaid
-        name = "comparison" if len(worlds) == 1 else "comparison_" + (
-            re.sub(r"[^\w.-]", "-", world) or "no-world")
-        if len(episodes) > 1:
-            figures.append((out / f"{name}.png", lambda e=episodes: trajectories_figure(
-                e, group_by=args.by)))
-    for target, draw in figures:
-        if target.exists():
-            print(f"kept existing {target}", file=sys.stderr)
-            continue
-        with _writing(target):
-            save_figure(draw(), target)
-        print(f"wrote {target}", file=sys.stderr)
 
 
 def _check_table_options(args: argparse.Namespace) -> None:
@@ -342,7 +306,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             columns=lambda rows: _shown(result, table_columns(rows), numeric=True))
         _emit(text, args.out, args.force)
     else:
-        _plot(args, result)
+        run_plot(args, result)
     return _report_failures(result)
 
 

@@ -1,5 +1,6 @@
-"""The area an exploration has seen, drawn: the HTML report's coverage curves and the episode
-videos' tint of the floor seen so far.
+"""The area an exploration has seen, drawn: the HTML report's coverage curves (and
+``pic4rl-metrics plot``'s, the same as a PNG: ``coverage_figure``) and the episode videos' tint
+of the floor seen so far.
 
 An exploration is judged by how fast it sees, which the time-to columns only sample; the curve
 shows it whole. Each episode's curve is ``Derived.seen`` (the one the coverage columns come
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from ..core.derived import Derived
@@ -184,6 +186,33 @@ def coverage_svg(grid: np.ndarray, agent_bands: Sequence[Band], unit: str) -> st
     return (f'<svg class="coverage" viewBox="0 0 {WIDTH} {HEIGHT}" width="{WIDTH}" '
             f'height="{HEIGHT}" font-size="11" role="img" aria-label="{label} against time">'
             + "".join(parts) + "</svg>")
+
+
+def coverage_figure(episodes: Sequence[Episode], *, group_by: str = "agent") -> Figure | None:
+    """The curves of ``episodes`` as a figure: per value of the fact ``group_by`` (its bag's
+    name where an episode lacks it) the mean line and the ± one standard deviation band, as
+    the report draws them; None when none of them explores."""
+    curves = []
+    for ep in episodes:
+        curve = episode_curve(ep)
+        if curve is not None:
+            value = getattr(ep.facts, group_by, None)
+            curves.append((ep.bag.name if value is None else str(value), curve))
+    if not curves:
+        return None
+    grid, agent_bands, unit = bands(curves)
+    fig = Figure(figsize=(8, 4.5), layout="constrained")
+    ax = fig.subplots()
+    for k, b in enumerate(agent_bands):
+        color = tuple(c / 255 for c in PALETTE[k % len(PALETTE)])
+        ax.fill_between(grid, b.mean - b.std, b.mean + b.std, color=color, alpha=0.2, lw=0)
+        ax.plot(grid, b.mean, color=color, lw=2, label=f"{b.agent} (n = {b.n})")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("coverage [%]" if unit == "%" else "area seen [m²]")
+    ax.set_ylim(bottom=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(title=group_by, fontsize="small")
+    return fig
 
 
 def coverage_section(result: MetricsResult, names: pd.Series) -> str:

@@ -1,7 +1,7 @@
 """Exploration drawn (``viz.coverage_plot``): synthetic exploration bags (turning in place in a
 4 m square room, seeing through a 90° sector ahead) give the report's coverage curves, per
 agent the mean of its episodes with a band, and the videos' tint of the floor seen, inside the
-seen sector and nowhere else."""
+seen sector and nowhere else; ``pic4rl-metrics plot`` draws the curves as a PNG."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_metrics.cli.commands import main
 from pic4rl_metrics.synthetic.synthetic import cast_scan, write_episode_bag
 from pic4rl_metrics.synthetic.synthetic_tracks import front_sector, square_room, turn_in_place
-from pic4rl_metrics.viz.coverage_plot import ALPHA, SHADE
+from pic4rl_metrics.viz.coverage_plot import ALPHA, SHADE, coverage_figure
 from pic4rl_metrics.viz.video import EpisodeScene, VideoOptions
 
 ROOM = square_room(4.0)  # free floor 16 m²
@@ -116,3 +116,25 @@ def test_a_video_frame_shades_the_seen_sector_and_nothing_else(tmp_path: Path) -
     assert not shaded_at(-1.2, 0.3) and not shaded_at(0.3, -1.2)  # behind, and right of -45°
     last = frames[-1][rr, cc].astype(float)  # 4 s: 2 rad turned, more seen, none outside
     assert ((last == tinted).all(axis=2) & (background != tinted).any(axis=2)).sum() > len(rows)
+
+
+def test_plot_draws_the_coverage_curves_as_a_figure(tmp_path: Path, capsys) -> None:
+    """``pic4rl-metrics plot`` beside its comparison figure writes the same curves as a PNG:
+    one line per agent, ending at its mean coverage; a navigation bag gets none."""
+    bags = tmp_path / "bags"
+    _explore_bag(bags / "fast_0", "fast", 0.5)
+    _explore_bag(bags / "slow_0", "slow", 0.25)
+    out = tmp_path / "plots"
+    assert main(["plot", str(bags), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert (out / "coverage.png").stat().st_size > 10_000 and (out / "comparison.png").exists()
+    episodes = [read_episode(bags / name) for name in ("fast_0", "slow_0")]
+    fig = coverage_figure(episodes)
+    assert fig is not None
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "coverage [%]"
+    finals = {line.get_label(): line.get_ydata()[-1] for line in ax.get_lines()}
+    assert finals["fast (n = 1)"] == pytest.approx(100.0, abs=0.01)
+    assert finals["slow (n = 1)"] == pytest.approx(_sector_pct(0.25 * 14.0), abs=1.0)
+    nav = write_episode_bag(tmp_path / "nav", turn_in_place(0.5, 2.0), obstacles=ROOM,
+                            facts={"task": "goToPose/lidar"})
+    assert coverage_figure([read_episode(nav)]) is None
