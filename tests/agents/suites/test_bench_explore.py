@@ -1,5 +1,5 @@
 """``config/suite_explore.yaml``: the exploration baselines on held-out worlds (none of the
-env's training variants), and a reduced copy (one indoor world, one episode per baseline) run
+envs' training variants: indoor's, and the rooms house's held-out layouts), and a reduced copy (one indoor world, one episode per baseline) run
 in process end to end into the explore table's coverage columns, equal to the bags'."""
 
 from __future__ import annotations
@@ -12,13 +12,14 @@ import yaml
 from pic4rl_agents.suites import runner as bench
 from pic4rl_agents.suites.suite import load_suite
 from pic4rl_metrics import compute
+from pic4rl_sim.engine.worlds.held_out import HELD_OUT
 
 REPO = Path(__file__).resolve().parents[3]
 SUITE = REPO / "config" / "suite_explore.yaml"
 
 
-def _training_variants() -> set[int]:
-    env = yaml.safe_load((REPO / "config" / "env_explore.yaml").read_text())
+def _training_variants(name: str = "env_explore.yaml") -> set[int]:
+    env = yaml.safe_load((REPO / "config" / name).read_text())
     text = env["nav_env"]["ros__parameters"]["episodes"]["world_variants"]
     low, high = (int(v) for v in text.split(":"))
     return set(range(low, high))
@@ -26,13 +27,17 @@ def _training_variants() -> set[int]:
 
 def test_the_suite_is_both_baselines_on_held_out_worlds(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "explore" and len(suite.cells) == 2 * 5
+    assert suite.table == "explore" and len(suite.cells) == 2 * 5 + 2 * 10
     assert sorted({c.agent for c in suite.cells}) == ["frontier", "random_walk"]
     indoor = {c.variant for c in suite.cells if c.world == "indoor"}
     assert indoor == {1000, 1001, 1002} and not indoor & _training_variants()
     assert {c.variant for c in suite.cells if c.world == "barn_like"} == {1000, 1001}
-    assert {c.pairs.episodes for c in suite.cells} == {2}
-    assert {c.row["world"] for c in suite.cells} == {"indoor:heldout", "barn_like:fields"}
+    house = {c.variant for c in suite.cells if c.world == "rooms"}
+    assert house == set(range(1000, 1010)) and house <= set(HELD_OUT["rooms"].variants())
+    assert not house & _training_variants("env_explore_rooms.yaml")
+    assert {c.pairs.episodes for c in suite.cells if c.world != "rooms"} == {2}
+    assert {c.row["world"] for c in suite.cells} == {"indoor:heldout", "barn_like:fields",
+                                                     "rooms:heldout"}
 
 
 @pytest.mark.heavy
