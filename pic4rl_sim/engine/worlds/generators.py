@@ -26,9 +26,9 @@ from ..person_walk import corner_occluders, leg_speeds
 from .arena import rng_for, walls
 from .barn import BarnParams, barn
 from .barn_like import BarnLikeParams, barn_like
-from .dynbarn import DynBarnParams, dynbarn
 from .clutter3d import Clutter3dParams, clutter3d
-from .rooms import JUNCTION_MARGIN_M, RoomsParams, furniture, rooms, wall_line
+from .dynbarn import DynBarnParams, dynbarn
+from .rooms import RoomsParams, door_centre, furniture, least_room_m, rooms, wall_line
 from .spec import Box, Cylinder, PersonSpec, WorldSpec, clearance
 from .vineyard import VineyardParams, vineyard
 
@@ -63,7 +63,7 @@ class IndoorParams:
         check(self, "world.indoor.")
         require(self.narrow_width_m < self.door_width_m, "world.indoor.narrow_width_m",
                 self.narrow_width_m, f"a width in [0.5, door_width_m={self.door_width_m}) m")
-        room_min = self.door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
+        room_min = least_room_m(self.door_width_m)
         require(self.size_x_m / self.rooms_x >= room_min, "world.indoor.size_x_m",
                 self.size_x_m, f"at least rooms_x * {room_min:.2f} m so that doors fit")
         require((self.size_y_m - self.corridor_width_m) / self.rooms_y >= room_min,
@@ -143,8 +143,8 @@ def indoor(seed: int, p: IndoorParams) -> WorldSpec:
 
     def opening(lo: float, index: int) -> tuple[float, float]:
         width = narrow_width_m if index == narrow else door_width_m
-        span = (room_x if index < rooms_x * rooms_y else room_y) - width - 2 * JUNCTION_MARGIN_M
-        return lo + JUNCTION_MARGIN_M + width / 2 + float(rng.uniform(0, span)), width
+        length = room_x if index < rooms_x * rooms_y else room_y
+        return door_centre(rng, lo, length, width), width
 
     boxes = walls((x0, y0, -x0, -y0))
     doors: list[tuple[float, float]] = []

@@ -58,13 +58,24 @@ class RoomsParams:
 
     def __post_init__(self) -> None:
         check(self, "world.rooms.")
-        room_min = self.door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
+        room_min = least_room_m(self.door_width_m)
         for key, size, count in (("size_x_m", self.size_x_m, self.rooms_x),
                                  ("size_y_m", self.size_y_m, self.rooms_y)):
             least = count * (room_min + 2 * self.wall_jitter_m)
             require(size >= least, f"world.rooms.{key}", size,
                     f"at least {least:.2f} m: rooms of {room_min:.2f} m (door_width_m and "
                     "margins) plus twice wall_jitter_m each")
+
+
+def least_room_m(door_width_m: float) -> float:
+    """The shortest wall a door of ``door_width_m`` fits in, margins to crossing walls kept."""
+    return door_width_m + 2 * JUNCTION_MARGIN_M + 0.2
+
+
+def door_centre(rng: np.random.Generator, lo: float, length: float, width: float) -> float:
+    """A door's centre drawn on the wall of ``length`` from ``lo``, off its crossing walls."""
+    return lo + JUNCTION_MARGIN_M + width / 2 + float(
+        rng.uniform(0, length - width - 2 * JUNCTION_MARGIN_M))
 
 
 def wall_line(fixed: float, lo: float, hi: float, openings: list[tuple[float, float]],
@@ -148,8 +159,7 @@ def rooms(seed: int, p: RoomsParams) -> WorldSpec:
 
     def door(lo: float, hi: float) -> float:
         """A door's centre on the wall between ``lo`` and ``hi``."""
-        return lo + JUNCTION_MARGIN_M + width / 2 + float(
-            rng.uniform(0, hi - lo - width - 2 * JUNCTION_MARGIN_M))
+        return door_centre(rng, lo, hi - lo, width)
 
     boxes = walls((x0, y0, -x0, -y0))
     doors: list[tuple[float, float]] = []
