@@ -2,7 +2,8 @@
 random walk on the same seed, each episode's bag judged by pic4rl_metrics alone. The bags carry
 the world's free area, so coverage is a percentage, the frontier's above the random walk's, and
 the metrics' area seen from the bag is the area the task counted, to the cell; an episode the
-task ended at its 90 % coverage target reads at least 90 % from its bag, reached at its end."""
+task ended at its 90 % coverage target reads at least 90 % from its bag, reached at its end.
+In the larger house (config/env_explore_rooms.yaml) the starts come from the seed."""
 
 from __future__ import annotations
 
@@ -88,3 +89,24 @@ def test_an_episode_ended_at_its_coverage_target_reads_it_from_its_bag(tmp_path:
     assert row["coverage_pct"] >= 90.0 and seen >= 0.9 * free
     # reached at the episode's last scan: 0.1 s a step
     assert row["time_to_90pct_s"] == pytest.approx(0.1 * info["steps"], abs=0.1)
+
+
+def test_house_starts_are_drawn_from_the_seed_on_the_layouts_floor() -> None:
+    """config/env_explore_rooms.yaml: a seed gives its layout and start again, another seed
+    another start; each start on the floor the free-area fact counts (all of the house's)."""
+    env = gym.make("pic4rl/ExploreLidar-v0", config=CONFIG.with_name("env_explore_rooms.yaml"))
+    nav = env.unwrapped
+    try:
+        starts = []
+        for seed in (4, 4, 5):
+            env.reset(seed=seed)
+            start, world = nav._context.start, nav.scenario.world
+            assert world.name == "rooms" and 0 <= world.seed < 1000  # a training layout
+            assert world.clearance([[start.x, start.y]])[0] > 0.3
+            free = nav.episode_facts().free_area_m2
+            assert free == pytest.approx(free_area_m2(world, (start.x, start.y)))
+            assert 250.0 < free < 300.0
+            starts.append((world.seed, start.x, start.y, start.yaw))
+    finally:
+        env.close()
+    assert starts[0] == starts[1] and starts[2] != starts[0]
