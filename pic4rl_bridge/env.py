@@ -26,20 +26,20 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_base.geometry import Pose2D
+from pic4rl_metrics.contract import EpisodeFacts, Outcome
 from pic4rl_sim.engine.sampling import PairKind
 
 from .config import EnvConfig, TransportName, env_config_from_params, load_env_config
 from .env_facts import episode_facts
-from .episodes import EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses
-from .episodes import resolve_pair_kind
+from .episodes import (EpisodeSchedule, PairSampler, check_pairs, load_goals_and_poses,
+                       resolve_pair_kind)
 from .errors import BridgeError, ConfigError, EpisodeRejected, StaleSensor
-from .scenario import Scenario
-from .tasks.base import EpisodeContext, make_task
-from .settings.tasks import task_spec
 from .readings.frame import SensorFrame
 from .readings.sensor_table import BY_NAME
+from .scenario import Scenario
+from .settings.tasks import task_spec
+from .tasks.base import EpisodeContext, make_task
 from .transports.transport import EpisodeRequest, OfferedQos, Tap, Transport
 
 log = logging.getLogger(__name__)
@@ -78,7 +78,7 @@ def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
     known = ("start", "goal", "seed", *_PAIR_OPTIONS)
     unknown = set(options) - set(known)
     if unknown:
-        raise ConfigError(f"reset options: unknown key {sorted(unknown)[0]!r}; expected "
+        raise ConfigError(f"reset options: unknown key {min(unknown)!r}; expected "
                           f"{', '.join(known)}")
     parsed: dict[str, Any] = {}
     for key, size, expected in (("start", 3, "[x, y, yaw] (m, m, rad)"), ("goal", 2, "[x, y] (m)")):
@@ -99,7 +99,7 @@ def _parse_options(options: Mapping[str, Any]) -> dict[str, Any]:
         parsed["seed"] = int(seed)
     pair = {key: options[key] for key in _PAIR_OPTIONS if options.get(key) is not None}
     if pair and ("start" in parsed or "goal" in parsed):
-        raise ConfigError(f"reset options: {sorted(pair)[0]!r} draws the pair; it cannot go "
+        raise ConfigError(f"reset options: {min(pair)!r} draws the pair; it cannot go "
                           "with start or goal")
     for key in _PAIR_OPTIONS[1:]:
         value = pair.get(key, 0.0)

@@ -17,10 +17,10 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-from pic4rl_sim.engine.core import Engine
-from pic4rl_sim.errors import SimError
 from pic4rl_base.geometry import Pose2D
+from pic4rl_sim.engine.core import Engine
 from pic4rl_sim.engine.geometry import Twist2D
+from pic4rl_sim.errors import SimError
 from pic4rl_sim.interfaces import (
     CMD_VEL,
     EPISODE_TOPICS,
@@ -33,10 +33,10 @@ from pic4rl_sim.interfaces import (
 
 from ..config import EnvConfig
 from ..errors import ConfigError, EpisodeRejected
-from ..scenario import Scenario
 from ..readings import decode
 from ..readings.frame import SensorFrame, as_published
 from ..readings.sensor_table import FrameSensor, build_frame
+from ..scenario import Scenario
 from .transport import EpisodeRequest, OfferedQos, RawMessage, Tap, Transport
 
 _POSE_SOURCES = ("odom", "ground_truth")
@@ -101,7 +101,7 @@ class InProcessTransport(Transport):
 
     def offered_qos(self, topic: str) -> OfferedQos | None:
         """As the sim node and the ROS transport offer it."""
-        name = topic[len(self._namespace):] if topic.startswith(self._namespace) else topic
+        name = topic.removeprefix(self._namespace)
         return _NODE_QOS.get(name.lstrip("/"), OfferedQos())
 
     def close(self) -> None:
@@ -129,8 +129,9 @@ class _MessageWriter:
 
     def __init__(self, engine: Engine, namespace: str, topics: tuple[str, ...]) -> None:
         from geometry_msgs.msg import Twist
-        from pic4rl_sim.node.messages import StateMessages, episode_messages
         from rclpy.serialization import serialize_message
+
+        from pic4rl_sim.node.messages import StateMessages, episode_messages
 
         self._engine = engine
         self._serialize = serialize_message

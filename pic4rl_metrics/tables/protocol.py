@@ -127,7 +127,7 @@ def row_cells(stats: pd.Series, episodes: pd.DataFrame, layout: Layout, *,
             best = (episodes["outcome"] == FULL_RUN) if heads == FULL_RUNS else (
                 episodes["success"] == 1.0)
             over = episodes[best] if METRICS[m].quality else episodes
-            values = over[m] if m in over else []
+            values = over.get(m, [])
             cells.append(_interval(*bootstrap_interval(pd.to_numeric(values, errors="coerce"))))
     return cells
 

@@ -15,9 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pic4rl_base.errors import require
-from pic4rl_base.schema import FRACTION, Range, check, param
-
 from pic4rl_base.geometry import Pose2D, yaw_to_quaternion
+from pic4rl_base.schema import FRACTION, Range, check, param
 
 from .sensor_kinds import optical
 

@@ -121,8 +121,8 @@ def test_dotted_overrides_win_over_the_file(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("params", "message"), [
     ({"reward": {"gaol": 1.0}}, r"unknown key 'reward\.gaol'; did you mean 'reward\.goal'\?"),
-    ({"episode_max_step": 5}, r"unknown key 'episode_max_step'; did you mean "
-                              r"'episode_max_steps'\?"),
+    ({"episode_max_step": 5}, (r"unknown key 'episode_max_step'; did you mean "
+                               r"'episode_max_steps'\?")),
     ({"zzzz": 1}, r"unknown key 'zzzz'; known keys: .*episode_max_steps"),
 ])
 def test_unknown_keys_are_named(tmp_path: Path, params: dict[str, Any], message: str) -> None:

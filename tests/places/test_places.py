@@ -33,7 +33,7 @@ def _written(piece: str) -> list[Path]:
 
 def _doc_count(row: str) -> int:
     text = DOC.read_text(encoding="utf-8").split("## Places for a new piece", 1)[1]
-    found = re.search(rf"^\| {re.escape(row)} \| (\d+) \|", text, re.M)
+    found = re.search(rf"^\| {re.escape(row)} \| (\d+) \|", text, re.MULTILINE)
     assert found, f"docs/architecture.md's places table has no row {row!r}"
     return int(found[1])
 
