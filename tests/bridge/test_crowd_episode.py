@@ -9,11 +9,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from pic4rl_metrics import compute
-from pic4rl_metrics.core.tasks.crowd import PERSON_RADIUS_M
-
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.recording import make_env
+from pic4rl_metrics import compute
+from pic4rl_metrics.core.tasks.crowd import PERSON_RADIUS_M
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "env_goto_lidar.yaml"
 SEED, STEPS, PEOPLE = 3, 150, 10

@@ -12,11 +12,11 @@ from pathlib import Path
 
 import gymnasium as gym
 import pytest
-from pic4rl_metrics import compute
-from pic4rl_metrics.bags.reader import read_episode
 
 from pic4rl_bridge.baselines.registry import make_baseline
 from pic4rl_bridge.tasks.explore import free_area_m2
+from pic4rl_metrics import compute
+from pic4rl_metrics.bags.reader import read_episode
 
 CONFIG = Path(__file__).resolve().parents[2] / "config" / "env_explore.yaml"
 SEED, STEPS = 1, 300
