@@ -5,12 +5,13 @@ piece in the group of its table::
     [project.entry-points."pic4rl.baselines"]
     mine = "my_package.my_baseline:SPEC"
 
-The groups read here: ``pic4rl.baselines`` (``BASELINE_TABLE``), ``pic4rl.tasks``
-(``TASK_TABLE``) and, for a sensor, ``pic4rl.sensors`` (``SENSOR_TABLE``), ``pic4rl.interfaces``
+The groups read here: ``pic4rl.baselines`` (``BASELINE_TABLE``), ``pic4rl.tasks`` (``TASK_TABLE``)
+and, for a sensor, ``pic4rl.sensors`` (``SENSOR_TABLE``), ``pic4rl.interfaces``
 (``INTERFACE_TABLE``), ``pic4rl.readings`` (``READING_TABLE``) and ``pic4rl.observations``
-(``OBSERVED_TABLE``); ``docs/extending.md`` shows each. A table reads its group once, when its module is imported, so that everything derived
-from it (choices, ids, parameters, topics) sees the new entry. (Metrics and policies, whose
-registries load on demand, read ``pic4rl.metrics`` and ``pic4rl.policies`` themselves.)
+(``OBSERVED_TABLE``); ``docs/extending.md`` shows each. A table reads its group once, when its
+module is imported, so that everything derived from it (choices, ids, parameters, topics) sees the
+new entry. (Metrics and policies, whose registries load on demand, read ``pic4rl.metrics`` and
+``pic4rl.policies`` themselves.)
 """
 
 from __future__ import annotations

@@ -4,15 +4,15 @@ the world's plan is (``pic4rl_sim.engine.paths``), so that the planner replans a
 instead of driving its world plan through it.
 
 Each person is a disc of ``keep_off_m`` (the robot's circumscribed radius plus the planner's
-``people_margin_m``) around their current position: moving people are not predicted; at a
-fixed period (``PlannerController``'s ``people_replan_s``) the plan ahead is checked against
-where they stand then (``blocks``) and made again round them when one is in its way. A person nearer than that to the robot or the goal is blocked only up to a
-cell short of it, or no path could leave the robot's cell or reach the goal: the plan then
-leads away from them. The grid is the world's clearance at the cell centres
-(``clearance_grid``, computed once per world), thresholded at the robot's radius plus a plan
-margin; the search is ``grid_search`` (Dijkstra, no corner cutting) and the cell path is
-pulled taut (``pull_taut``) with a line of sight that keeps both the world's clearance and
-each person's disc.
+``people_margin_m``) around their current position: moving people are not predicted; at a fixed
+period (``PlannerController``'s ``people_replan_s``) the plan ahead is checked against where they
+stand then (``blocks``) and made again round them when one is in its way. A person nearer than that
+to the robot or the goal is blocked only up to a cell short of it, or no path could leave the
+robot's cell or reach the goal: the plan then leads away from them. The grid is the world's
+clearance at the cell centres (``clearance_grid``, computed once per world), thresholded at the
+robot's radius plus a plan margin; the search is ``grid_search`` (Dijkstra, no corner cutting) and
+the cell path is pulled taut (``pull_taut``) with a line of sight that keeps both the world's
+clearance and each person's disc.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """goToPose toward a UWB tag through both transports (issue 40): the sim node of
 ``config/env_goto_uwb.yaml`` (four anchors on the robot, dropouts raised to 20 %) publishes each
-anchor's range to the goal's tag on ``uwb/a<i>``; the bridge over ROS 2 makes the same observations, the goal part's estimate and
-its dropout mask included, as the in-process engine for one seed and one command sequence."""
+anchor's range to the goal's tag on ``uwb/a<i>``; the bridge over ROS 2 makes the same observations,
+the goal part's estimate and its dropout mask included, as the in-process engine for one seed and
+one command sequence."""
 
 from __future__ import annotations
 
