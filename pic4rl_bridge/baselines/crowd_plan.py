@@ -23,6 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pic4rl_sim.engine.paths import (
+    RESOLUTION_M,
     clearance_grid,
     grid_search,
     grid_steps,
@@ -31,8 +32,6 @@ from pic4rl_sim.engine.paths import (
 )
 from pic4rl_sim.engine.taut_path import pull_taut
 from pic4rl_sim.engine.worlds.spec import WorldSpec
-
-RESOLUTION_M = 0.05  # the world plan's cell
 
 
 def people_discs(people_xy: np.ndarray, start: np.ndarray, goal: np.ndarray,

@@ -41,6 +41,7 @@ _OCTILE_BIAS = math.sqrt(4.0 - 2.0 * _SQRT2)
 _CHUNK = 8192  # cell centres per clearance call: bounds the (points x obstacles) arrays
 _CACHE = 256  # lengths and paths kept per planner (a query is asked again: the facts,
 #               the runs of one pair)
+RESOLUTION_M = 0.05  # the plans' grid cell, unless a caller names another
 
 
 
@@ -91,7 +92,7 @@ class PathPlanner:
     kept."""
 
     def __init__(self, world: WorldSpec, *, robot_radius_m: float,
-                 resolution_m: float = 0.05) -> None:
+                 resolution_m: float = RESOLUTION_M) -> None:
         require(math.isfinite(robot_radius_m) and robot_radius_m >= 0, "paths.robot_radius_m",
                 robot_radius_m, "a finite radius >= 0 m")
         require(math.isfinite(resolution_m) and resolution_m > 0, "paths.resolution_m",
@@ -271,7 +272,6 @@ def grid_search(free: np.ndarray, steps: list[Step], s: int, g: int,
         front = front[dist[front] >= bucket]  # drop cells settled in an earlier bucket
         if dist[g] < bucket + 1:
             break
-        d_front = dist[front]
         moves = [(front[m] + off, np.full(int(m.sum()), cost), front[m])
                  for off, cost, ok in steps if (m := ok[front]).any()]
         if not moves:
@@ -302,7 +302,7 @@ _PLANNERS: OrderedDict[tuple[int, float, float], PathPlanner] = OrderedDict()
 
 
 def planner_for(world: WorldSpec, *, robot_radius_m: float,
-                resolution_m: float = 0.05) -> PathPlanner:
+                resolution_m: float = RESOLUTION_M) -> PathPlanner:
     """The planner of (world, radius, resolution), built on first use and kept (a few)."""
     key = (id(world), float(robot_radius_m), float(resolution_m))
     found = _PLANNERS.get(key)
@@ -315,7 +315,7 @@ def planner_for(world: WorldSpec, *, robot_radius_m: float,
 
 
 def shortest_path_length(world: WorldSpec, start_xy: Sequence[float], goal_xy: Sequence[float],
-                         *, robot_radius_m: float, resolution_m: float = 0.05) -> float:
+                         *, robot_radius_m: float, resolution_m: float = RESOLUTION_M) -> float:
     """Length (m) of the shortest path a disc of ``robot_radius_m`` can follow from
     ``start_xy`` to ``goal_xy`` in ``world``; ``math.inf`` when there is none."""
     planner = planner_for(world, robot_radius_m=robot_radius_m, resolution_m=resolution_m)
