@@ -15,7 +15,10 @@ that flips is one neither a follower nor a student can keep to.
 
 The search runs on a window of the grid (what was seen, the robot and the goal, with
 ``_PAD_CELLS`` round them), on a clearance field (distance to the nearest occupied cell,
-capped) that new cells update in place; the window is rebuilt when something leaves it.
+capped) that new cells update in place; the window is rebuilt when something leaves it. With
+``clear_free`` each scan first frees the cells its beams pass through (``OccupancyGrid.
+clear_scan``): the field is recomputed round them, and the plan kept (a freed way is taken at
+the next replan, so a walking person's trail neither blocks the plan nor makes it flip).
 """
 
 from __future__ import annotations
@@ -78,6 +81,21 @@ class _Clearance:
             x, y = x[ok], y[ok]
             self.clear[y, x] = np.minimum(self.clear[y, x], dist)
 
+    def remove(self, freed: np.ndarray, cells: np.ndarray) -> None:
+        """``freed`` cells (k, 2) are no longer occupied, ``cells`` (the grid's, all occupied):
+        the clearance within the cap of the freed ones is made anew from the occupied cells
+        near them, as a new field would hold it."""
+        if not len(freed):
+            return
+        h, w = self.clear.shape
+        reach = int(np.abs(self._offsets).max()) if len(self._offsets) else 0
+        lo = np.maximum(freed.min(axis=0) - self.lo - reach, 0)
+        hi = np.minimum(freed.max(axis=0) - self.lo + reach + 1, (w, h))
+        self.clear[lo[1]:hi[1], lo[0]:hi[0]] = self.cap_m
+        local = cells - self.lo
+        near = ((local >= lo - reach) & (local < hi + reach)).all(axis=1)
+        self.add(cells[near])
+
     def at(self, xy: np.ndarray) -> np.ndarray:
         """The clearance of the cells of points ``xy`` (n, 2, m); 0 outside the window."""
         local = np.floor(np.asarray(xy) / self.res).astype(np.int64) - self.lo
@@ -126,13 +144,21 @@ class ExplorerPlan:
         return self._path
 
     def observe(self, frame: SensorFrame) -> np.ndarray:
-        """Mark ``frame``'s returns (once per frame); the cells new to the grid (k, 2)."""
+        """Mark ``frame``'s returns (once per frame; with ``clear_free`` after freeing what its
+        beams pass through); the cells new to the grid (k, 2)."""
         key = (frame.stamp_ns, frame.pose)
         scans = sensed_scans(frame, self.robot, self.sensors, self.depth_rows)
         if not scans or self._seen == key:
             return np.zeros((0, 2), dtype=np.int64)
         self._seen = key
+        if self.config.clear_free:
+            freed = np.concatenate([self.grid.clear_scan(scan, frame.pose) for scan in scans])
         new = np.concatenate([self.grid.mark_scan(scan, frame.pose) for scan in scans])
+        if self.config.clear_free and self._field is not None and len(freed):
+            if self._field.holds(freed):
+                self._field.remove(freed, self.grid.cells)
+            else:
+                self._field = None
         if self._field is not None and len(new):
             if self._field.holds(new):
                 self._field.add(new)

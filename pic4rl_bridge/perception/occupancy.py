@@ -6,7 +6,9 @@ default) and mark world-fixed cells of ``resolution_m`` as occupied. Nothing els
 unknown space counts as free, the optimistic convention of nav2's rolling costmap with
 ``track_unknown_space: false`` and of D* Lite in unknown terrain. Marking is idempotent (the
 same frame twice gives the same grid), so the grid is a function of the frames seen, whichever
-transport made them. It grows as the robot sees farther; past ``max_extent_m`` across it rolls,
+transport made them. Cells are only marked unless a reader opts into ``clear_scan``, nav2's
+obstacle layer's raytrace clearing: a scan's beams free the occupied cells they pass through
+short of their returns, so people and moving obstacles leave no trails. It grows as the robot sees farther; past ``max_extent_m`` across it rolls,
 forgetting the cells farthest from the robot. ``reset`` clears it (one grid per episode).
 
 Two readers: the mapless ``explorer`` baseline (``pic4rl_bridge.baselines.explorer``) plans on it,
@@ -19,7 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pic4rl_base.geometry import Pose2D
+from pic4rl_base.geometry import Pose2D, wrap_angle
 
 from ..robot_info import RobotInfo
 from ..readings.frame import ScanData, SensorFrame
@@ -28,6 +30,9 @@ from .collision import depth_scan
 #: Cell size (m) of the grids the explorer and the memory observation keep.
 GRID_RESOLUTION_M = 0.05
 _GROW_MARGIN_CELLS = 64  # grown by at least this much on a side, so that it rarely regrows
+#: ``clear_scan`` frees only cells whose centres lie this many cells short of the beam's return:
+#: the surface it hit, seen again a cell nearer or farther (noise, another viewpoint), stays.
+_CLEAR_SHORT_CELLS = 2.0
 
 
 def to_world(points: np.ndarray, pose: Pose2D) -> np.ndarray:
@@ -110,6 +115,43 @@ class OccupancyGrid:
         new = np.column_stack((ix, iy)) + self._origin
         self._cells = np.concatenate((self._cells, new))
         return new
+
+    def clear_scan(self, scan: ScanData, pose: Pose2D) -> np.ndarray:
+        """Free the occupied cells that the beams of ``scan`` taken at ``pose`` pass through at
+        least ``_CLEAR_SHORT_CELLS`` cells short of their returns (``+inf``: nothing up to
+        ``range_max_m``; NaN: nothing freed); the cells freed (k, 2). Each cell is tested
+        against its nearest beam: the ray crosses the cell's square."""
+        ranges = np.asarray(scan.ranges, dtype=np.float64)
+        if not len(self._cells) or not len(ranges):
+            return np.zeros((0, 2), dtype=np.int64)
+        ranges = np.where(np.isneginf(ranges), scan.range_min_m, ranges)
+        ranges = np.nan_to_num(np.where(np.isposinf(ranges), scan.range_max_m, ranges), nan=0.0)
+        origin = to_world(np.array([[scan.mount.x, scan.mount.y]]), pose)[0]
+        rel = self.centres() - origin
+        dist = np.hypot(rel[:, 0], rel[:, 1])
+        inc, n = scan.angle_increment_rad, len(ranges)
+        first = pose.yaw + scan.mount.yaw + scan.angle_min_rad  # beam 0's world direction
+        mid = 0.5 * inc * (n - 1)
+        offset = wrap_angle(np.arctan2(rel[:, 1], rel[:, 0]) - first - mid) + mid
+        beam = np.rint(offset / inc).astype(np.int64) if inc else np.zeros(len(dist), np.int64)
+        if abs(inc) * n >= 2.0 * math.pi - 1e-9:  # a full turn: the seam's cells to beam 0
+            beam %= n
+        inside = (beam >= 0) & (beam < n)
+        beam = np.clip(beam, 0, n - 1)
+        direction = first + beam * inc
+        # a line crosses a square of half-side h when its distance to the centre is at most
+        # h (|cos| + |sin|) of its direction
+        across = np.abs(rel[:, 0] * np.sin(direction) - rel[:, 1] * np.cos(direction))
+        reach = 0.5 * self.resolution_m * (np.abs(np.cos(direction)) + np.abs(np.sin(direction)))
+        free = (inside & (across <= reach)
+                & (dist <= ranges[beam] - _CLEAR_SHORT_CELLS * self.resolution_m))
+        if not free.any():
+            return np.zeros((0, 2), dtype=np.int64)
+        cleared = self._cells[free]
+        local = cleared - self._origin
+        self._mask[local[:, 1], local[:, 0]] = False
+        self._cells = self._cells[~free]
+        return cleared
 
     def _fit(self, idx: np.ndarray, centre: np.ndarray) -> None:
         """Grow the mask to hold ``idx`` (with a margin), or roll it round ``centre`` when that

@@ -108,6 +108,9 @@ class ExplorerConfig:
                                     range=NON_NEGATIVE)
     max_linear_m_s: float = param(0.0, doc="its speed limit; 0: the env's", unit="m/s",
                                   range=NON_NEGATIVE)
+    clear_free: bool = param(False, doc="each scan frees the occupied cells its beams pass "
+                             "through short of their returns (nav2's raytrace clearing: people "
+                             "and moving obstacles leave no trails); false: cells seen stay")
 
 
 @dataclass(frozen=True)
