@@ -11,7 +11,7 @@ tag's antenna and the anchor's, plus white noise ``noise_std_m``; when the line 
 blocked (a ray cast from tag to anchor by ``mj_multiRay`` hits anything first, walls, boxes
 and people alike, the robot itself skipped) a positive bias drawn from an exponential
 distribution of mean ``nlos_bias_m`` (the first path arrives late through or around the
-obstacle); each range is lost with probability ``dropout_prob`` and beyond ``range_max_m``
+obstacle; anchors on the robot, blocked at one instant, share one draw); each range is lost with probability ``dropout_prob`` and beyond ``range_max_m``
 (``+inf``, REP 117). MuJoCo and numpy are imported where they are used: the sim's interface
 table imports this module and loads neither."""
 
@@ -150,7 +150,10 @@ class UwbTag:
         if spec.noise_std_m > 0:
             ranges += spec.noise_std_m * rng.standard_normal(len(true))
         if spec.nlos_bias_m > 0 and blocked.any():
-            ranges[blocked] += rng.exponential(spec.nlos_bias_m, int(blocked.sum()))
+            # anchors on one robot see the tag through the same obstacle: one late path, one
+            # draw for all of them; anchors across a room, one each
+            draws = 1 if spec.anchors_on_robot else int(blocked.sum())
+            ranges[blocked] += rng.exponential(spec.nlos_bias_m, draws)
         np.maximum(ranges, 0.0, out=ranges)
         if spec.dropout_prob > 0:
             ranges[rng.random(len(true)) < spec.dropout_prob] = np.inf

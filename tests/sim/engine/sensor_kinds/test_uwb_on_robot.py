@@ -1,7 +1,8 @@
 """UWB anchors on the robot (``uwb.anchors_on_robot``, issue 40's person-following layout)
 against analytic answers: each mounted anchor, turned and moved with the robot, ranges to the
-goal's tag; a wall between the goal and one anchor biases that range alone; the robot's own
-tag still ranges to the goal; the spec refuses robot anchors with none given."""
+goal's tag; a post between the goal and one anchor biases that range alone, a wall hiding the
+tag from all of them biases each by one shared draw; the robot's own tag still ranges to the
+goal; the spec refuses robot anchors with none given."""
 
 from __future__ import annotations
 
@@ -59,6 +60,18 @@ def test_a_wall_between_the_goal_and_one_anchor_biases_that_range_alone() -> Non
     blocked = errors[:, 0]
     assert blocked.mean() == pytest.approx(0.5, abs=0.04)
     np.testing.assert_allclose(errors[:, 1:], 0.0, atol=1e-5)
+
+
+def test_anchors_seeing_the_tag_through_one_wall_share_one_late_path() -> None:
+    wall = '<geom type="box" pos="1.5 0 1" size="0.05 1 1"/>'  # hides the goal from all four
+    spec = UwbSpec(anchors_xy_m=CORNERS, anchors_on_robot=True, anchor_height_m=0.4,
+                   goal_tag=False, noise_std_m=0.0, nlos_bias_m=0.5)
+    goal = (3.0, 0.0)
+    errors = samples(wall, spec, 2000, goal=goal) - np.array(
+        [math.dist(a, (*goal, 1.0)) for a in _world(Pose2D(0.0, 0.0, 0.0), spec)])
+    assert errors[:, 0].mean() == pytest.approx(0.5, abs=0.04)
+    # one draw an instant for every anchor: the range differences (the bearing) keep no bias
+    np.testing.assert_allclose(errors - errors[:, :1], 0.0, atol=1e-5)
 
 
 def test_robot_anchors_need_anchors() -> None:
