@@ -65,6 +65,12 @@ CROWD_DEMO := bags/demo_crowd
 # with the coverage curves (bags/explore/report.html) and a video per bag shading the floor
 # seen (bags/explore/videos/).
 EXPLORE_DEMO := bags/explore
+# `make demo CASE=sensors`: the fusion study's agents in the clutter3d world (low boxes below the
+# LiDAR's plane, tables and shelves on thin legs): LiDAR-only, depth-only and fused
+# (checkpoints/fusion_*), and the explorer on the fused grid, on 5 test layouts training never
+# saw, through the sim node over ROS 2 (config/suite_fusion_demo.yaml): a bag per episode, the
+# table (bags/demo_sensors/results.md) and a video per bag (bags/demo_sensors/videos/).
+SENSORS_DEMO := bags/demo_sensors
 demo: setup
 ifeq ($(CASE),barn)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_barn_demo.yaml
@@ -75,6 +81,9 @@ else ifeq ($(CASE),crowd)
 else ifeq ($(CASE),explore)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_explore.yaml
 	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(EXPLORE_DEMO)/videos $(EXPLORE_DEMO)
+else ifeq ($(CASE),sensors)
+	$(VENV)/bin/pic4rl-bench --no-progress config/suite_fusion_demo.yaml
+	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(SENSORS_DEMO)/videos $(SENSORS_DEMO)
 else ifeq ($(CASE),person)
 	$(VENV)/bin/pic4rl-run test $(PERSON_DEMO)
 else ifeq ($(CASE),vineyard)
