@@ -40,6 +40,8 @@ SHIPPED = {
     "train_person_e2e_sac.yaml": ("sac", "lidar", "sac_person_e2e"),
     "train_vineyard_sac.yaml": ("sac", "depth", "vineyard_sac"),
     "train_vineyard_td3.yaml": ("td3", "depth", "vineyard_td3"),
+    "train_fusion_td3_explorer.yaml": ("td3", "lidar", "fusion_fused"),
+    "train_goto_uwb_td3.yaml": ("td3", "lidar", "td3_uwb"),
 }
 
 
@@ -72,7 +74,7 @@ def test_a_shipped_training_file_loads_with_its_algorithm_and_sensor(name: str) 
     assert run.train.reward_scale == trainer.get("reward_scale", 1.0)
     assert run.train.off_policy
     assert dict(run.env.sim_params) == raw["sim"]["ros__parameters"]
-    assert run.env.sim_params["depth.enabled"] is (sensor == "depth")
+    assert run.env.sim_params["depth.enabled"] is ("depth" in run.env.observed)
     assert run.sources == (str(path),)
 
 

@@ -47,7 +47,7 @@ def test_the_protocol_is_the_50_test_worlds_times_10_runs(tmp_path: Path) -> Non
 @pytest.mark.bad_input
 @pytest.mark.parametrize(("change", "message"), [
     ({"table": "barns"},
-     "suite_barn_ci.yaml: table: 'barns' is invalid; expected paper or barn or explore"),
+     "suite_barn_ci.yaml: table: 'barns' is invalid; expected paper or barn or explore or crowd"),
     ({"worlds": [{"world": "barn", "label": "x", "variants": [1, -2]}]},
      "tasks[0].worlds.variants: [1, -2] is invalid; expected a non-empty list of integers >= 0"),
     ({"worlds": [{"world": "barn", "variant": [1]}]},
