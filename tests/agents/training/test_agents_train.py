@@ -276,7 +276,7 @@ def test_a_shipped_training_file_works_from_any_directory(
     (["--hyperparams", "learning_rat:0.1"], "did you mean 'learning_rate'"),
     (["--hyperparams", "algorithm:foo"], "algorithm: 'foo' is invalid"),
     (["--hyperparams", "oops"], "--hyperparams 'oops': expected key:value"),
-    (["--env-kwargs", "sensor:sonar"], "sensor: 'sonar' is invalid"),
+    (["--env-kwargs", "sensor:radar"], "sensor: 'radar' is invalid"),
     (["--sim-kwargs", "x"], "--sim-kwargs 'x'"),
     (["--ros-args", "-p", "transprt:=ros", "--"], "did you mean 'transport'"),
     (["--ros-args", "-p"], "-p: expected key:=value"),
