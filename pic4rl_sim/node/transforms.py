@@ -31,9 +31,10 @@ MountedFrame = tuple[str, tuple[float, float, float], Quaternion]
 
 def sensor_frames(engine: Engine) -> tuple[MountedFrame, ...]:
     """Each sensor's frame in ``base_link``, for the sensors ``engine``'s robot carries: what
-    each one's ``frames()`` gives, in ``SENSOR_TABLE``'s order (a sensor without ``frames``,
-    the wheel odometry, has none)."""
-    return tuple(frame for sensor in engine.sensors.values() if hasattr(sensor, "frames")
+    each one's ``frames()`` gives (a sensor without ``frames``, the wheel odometry, has none),
+    the IMU's first, then ``SENSOR_TABLE``'s order: the order recorded bags hold them in."""
+    ordered = sorted(engine.sensors.values(), key=lambda sensor: sensor is not engine.imu)
+    return tuple(frame for sensor in ordered if hasattr(sensor, "frames")
                  for frame in sensor.frames())
 
 

@@ -56,7 +56,7 @@ def test_lidar_and_depth_observations_are_alike_through_both_transports(
     start_sim(domain, "--params-file", str(CONFIG),
               *(arg for k, v in SIM.items() for arg in ("-p", f"{k}:={str(v).lower()}")))
     with tempfile.TemporaryDirectory() as bags:
-        ros, ros_bag = _episode(lambda o: make_env(CONFIG, transport="ros",
+        ros, ros_bag = _episode(lambda o: make_env(CONFIG, transport="ros", sim=SIM,
                                                    overrides={**o, "ros.domain_id": domain}),
                                 bags, "ros")
         local, local_bag = _episode(lambda o: make_env(CONFIG, overrides=o, sim=SIM), bags,
