@@ -160,7 +160,8 @@ def test_ctrl_c_ends_the_study_in_one_line_with_exit_130(tmp_path: Path) -> None
         env={**os.environ, "PYTHONPATH": str(Path(tune.__file__).parents[2])},
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
-    while not (tmp_path / "trials" / "trial_0" / "config.yaml").is_file():
+    # Ctrl-C once the trial trains (its env's monitor written), not while it starts up
+    while not any((tmp_path / "trials" / "trial_0").glob("monitor/*.csv")):
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
         time.sleep(0.1)
     proc.send_signal(signal.SIGINT)
