@@ -84,13 +84,26 @@ class FrontierExplorer:
 
     def command(self, frame: SensorFrame) -> tuple[float, float]:
         """(v, ω) (m/s, rad/s) for ``frame``."""
+        self.observe(frame)
+        return self.steer(frame, self._arrived(frame))
+
+    def observe(self, frame: SensorFrame) -> None:
+        """Integrate ``frame``'s scan into the seen grid and the plan's occupancy grid."""
         if frame.scan is not None:
             integrate_scan(self.seen, frame.scan, frame.pose)
         self.plan.observe(frame)
-        pick = self._arrived(frame)
+
+    def pick(self, frame: SensorFrame) -> tuple[tuple[float, float],
+                                                tuple[float, float]] | None:
+        """The next target and its frontier cell (``nearest_frontier``'s); ``None``: none."""
+        return self.nearest_frontier(frame)
+
+    def steer(self, frame: SensorFrame, pick: bool) -> tuple[float, float]:
+        """(v, ω) toward the target, a new one ``pick``ed first (up to ``_TRIES`` while the
+        plan finds no way to the one picked)."""
         for _ in range(_TRIES):
             if pick:
-                found = self.nearest_frontier(frame)
+                found = self.pick(frame)
                 self.target, self._frontier = found or (None, None)
                 self.targets += found is not None
                 self._best_m, self._since = math.inf, 0 if found else 1
@@ -132,13 +145,13 @@ class FrontierExplorer:
             return True
         return False
 
-    def nearest_frontier(self, frame: SensorFrame) -> tuple[tuple[float, float],
-                                                           tuple[float, float]] | None:
-        """(the centre of the cell beside it, of the frontier cell) first reached growing from
-        the robot
-        through known free cells clear of the obstacles inflated by the circumscribed radius
-        (whole cells, at most; a robot nearer a wall first grows to the nearest clear cells);
-        ``None``: none."""
+    def search_grids(self, frame: SensorFrame) -> FrontierGrids:
+        """The frontier search's grids round what was seen and the robot (``FRONTIER_CELL_M``
+        cells): the frontier cells (beyond ``ARRIVE_M`` of the robot, none near a given-up
+        target), the cells clear of the obstacles inflated by the circumscribed radius (whole
+        cells, at most), the robot's start cells among them (a robot nearer a wall starts from
+        the nearest clear cells) and the cells a robot may stand on, clear of the plan's
+        margin too."""
         res = FRONTIER_CELL_M
         xmin, ymin, xmax, ymax = self.seen.bounds_m
         lo = np.floor(np.array([min(xmin, frame.pose.x), min(ymin, frame.pose.y)]) / res) - 1
@@ -161,31 +174,54 @@ class FrontierExplorer:
         for k in range(math.floor(radius / res)):
             inflated = neighbours(inflated, diagonal=k % 2 == 1)
         clear = seen & ~inflated
-        # from the robot's own cell; one near a wall first reaches the nearest clear cells
         start = robot_d <= res
         near = seen & ~neighbours(occupied, diagonal=True)
         if not (start & clear).any():
             start, _ = grow(start, near | start, diagonal=True, stop=clear)
-        region, touched = grow(start, clear | start, diagonal=True, stop=frontier)
+        wide = inflated
+        for k in range(math.ceil((radius + self.config.margin_m) / res) - math.floor(radius / res)):
+            wide = neighbours(wide, diagonal=k % 2 == 1)
+        return FrontierGrids(gx, gy, seen, occupied, frontier, clear, start, wide, robot_d)
+
+    def nearest_frontier(self, frame: SensorFrame) -> tuple[tuple[float, float],
+                                                           tuple[float, float]] | None:
+        """(the centre of the cell beside it, of the frontier cell) first reached growing from
+        the robot through the ``search_grids``' clear cells; ``None``: none."""
+        g = self.search_grids(frame)
+        region, touched = grow(g.start, g.clear | g.start, diagonal=True, stop=g.frontier)
         if not touched.any():
             return None
         # the cell beside the frontier the robot can stand on: clear of the plan's margin too
         # (within three cells of the frontier), else clear of the radius
-        wide, around = inflated, touched
-        for k in range(math.ceil((radius + self.config.margin_m) / res) - math.floor(radius / res)):
-            wide = neighbours(wide, diagonal=k % 2 == 1)
+        around = touched
         for k in range(3):
             around = neighbours(around, diagonal=k % 2 == 1)
-        beside = region & ~wide & around
+        beside = region & ~g.wide & around
         if not beside.any():
-            beside = region & clear & neighbours(touched, diagonal=True)
+            beside = region & g.clear & neighbours(touched, diagonal=True)
         if not beside.any():
             beside = touched
-        best = np.flatnonzero(beside.ravel())[int(np.argmin(robot_d[beside]))]
-        x, y = float(gx.ravel()[best]), float(gy.ravel()[best])
+        best = np.flatnonzero(beside.ravel())[int(np.argmin(g.robot_d[beside]))]
+        x, y = float(g.gx.ravel()[best]), float(g.gy.ravel()[best])
         front = np.flatnonzero(touched.ravel())
-        nearest = front[int(np.argmin(np.hypot(gx.ravel()[front] - x, gy.ravel()[front] - y)))]
-        return (x, y), (float(gx.ravel()[nearest]), float(gy.ravel()[nearest]))
+        nearest = front[int(np.argmin(np.hypot(g.gx.ravel()[front] - x,
+                                               g.gy.ravel()[front] - y)))]
+        return (x, y), (float(g.gx.ravel()[nearest]), float(g.gy.ravel()[nearest]))
+
+
+@dataclasses.dataclass(frozen=True)
+class FrontierGrids:
+    """``FrontierExplorer.search_grids``: cell centres (m) and boolean grids, rows along y."""
+
+    gx: np.ndarray
+    gy: np.ndarray
+    seen: np.ndarray
+    occupied: np.ndarray
+    frontier: np.ndarray
+    clear: np.ndarray  # seen, clear of the obstacles inflated by the circumscribed radius
+    start: np.ndarray  # the robot's cells the search grows from
+    wide: np.ndarray  # the obstacles inflated by the radius and the plan's margin
+    robot_d: np.ndarray  # each cell's distance (m) from the robot
 
 
 class RandomWalk:
