@@ -29,8 +29,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pic4rl_bridge.baselines.frontier_choice import (CHOICES, OBSERVATION_SIZE,
-                                                     ChoosingExplorer)
+from pic4rl_bridge.baselines.frontier_choice import CHOICES, OBSERVATION_SIZE, ChoosingExplorer
 from pic4rl_bridge.control.actions import normalized_action
 from pic4rl_bridge.control.plugin import Policy, RobotInfo, SensorFrame, TaskInfo
 from pic4rl_bridge.errors import ConfigError
@@ -140,17 +139,64 @@ def _episode(model: Any, variant: int) -> dict[str, Any]:
         done = terminated or truncated
     context = env.nav._context.extra
     env.close()
-    return {"variant": variant, "outcome": str(info.get("outcome")), "steps": steps,
+    outcome = info.get("outcome")
+    return {"variant": variant, "outcome": str(getattr(outcome, "value", outcome)), "steps": steps,
             "coverage": context["seen"].grid.area_m2 / context["free_area_m2"]}
+
+
+def save_curve(run: Path, out: Path, window: int = 10) -> Path | None:
+    """Write ``out`` (PNG): the episodes' return and the share that reached the coverage
+    target (moving averages over ``window`` episodes) against training wall-clock and
+    decisions, from ``run``'s monitor CSVs; ``None`` before the first finished episode."""
+    from pic4rl_agents.training.curves import episode_table
+
+    df = episode_table(run)
+    if df.empty:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = {"training wall-clock (min)": df["t"] / 60.0, "decisions": df["l"].cumsum()}
+    ys = {"episode return": df["r"],
+          "reached 90 % coverage": df["is_success"].astype(str).eq("True").astype(float)}
+    fig, axes = plt.subplots(2, 2, figsize=(9, 5), layout="constrained", sharey="row")
+    for col, (xlabel, xs) in enumerate(x.items()):
+        for row, (ylabel, y) in enumerate(ys.items()):
+            ax = axes[row, col]
+            ax.plot(xs, y, ".", alpha=0.35, ms=4)
+            ax.plot(xs, y.rolling(window, min_periods=1).mean(), lw=2,
+                    label=f"moving average ({window} episodes)")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize="small")
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def new_model(env: Any, seed: int = 0) -> Any:
+    """The untrained PPO on ``env`` (a decision-level env or a vector of them), its action
+    head biased by ``FIRST_BIAS`` to the first candidate, the nearest."""
+    import torch
+    from stable_baselines3 import PPO
+
+    model = PPO("MlpPolicy", env, n_steps=128, batch_size=64, n_epochs=10, gamma=0.99,
+                learning_rate=3e-4, ent_coef=0.01, seed=seed, device="cpu",
+                policy_kwargs={"net_arch": [64, 64]})
+    with torch.no_grad():
+        model.policy.action_net.bias[0] += FIRST_BIAS
+    return model
 
 
 def train(out: Path, *, minutes: float, n_envs: int, seed: int,
           validation: int = 10) -> dict[str, Any]:
     """Train PPO for ``minutes`` of wall-clock on ``n_envs`` processes; save ``out``/model.zip,
-    the monitor files and ``summary.json`` (``validation`` episodes, the first layouts of
+    the monitor files, ``curve.png`` (``save_curve``) and ``summary.json`` (``validation`` episodes, the first layouts of
     ``VALIDATION_VARIANTS``)."""
     import torch
-    from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
@@ -160,11 +206,7 @@ def train(out: Path, *, minutes: float, n_envs: int, seed: int,
     vec = make_vec_env(make_choice_env, n_envs=n_envs, seed=seed, monitor_dir=str(out),
                        vec_env_cls=SubprocVecEnv if n_envs > 1 else None,
                        monitor_kwargs={"info_keywords": ("is_success",)})
-    model = PPO("MlpPolicy", vec, n_steps=128, batch_size=64, n_epochs=10, gamma=0.99,
-                learning_rate=3e-4, ent_coef=0.01, seed=seed, device="cpu",
-                policy_kwargs={"net_arch": [64, 64]})
-    with torch.no_grad():
-        model.policy.action_net.bias[0] += FIRST_BIAS
+    model = new_model(vec, seed)
     deadline, began = time.monotonic() + 60.0 * minutes, time.monotonic()
 
     class _Clock(BaseCallback):
@@ -179,6 +221,7 @@ def train(out: Path, *, minutes: float, n_envs: int, seed: int,
     model.learn(total_timesteps=10**9, callback=_Clock())
     vec.close()
     model.save(out / "model.zip")
+    save_curve(out, out / "curve.png")
     summary = {"wall_min": (time.monotonic() - began) / 60, "decisions": model.num_timesteps,
                "validation": [_episode(model, v) for v in range(VALIDATION_VARIANTS[0],
                                                     VALIDATION_VARIANTS[0] + validation)]}

@@ -191,22 +191,7 @@ class FrontierExplorer:
         region, touched = grow(g.start, g.clear | g.start, diagonal=True, stop=g.frontier)
         if not touched.any():
             return None
-        # the cell beside the frontier the robot can stand on: clear of the plan's margin too
-        # (within three cells of the frontier), else clear of the radius
-        around = touched
-        for k in range(3):
-            around = neighbours(around, diagonal=k % 2 == 1)
-        beside = region & ~g.wide & around
-        if not beside.any():
-            beside = region & g.clear & neighbours(touched, diagonal=True)
-        if not beside.any():
-            beside = touched
-        best = np.flatnonzero(beside.ravel())[int(np.argmin(g.robot_d[beside]))]
-        x, y = float(g.gx.ravel()[best]), float(g.gy.ravel()[best])
-        front = np.flatnonzero(touched.ravel())
-        nearest = front[int(np.argmin(np.hypot(g.gx.ravel()[front] - x,
-                                               g.gy.ravel()[front] - y)))]
-        return (x, y), (float(g.gx.ravel()[nearest]), float(g.gy.ravel()[nearest]))
+        return stand_beside(g, region, touched)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -222,6 +207,28 @@ class FrontierGrids:
     start: np.ndarray  # the robot's cells the search grows from
     wide: np.ndarray  # the obstacles inflated by the radius and the plan's margin
     robot_d: np.ndarray  # each cell's distance (m) from the robot
+
+
+def stand_beside(g: FrontierGrids, region: np.ndarray, front: np.ndarray) -> tuple[
+        tuple[float, float], tuple[float, float]]:
+    """(the target, the frontier cell beside it) for the frontier cells ``front`` the search's
+    ``region`` reaches: the cell of the region within three cells of them that a robot can
+    stand on (clear of the plan's margin too, else of the radius; else a frontier cell) nearest
+    the robot, and the cell of ``front`` nearest that."""
+    around = front
+    for k in range(3):
+        around = neighbours(around, diagonal=k % 2 == 1)
+    beside = region & ~g.wide & around
+    if not beside.any():
+        beside = region & g.clear & neighbours(front, diagonal=True)
+    if not beside.any():
+        beside = front
+    gx, gy = g.gx.ravel(), g.gy.ravel()
+    best = np.flatnonzero(beside.ravel())[int(np.argmin(g.robot_d[beside]))]
+    x, y = float(gx[best]), float(gy[best])
+    cells = np.flatnonzero(front.ravel())
+    nearest = cells[int(np.argmin(np.hypot(gx[cells] - x, gy[cells] - y)))]
+    return (x, y), (float(gx[nearest]), float(gy[nearest]))
 
 
 class RandomWalk:

@@ -29,7 +29,7 @@ from ..perception.frontiers import neighbours
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
 from ..settings.baselines import ExplorerConfig
-from .exploration import _BAN_M, FRONTIER_CELL_M, FrontierExplorer, FrontierGrids
+from .exploration import _BAN_M, FRONTIER_CELL_M, FrontierExplorer, FrontierGrids, stand_beside
 
 CHOICES = 6  # candidates offered
 FEATURES = 7  # numbers per candidate
@@ -117,7 +117,7 @@ class ChoosingExplorer(FrontierExplorer):
             group = avail & (d <= GROUP_M)  # the frontier it stands for, no other's
             avail &= d > GROUP_M
             disc = d <= UNKNOWN_M
-            candidates.append(self._stand(g, region, group.reshape(region.shape)))
+            candidates.append(stand_beside(g, region, group.reshape(region.shape)))
             bearing = math.atan2(fy - pose.y, fx - pose.x) - pose.yaw
             rows.append([1.0, min(flat_steps[i] * FRONTIER_CELL_M / FAR_M, 1.0),
                          min(math.hypot(fx - pose.x, fy - pose.y) / FAR_M, 1.0),
@@ -130,25 +130,3 @@ class ChoosingExplorer(FrontierExplorer):
         observation[-2] = min(self.seen.area_m2 / AREA_NORM_M2, 1.0)
         observation[-1] = min(np.count_nonzero(reach) * FRONTIER_CELL_M / TOTAL_NORM_M, 1.0)
         return candidates, observation
-
-    @staticmethod
-    def _stand(g: FrontierGrids, region: np.ndarray, group: np.ndarray) -> tuple[
-            tuple[float, float], tuple[float, float]]:
-        """(the target, the frontier cell beside it) for a candidate's ``group`` of frontier
-        cells, as ``nearest_frontier`` places its own: the cell within three cells of the group
-        the robot can stand on (clear of the plan's margin, else of the radius) nearest the
-        robot, and the group's cell nearest that."""
-        around = group
-        for k in range(3):
-            around = neighbours(around, diagonal=k % 2 == 1)
-        beside = region & ~g.wide & around
-        if not beside.any():
-            beside = region & g.clear & neighbours(group, diagonal=True)
-        if not beside.any():
-            beside = group
-        gx, gy = g.gx.ravel(), g.gy.ravel()
-        best = np.flatnonzero(beside.ravel())[int(np.argmin(g.robot_d[beside]))]
-        x, y = float(gx[best]), float(gy[best])
-        front = np.flatnonzero(group.ravel())
-        nearest = front[int(np.argmin(np.hypot(gx[front] - x, gy[front] - y)))]
-        return (x, y), (float(gx[nearest]), float(gy[nearest]))

@@ -8,13 +8,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
-from pic4rl_bridge.baselines.exploration import FrontierGrids
-from pic4rl_bridge.baselines.frontier_choice import (CHOICES, FAR_M, FEATURES, GROUP_M,
-                                                     OBSERVATION_SIZE, ChoosingExplorer,
-                                                     frontier_steps)
 from pic4rl_base.geometry import Footprint, Pose2D
+from pic4rl_bridge.baselines.exploration import FrontierGrids
+from pic4rl_bridge.baselines.frontier_choice import (
+    CHOICES,
+    FAR_M,
+    FEATURES,
+    GROUP_M,
+    OBSERVATION_SIZE,
+    ChoosingExplorer,
+    frontier_steps,
+)
 from pic4rl_bridge.readings.frame import ScanData, SensorFrame
 from pic4rl_bridge.robot_info import RobotInfo
 from pic4rl_sim.engine.geometry import Twist2D
