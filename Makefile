@@ -59,12 +59,13 @@ BARN_DEMO := bags/demo_barn
 # (bags/demo_crowd/results.md, report.html) and a video per bag, the people drawn with their
 # tracks' tails (bags/demo_crowd/videos/).
 CROWD_DEMO := bags/demo_crowd
-# `make demo CASE=explore`: the two exploration baselines, frontier and random walk, on held-out
-# indoor worlds and BARN-like fields, in process (config/suite_explore.yaml): a bag per episode,
-# the explore table (coverage %, times to 50 % and 90 %; bags/explore/results.md), the report
-# with the coverage curves (bags/explore/report.html) and a video per bag shading the floor
-# seen (bags/explore/videos/).
-EXPLORE_DEMO := bags/explore
+# `make demo CASE=explore`: the learned frontier choice (frontier_ppo) and the two exploration
+# baselines, frontier and random walk, on a held-out indoor world and two held-out layouts of the
+# larger house, in process (config/suite_explore_demo.yaml): a bag per episode, the explore table
+# (coverage %, times to 50 % and 90 %; bags/demo_explore/results.md), the report with the
+# coverage curves (bags/demo_explore/report.html) and a video per bag shading the floor seen
+# (bags/demo_explore/videos/).
+EXPLORE_DEMO := bags/demo_explore
 # `make demo CASE=sensors`: the fusion study's agents in the clutter3d world (low boxes below the
 # LiDAR's plane, tables and shelves on thin legs): LiDAR-only, depth-only and fused
 # (checkpoints/fusion_*), and the explorer on the fused grid, on 5 test layouts training never
@@ -79,7 +80,7 @@ else ifeq ($(CASE),crowd)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_crowd_demo.yaml
 	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(CROWD_DEMO)/videos $(CROWD_DEMO)
 else ifeq ($(CASE),explore)
-	$(VENV)/bin/pic4rl-bench --no-progress config/suite_explore.yaml
+	$(VENV)/bin/pic4rl-bench --no-progress config/suite_explore_demo.yaml
 	$(VENV)/bin/pic4rl-metrics video --no-progress --out $(EXPLORE_DEMO)/videos $(EXPLORE_DEMO)
 else ifeq ($(CASE),sensors)
 	$(VENV)/bin/pic4rl-bench --no-progress config/suite_fusion_demo.yaml

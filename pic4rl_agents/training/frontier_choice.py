@@ -105,17 +105,23 @@ class FrontierPPO(Policy):
     checkpoint = CHECKPOINT
 
     def __init__(self) -> None:
-        from stable_baselines3 import PPO
-
-        zip_path = Path(self.checkpoint) / "model.zip"
-        if not zip_path.is_file():
-            raise ConfigError(f"{type(self).__name__}: no such file {zip_path}")
-        self.model = PPO.load(zip_path, device="cpu")
+        self.zip_path = Path(self.checkpoint) / "model.zip"
+        if not self.zip_path.is_file():
+            raise ConfigError(f"{type(self).__name__}: no such file {self.zip_path}")
+        self.model: Any = None
         self.explorer: ChoosingExplorer | None = None
 
     def reset(self, robot: RobotInfo, task: TaskInfo) -> None:
         if task.name != "explore":
             raise ConfigError(f"{self.name}: drives the explore task, not {task.name}")
+        if self.model is None:
+            # loaded where it drives: a suite checks the plugin in its parent and forks
+            # workers, and torch's threads started in a parent deadlock a forked child
+            import torch
+            from stable_baselines3 import PPO
+
+            torch.set_num_threads(1)
+            self.model = PPO.load(self.zip_path, device="cpu")
         self.explorer = ChoosingExplorer(robot)
 
     def act(self, frame: SensorFrame) -> tuple[float, float]:
