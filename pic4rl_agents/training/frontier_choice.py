@@ -15,7 +15,7 @@ so the untrained policy is close to Yamauchi's explorer.
 ``pic4rl-test --agent pic4rl_agents.training.frontier_choice:FrontierPPO`` and a suite's
 ``agents:`` entry run it on any explore env, through ROS 2 or in process.
 
-    python -m pic4rl_agents.training.frontier_choice --minutes 40 --out checkpoints/explore_frontier_ppo
+    python -m pic4rl_agents.training.frontier_choice --minutes 50 --out runs/explore_frontier_ppo
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from pic4rl_bridge.errors import ConfigError
 ROOT = Path(__file__).resolve().parents[2]  # the checkout's
 #: The shipped policy and the env it trains in.
 CHECKPOINT = ROOT / "checkpoints" / "explore_frontier_ppo"
+RUN = Path("runs") / "explore_frontier_ppo"  # the training's default folder
 ENV_CONFIG = str(ROOT / "config" / "env_explore_rooms.yaml")
 #: Layouts the training draws from (the rooms family's 0-999 less the validation ones) and
 #: the validation layouts its summary reports; the test layouts 1000-1019 no run draws.
@@ -200,13 +201,16 @@ def new_model(env: Any, seed: int = 0) -> Any:
 def train(out: Path, *, minutes: float, n_envs: int, seed: int,
           validation: int = 10) -> dict[str, Any]:
     """Train PPO for ``minutes`` of wall-clock on ``n_envs`` processes; save ``out``/model.zip,
-    the monitor files, ``curve.png`` (``save_curve``) and ``summary.json`` (``validation`` episodes, the first layouts of
+    the monitor files, ``curve.png`` (``save_curve``) and ``summary.json``. ``out`` must be
+    new or empty: nothing a run recorded is overwritten, nor two runs' monitors mixed (``validation`` episodes, the first layouts of
     ``VALIDATION_VARIANTS``)."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
 
+    if out.is_dir() and any(out.iterdir()):
+        raise ConfigError(f"--out {out}: not empty; a training run writes into a new folder")
     torch.set_num_threads(1)
     out.mkdir(parents=True, exist_ok=True)
     vec = make_vec_env(make_choice_env, n_envs=n_envs, seed=seed, monitor_dir=str(out),
@@ -238,15 +242,20 @@ def train(out: Path, *, minutes: float, n_envs: int, seed: int,
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m pic4rl_agents.training.frontier_choice",
                                      description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, default=CHECKPOINT)
+    parser.add_argument("--out", type=Path, default=RUN,
+                        help="a new folder (the shipped policy is CHECKPOINT's model.zip)")
     parser.add_argument("--minutes", type=float, default=40.0)
     parser.add_argument("--n-envs", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--validation", type=int, default=10,
                         help="validation episodes after training (layouts 900-909)")
     args = parser.parse_args(argv)
-    summary = train(args.out, minutes=args.minutes, n_envs=args.n_envs, seed=args.seed,
-                    validation=args.validation)
+    try:
+        summary = train(args.out, minutes=args.minutes, n_envs=args.n_envs, seed=args.seed,
+                        validation=args.validation)
+    except ConfigError as err:
+        print(f"error: {err}")
+        return 2
     reached = sum(e["coverage"] >= 0.9 for e in summary["validation"])
     print(f"validation: {reached}/{len(summary['validation'])} reached 90 %")
     return 0

@@ -27,8 +27,6 @@ import numpy as np
 
 from ..perception.frontiers import neighbours
 from ..readings.frame import SensorFrame
-from ..robot_info import RobotInfo
-from ..settings.baselines import ExplorerConfig
 from .exploration import _BAN_M, FRONTIER_CELL_M, FrontierExplorer, FrontierGrids, stand_beside
 
 CHOICES = 6  # candidates offered
@@ -65,9 +63,6 @@ class ChoosingExplorer(FrontierExplorer):
     """The frontier explorer whose targets are chosen (see the module's docstring): ``due``
     observes a frame and gives the candidates' features when a new target is due, ``drive``
     steers, to the candidate chosen when one is given."""
-
-    def __init__(self, robot: RobotInfo, config: ExplorerConfig | None = None) -> None:
-        super().__init__(robot, config)
 
     def reset(self) -> None:
         super().reset()

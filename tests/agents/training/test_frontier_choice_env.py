@@ -18,10 +18,12 @@ from pic4rl_agents.training.frontier_choice import (
     FIRST_BIAS,
     VALIDATION_VARIANTS,
     FrontierChoiceEnv,
+    main,
     new_model,
     train,
 )
 from pic4rl_bridge.baselines.frontier_choice import CHOICES
+from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics import read_episode
 
 REPO = Path(__file__).resolve().parents[3]
@@ -101,3 +103,14 @@ def test_a_short_training_run_writes_its_policy_curve_and_validation(tmp_path: P
     (episode,) = summary["validation"]
     assert episode["variant"] == VALIDATION_VARIANTS[0] and 0.0 < episode["coverage"] <= 1.05
     assert episode["outcome"] in ("goal", "timeout", "collision")
+
+
+def test_a_training_run_never_writes_into_a_folder_that_holds_something(tmp_path: Path):
+    """Nothing recorded is overwritten: a folder with files is refused before any training,
+    and the command line says so in one line with status 2."""
+    (tmp_path / "model.zip").write_bytes(b"a user's policy")
+    with pytest.raises(ConfigError, match=r"--out .*: not empty"):
+        train(tmp_path, minutes=0.1, n_envs=1, seed=0, validation=0)
+    assert main(["--out", str(tmp_path), "--minutes", "0.1"]) == 2
+    assert (tmp_path / "model.zip").read_bytes() == b"a user's policy"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.zip"]
