@@ -42,6 +42,8 @@ SHIPPED = {
     "train_vineyard_td3.yaml": ("td3", "depth", "vineyard_td3"),
     "train_fusion_td3_explorer.yaml": ("td3", "lidar", "fusion_fused"),
     "train_goto_uwb_td3.yaml": ("td3", "lidar", "td3_uwb"),
+    "train_crowd_td3_history.yaml": ("td3", "lidar", "crowd_td3_history"),
+    "train_dynbarn_td3_history.yaml": ("td3", "lidar", "dynbarn_td3_history"),
 }
 
 

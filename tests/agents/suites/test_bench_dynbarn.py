@@ -1,6 +1,7 @@
-"""``config/suite_dynbarn.yaml``: DWA and the planner on the dynamic BARN's 60 test scenes
-with BARN's table, and a cut-down suite run in process into that table, its BARN score from
-the bags (the dynbarn world's reference path marks it as BARN's)."""
+"""``config/suite_dynbarn.yaml``: the agent trained on training scenes, DWA and the planner on
+the dynamic BARN's 60 test scenes with BARN's table, and a cut-down suite run in process into
+that table, its BARN score from the bags (the dynbarn world's reference path marks it as
+BARN's)."""
 
 from __future__ import annotations
 
@@ -18,10 +19,10 @@ REPO = Path(__file__).resolve().parents[3]
 SUITE = REPO / "config" / "suite_dynbarn.yaml"
 
 
-def test_the_suite_is_dwa_and_the_planner_on_the_60_test_scenes(tmp_path: Path) -> None:
+def test_the_suite_is_the_agent_dwa_and_the_planner_on_the_60_test_scenes(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "barn" and len(suite.cells) == 2 * 60
-    for agent in ("dwa", "planner"):
+    assert suite.table == "barn" and len(suite.cells) == 3 * 60
+    for agent in ("dynbarn_td3_history", "dwa", "planner"):
         cells = [c for c in suite.cells if c.agent == agent]
         assert tuple(c.variant for c in cells) == TEST_SCENES
         assert {c.world for c in cells} == {"dynbarn"} and {c.pairs.episodes for c in cells} == {3}
@@ -35,13 +36,15 @@ def test_two_scenes_run_in_process_into_barns_table(tmp_path: Path) -> None:
     data["retries"] = 0
     task = data["tasks"][0]
     task["env"] = str(REPO / "config" / "env_barn.yaml")
+    task["agents"] = {name: str((SUITE.parent / where).resolve())
+                      for name, where in task["agents"].items()}
     task["worlds"] = [{"world": "dynbarn", "label": "two", "variants": list(TEST_SCENES[:2])}]
     task["pairs"] = [{"episodes": 1}]
     path = tmp_path / SUITE.name
     path.write_text(yaml.safe_dump(data))
     suite = load_suite(path, bags_dir=tmp_path / "bags")
     table = bench.bench_suite(suite, workers=2, local=True, progress=False)
-    assert [r[1] for r in table.rows] == ["dwa", "planner"]
+    assert sorted(r[1] for r in table.rows) == ["dwa", "dynbarn_td3_history", "planner"]
     for row in table.rows:
         cells = dict(zip(table.header, row))
         assert cells["status"] == "ok" and cells["world"] == "dynbarn:two" and cells["n"] == "2"

@@ -94,3 +94,11 @@ def test_a_failed_cell_never_ranks(tmp_path: Path) -> None:
     lines = board.splitlines()[2:]
     assert [line.split("|")[1:3] for line in lines] == [
         [" 1 ", " explorer "], [" 2 ", " dwa "], [" failed ", " planner "]]
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "config").glob("suite_*.yaml")),
+                         ids=lambda p: p.stem)
+def test_each_shipped_suite_writes_into_the_checkouts_bags(path: Path) -> None:
+    """A shipped suite's bags go to the checkout's ``bags/`` (ignored by git), not beside the
+    suite file (``config/bags/``, tracked)."""
+    assert load_suite(path).bags_dir.resolve() == REPO / "bags"
