@@ -1,7 +1,8 @@
-"""``config/suite_crowd.yaml`` (issue 41 item 6): the shipped TD3-LiDAR agent, the agent trained
-among people, DWA, the planner and ORCA on the paper's 5 indoor pairs among 10 people with held-out seeds, and a cut-down
-suite run in process whose bags carry the social metrics into the suite's table (``table:
-crowd``) and the report's leaderboard."""
+"""``config/suite_crowd.yaml`` (issue 41 items 5 and 6): the shipped TD3-LiDAR agent, the agent
+trained among people, DWA, the planner and ORCA on the paper's 5 indoor pairs among 10 people
+with held-out seeds, and a cut-down suite run in process (the agent trained among people from
+its checkpoint, and ORCA) whose bags carry the social metrics into the suite's table
+(``table: crowd``) and the report's leaderboard."""
 
 from __future__ import annotations
 
@@ -37,12 +38,12 @@ def test_the_suite_is_five_agents_among_ten_people_on_held_out_seeds(tmp_path: P
 
 
 @pytest.mark.heavy
-def test_two_episodes_run_in_process_into_the_social_columns(tmp_path: Path) -> None:
+def test_two_episodes_each_run_in_process_into_the_social_columns(tmp_path: Path) -> None:
     data = yaml.safe_load(SUITE.read_text())
     data["retries"] = 0
     task = data["tasks"][0]
     task["env"] = str(REPO / "config" / "env_crowd.yaml")
-    task.pop("agents")
+    task["agents"] = {"crowd_td3_history": str(REPO / "checkpoints" / "crowd_td3_history")}
     task["baselines"] = ["orca"]
     task["pairs"] = [{"random": 2, "kind": "paper", "seed": 0}]
     task["repetitions"] = 1
@@ -50,7 +51,11 @@ def test_two_episodes_run_in_process_into_the_social_columns(tmp_path: Path) -> 
     path.write_text(yaml.safe_dump(data))
     suite = load_suite(path, bags_dir=tmp_path / "bags")
     table = bench.bench_suite(suite, workers=1, local=True, progress=False)
-    cells = dict(zip(table.header, table.rows[0]))
+    rows = {row[1]: dict(zip(table.header, row)) for row in table.rows}
+    # the agent trained among people loads from its checkpoint with its trained observation
+    assert sorted(rows) == ["crowd_td3_history", "orca"]
+    assert rows["crowd_td3_history"]["status"] == "ok" and rows["crowd_td3_history"]["n"] == "2"
+    cells = rows["orca"]
     assert cells["status"] == "ok" and cells["n"] == "2"
     # the suite's table carries the social columns, read from these bags (not 0 for want of
     # people: ten walk in the indoor world, so someone comes within the social zone)
