@@ -201,9 +201,9 @@ def new_model(env: Any, seed: int = 0) -> Any:
 def train(out: Path, *, minutes: float, n_envs: int, seed: int,
           validation: int = 10) -> dict[str, Any]:
     """Train PPO for ``minutes`` of wall-clock on ``n_envs`` processes; save ``out``/model.zip,
-    the monitor files, ``curve.png`` (``save_curve``) and ``summary.json``. ``out`` must be
-    new or empty: nothing a run recorded is overwritten, nor two runs' monitors mixed (``validation`` episodes, the first layouts of
-    ``VALIDATION_VARIANTS``)."""
+    the monitor files, ``curve.png`` (``save_curve``) and ``summary.json`` (with
+    ``validation`` episodes, on the first layouts of ``VALIDATION_VARIANTS``). ``out`` must be
+    new or empty: nothing a run recorded is overwritten, nor two runs' monitors mixed."""
     import torch
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
