@@ -23,6 +23,7 @@ from stable_baselines3.common.save_util import load_from_zip_file
 from torch import nn
 
 from pic4rl_agents.runs.config import TrainConfig
+from pic4rl_agents.runs.rundir import trained_model
 from pic4rl_base.atomic import replacing
 from pic4rl_bridge.errors import ConfigError
 
@@ -121,7 +122,23 @@ def new_model(config: TrainConfig, env: Any, *, tensorboard_log: str | None = No
     if isinstance(model, EpsilonGreedy):
         e = config.epsilon
         model.set_epsilon(e.initial, e.decay, e.min)
+    if config.trained_agent:
+        _start_from(model, config, env)
     return model
+
+
+def _start_from(model: BaseAlgorithm, config: TrainConfig, env: Any) -> None:
+    """``config.trained_agent``'s networks and optimiser states in ``model``, which keeps its
+    own hyperparameters, seed and (empty) replay buffer: fine-tuning a trained agent on a new
+    env, as RL Zoo's ``--trained-agent``."""
+    path = trained_model(config.trained_agent, where="trainer.trained_agent")
+    where = f"trainer.trained_agent: {path}"
+    _saved_data(path, config.algorithm, env, model=where, env_from="this run's env")
+    try:
+        model.set_parameters(str(path), exact_match=True, device=config.device)
+    except (ValueError, KeyError, RuntimeError) as err:
+        raise ConfigError(f"{where}: its networks do not fit this run's policy "
+                          f"(policy.net_arch, policy.critic_arch): {err}") from err
 
 
 def _action_noise(config: TrainConfig, env: Any) -> dict[str, Any]:
@@ -154,6 +171,17 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str
     spaces differ from ``env``'s is a one-line error saying where each came from (``trained``:
     the model's config, ``env_from``: the env's)."""
     path = Path(path)
+    _saved_data(path, algorithm, env, model=f"{path}{f' ({trained})' if trained else ''}",
+                env_from=env_from)
+    try:
+        return algorithm_class(algorithm).load(path, env=env, device=device)
+    except (ValueError, KeyError, RuntimeError, TypeError, AttributeError) as err:
+        raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
+
+
+def _saved_data(path: Path, algorithm: str, env: Any, *, model: str, env_from: str) -> None:
+    """``ConfigError`` in one line unless ``path`` is an SB3 zip of ``algorithm`` whose
+    spaces are ``env``'s (when given)."""
     if not path.is_file():
         raise ConfigError(f"{path}: no such model file (expected an SB3 .zip)")
     cls = algorithm_class(algorithm)
@@ -169,12 +197,8 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str
                           f"{policy.__name__}, not one of {', '.join(k.__name__ for k in known)}"
                           "; pass the algorithm it was trained with")
     if env is not None and "observation_space" in data:
-        check_spaces(data["observation_space"], data.get("action_space"), env,
-                     model=f"{path}{f' ({trained})' if trained else ''}", env_from=env_from)
-    try:
-        return cls.load(path, env=env, device=device)
-    except (ValueError, KeyError, RuntimeError, TypeError, AttributeError) as err:
-        raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
+        check_spaces(data["observation_space"], data.get("action_space"), env, model=model,
+                     env_from=env_from)
 
 
 def describe_space(space: gym.Space) -> str:

@@ -190,6 +190,10 @@ class TrainConfig:
     run: str = param("", doc="runs_dir/<run>; empty: <algorithm>_<sensor>")
     runs_dir: str = param("runs", doc="where runs go")
     seed: int = param(0, doc="seed of the learner and the envs")
+    trained_agent: str = param("", doc="a new run starts from this trained model's networks (a "
+                               "model .zip, or a folder's model.zip, from the working directory; "
+                               "RL Zoo's --trained-agent) with this config's hyperparameters and "
+                               "an empty replay buffer; a resume ignores it")
     max_steps: int = param(100_000, doc="env steps in all (SB3's total_timesteps)",
                            range=POSITIVE)
     max_wall_s: float = param(0.0, doc="also stop after this many seconds of the session; 0: "

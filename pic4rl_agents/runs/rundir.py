@@ -69,6 +69,17 @@ def run_config_file(folder: Path) -> Path | None:
     return found[max(found)] if found else None
 
 
+def trained_model(path: str | Path, *, where: str) -> Path:
+    """The model a trained agent's ``path`` names: a model zip, or a folder's ``model.zip``
+    (a run's, a checkpoint folder's); ``ConfigError`` naming ``where`` when there is none."""
+    path = Path(path)
+    model = path / MODEL if path.is_dir() else path
+    if not model.is_file():
+        raise ConfigError(f"{where}: {path}: no such model (expected a model .zip or a folder "
+                          f"holding {MODEL})")
+    return model
+
+
 def run_of(model_zip: Path) -> Path | None:
     """The run directory a model zip belongs to: the nearest folder with a run config, the
     zip's own or up to two above it (``checkpoints/``, ``best/<session>/``)."""

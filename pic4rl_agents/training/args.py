@@ -56,6 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, help="trainer seed")
     parser.add_argument("--run", help="run name (a folder under runs_dir)")
     parser.add_argument("--n-envs", type=int, help="trainer n_envs")
+    parser.add_argument("-i", "--trained-agent", metavar="PATH",
+                        help="trainer trained_agent: start from this model's networks")
     parser.add_argument("--resume", metavar="PATH",
                         help="a checkpoint .zip or a run directory (its latest checkpoint)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -70,7 +72,7 @@ def _overrides(args: argparse.Namespace, ros: RosArgs) -> dict[str, dict[str, An
                                                              flag="--hyperparams"),
                                where="--hyperparams")}
     for flag, key in (("-n/--max-steps", "max_steps"), ("--seed", "seed"), ("--run", "run"),
-                      ("--n-envs", "n_envs")):
+                      ("--n-envs", "n_envs"), ("-i/--trained-agent", "trained_agent")):
         value = getattr(args, key)
         if value is not None:
             train.update(check_overrides(TRAINER_NODE, {key: value}, where=flag))
@@ -102,6 +104,9 @@ def resolve(args: argparse.Namespace, ros: RosArgs) -> tuple[RunConfig, rundir.R
     run = run_config(params_file.merge(*(read[f] for f in files)), files,
                      train=overrides[TRAINER_NODE], env=overrides[ENV_NODE],
                      sim=overrides[SIM_NODE])
+    if resume is None and run.train.trained_agent:
+        rundir.trained_model(run.train.trained_agent, where=(
+            "-i/--trained-agent" if args.trained_agent else "trainer.trained_agent"))
     if resume is not None and latest is not None:
         trained = run_config(read[str(latest)], [str(latest)]).origin
         resume = dataclasses.replace(resume, trained=f"trained with {trained}")

@@ -43,6 +43,7 @@ SHIPPED = {
     "train_fusion_td3_explorer.yaml": ("td3", "lidar", "fusion_fused"),
     "train_goto_uwb_td3.yaml": ("td3", "lidar", "td3_uwb"),
     "train_crowd_td3_history.yaml": ("td3", "lidar", "crowd_td3_history"),
+    "train_crowd_td3_lidar.yaml": ("td3", "lidar", "crowd_td3_lidar"),
     "train_dynbarn_td3_history.yaml": ("td3", "lidar", "dynbarn_td3_history"),
 }
 
