@@ -54,24 +54,18 @@ def test_a_new_model_starts_from_the_trained_networks_with_its_own_settings(
 
 
 @pytest.mark.bad_input
-def test_networks_of_another_size_are_refused_naming_the_key(trained_run: TrainedRun) -> None:
-    run = config(trained_run.run_dir, "policy.net_arch:[8]")
+@pytest.mark.parametrize(("extra", "params_file", "message"), [
+    (("policy.net_arch:[8]",), LIDAR_TD3,
+     r"^trainer\.trained_agent: .*model\.zip: its networks do not fit this run's policy"),
+    ((), DEPTH_TD3, r"^trainer\.trained_agent: .*model\.zip was trained on the observation "
+                    r"space .* but this run's env"),
+], ids=["other networks", "other env"])
+def test_a_model_that_does_not_fit_is_refused_naming_the_key(
+        trained_run: TrainedRun, extra: tuple[str, ...], params_file: Path, message: str) -> None:
+    run = config(trained_run.run_dir, *extra, params_file=params_file)
     env = make_vec_env(run.env)
     try:
-        with pytest.raises(ConfigError, match=r"^trainer\.trained_agent: .*model\.zip: its "
-                                              r"networks do not fit this run's policy"):
-            new_model(run.train, env)
-    finally:
-        env.close()
-
-
-@pytest.mark.bad_input
-def test_a_model_of_another_env_is_refused_naming_the_key(trained_run: TrainedRun) -> None:
-    run = config(trained_run.run_dir, params_file=DEPTH_TD3)
-    env = make_vec_env(run.env)
-    try:
-        with pytest.raises(ConfigError, match=r"trainer\.trained_agent: .*model\.zip was trained "
-                                              r"on the observation space .* but this run's env"):
+        with pytest.raises(ConfigError, match=message):
             new_model(run.train, env)
     finally:
         env.close()
