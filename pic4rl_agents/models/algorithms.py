@@ -133,7 +133,7 @@ def _start_from(model: BaseAlgorithm, config: TrainConfig, env: Any) -> None:
     env, as RL Zoo's ``--trained-agent``."""
     path = trained_model(config.trained_agent, where="trainer.trained_agent")
     where = f"trainer.trained_agent: {path}"
-    _saved_data(path, config.algorithm, env, model=where, env_from="this run's env")
+    _check_saved(path, config.algorithm, env, model=where, env_from="this run's env")
     try:
         model.set_parameters(str(path), exact_match=True, device=config.device)
     except (ValueError, KeyError, RuntimeError) as err:
@@ -171,7 +171,7 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str
     spaces differ from ``env``'s is a one-line error saying where each came from (``trained``:
     the model's config, ``env_from``: the env's)."""
     path = Path(path)
-    _saved_data(path, algorithm, env, model=f"{path}{f' ({trained})' if trained else ''}",
+    _check_saved(path, algorithm, env, model=f"{path}{f' ({trained})' if trained else ''}",
                 env_from=env_from)
     try:
         return algorithm_class(algorithm).load(path, env=env, device=device)
@@ -179,7 +179,7 @@ def load_model(path: str | Path, algorithm: str, *, env: Any = None, device: str
         raise ConfigError(f"{path}: cannot load it as a {algorithm} model: {err}") from err
 
 
-def _saved_data(path: Path, algorithm: str, env: Any, *, model: str, env_from: str) -> None:
+def _check_saved(path: Path, algorithm: str, env: Any, *, model: str, env_from: str) -> None:
     """``ConfigError`` in one line unless ``path`` is an SB3 zip of ``algorithm`` whose
     spaces are ``env``'s (when given)."""
     if not path.is_file():
