@@ -28,7 +28,7 @@ SIM_NODE = "sim"
 ENV_NODE = "nav_env"
 TRAINER_NODE = "trainer"
 #: Parameters, per section, that name a file relative to the params file.
-FILE_KEYS = {ENV_NODE: ("episodes.file",)}
+FILE_KEYS = {ENV_NODE: ("episodes.file",), TRAINER_NODE: ("trained_agent",)}
 
 
 def read(path: str | Path) -> Mapping[str, Any]:

@@ -191,7 +191,8 @@ class TrainConfig:
     runs_dir: str = param("runs", doc="where runs go")
     seed: int = param(0, doc="seed of the learner and the envs")
     trained_agent: str = param("", doc="a new run starts from this trained model's networks (a "
-                               "model .zip, or a folder's model.zip, from the working directory; "
+                               "model .zip, or a folder's model.zip; relative: from the working "
+                               "directory, else beside the params file; "
                                "RL Zoo's --trained-agent) with this config's hyperparameters and "
                                "an empty replay buffer; a resume ignores it")
     max_steps: int = param(100_000, doc="env steps in all (SB3's total_timesteps)",

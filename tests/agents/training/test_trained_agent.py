@@ -13,7 +13,16 @@ from typing import Any
 
 import pytest
 import torch
-from agents_helpers import DEPTH_TD3, LIDAR_TD3, SHORT_EPISODES, TINY, TRAINED_STEPS, TrainedRun
+from agents_helpers import (
+    CONFIG,
+    DEPTH_TD3,
+    LIDAR_TD3,
+    ROOT,
+    SHORT_EPISODES,
+    TINY,
+    TRAINED_STEPS,
+    TrainedRun,
+)
 
 from pic4rl_agents.models.algorithms import load_model, new_model
 from pic4rl_agents.runs.config import load_run_config
@@ -104,3 +113,12 @@ def test_pic4rl_train_i_trains_a_new_run_from_the_agent_leaving_it_as_it_was(
     assert saved.train.trained_agent == str(trained_run.run_dir)
     assert before == {p: hashlib.sha256(p.read_bytes()).hexdigest()
                       for p in sorted(trained_run.run_dir.rglob("*")) if p.is_file()}
+
+
+def test_the_shipped_recipe_finds_its_agent_from_any_directory(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``trained_agent`` is one of the params file's relative files (``FILE_KEYS``): not in the
+    working directory, it is found beside the params file."""
+    monkeypatch.chdir(tmp_path)
+    run = load_run_config([CONFIG / "train_crowd_td3_lidar.yaml"])
+    assert Path(run.train.trained_agent) == ROOT / "checkpoints" / "td3_lidar"
