@@ -22,9 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
+from pic4rl_metrics.bags.inputs import discover
 from pic4rl_metrics.bags.reader import read_episode
 from pic4rl_metrics.core.derived import Derived
 from pic4rl_metrics.core.tasks.crowd import crowd
+from pic4rl_metrics.errors import MetricsError
 
 BEHIND_DEG = 90.0
 
@@ -62,34 +64,33 @@ def first_contact(bag: Path) -> Contact | None:
                    float(c.speed_mps[i]), robot, closing - robot)
 
 
-def episode_bags(folder: Path) -> list[Path]:
-    """``folder`` itself when it is a bag (holds metadata.yaml), else the bags below it."""
-    if (folder / "metadata.yaml").is_file():
-        return [folder]
-    return sorted(p.parent for p in folder.rglob("metadata.yaml"))
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("folders", nargs="+", type=Path)
+    parser.add_argument("folders", nargs="+")
     args = parser.parse_args(argv)
+    found = discover(args.folders)
+    for item, why in found.unmatched:
+        print(f"{item}: {why}", file=sys.stderr)
     contacts, episodes = [], 0
-    for folder in args.folders:
-        for bag in episode_bags(folder):
-            episodes += 1
+    for bag in found.bags:
+        try:
             contact = first_contact(bag)
-            if contact is not None:
-                contacts.append(contact)
-                print(f"{contact.bag}: t {contact.t_s:5.1f} s, bearing {contact.bearing_deg:5.0f}°,"
-                      f" speed {contact.speed_mps:.2f} m/s, closing: robot "
-                      f"{contact.robot_closing_mps:5.2f} m/s, person "
-                      f"{contact.person_closing_mps:5.2f} m/s")
+        except MetricsError as err:  # one bad bag: said, and the batch goes on
+            print(f"{bag}: {err}", file=sys.stderr)
+            continue
+        episodes += 1
+        if contact is not None:
+            contacts.append(contact)
+            print(f"{contact.bag}: t {contact.t_s:5.1f} s, bearing {contact.bearing_deg:5.0f}°, "
+                  f"speed {contact.speed_mps:.2f} m/s, closing: robot "
+                  f"{contact.robot_closing_mps:5.2f} m/s, person "
+                  f"{contact.person_closing_mps:5.2f} m/s")
     behind = sum(c.behind for c in contacts)
     faster = sum(c.person_closing_mps > c.robot_closing_mps for c in contacts)
     print(f"{episodes} episodes, {len(contacts)} with a contact: {behind} with the person behind "
           f"the robot (|bearing| > {BEHIND_DEG:g}°), {faster} with the person closing faster "
           "than the robot")
-    return 0
+    return 0 if found.bags else 2
 
 
 if __name__ == "__main__":

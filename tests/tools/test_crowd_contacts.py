@@ -60,3 +60,16 @@ def test_no_contact_no_row_and_the_summary_counts(tmp_path: Path,
     assert len(out) == 2 and "behind" in out[0]
     assert out[1] == ("2 episodes, 1 with a contact: 1 with the person behind the robot "
                       "(|bearing| > 90°), 1 with the person closing faster than the robot")
+
+
+@pytest.mark.bad_input
+def test_a_bag_that_does_not_read_is_named_and_the_rest_go_on(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bag(tmp_path / "run", "behind", (-3.0, 0.0, 0.0), 1.5)
+    broken = tmp_path / "run" / "broken"
+    broken.mkdir()
+    (broken / "metadata.yaml").write_text("not: a rosbag2 metadata\n")
+    assert crowd_contacts.main([str(tmp_path / "run"), str(tmp_path / "nowhere")]) == 0
+    captured = capsys.readouterr()
+    assert f"{broken}: " in captured.err and f"{tmp_path / 'nowhere'}: " in captured.err
+    assert captured.out.splitlines()[-1].startswith("1 episodes, 1 with a contact")
