@@ -94,7 +94,8 @@ class Launcher:
     def start(cls, args: list[str], log: Path, domain: int) -> Launcher:
         """``pic4rl-run ARGS`` on ``domain``, tagged, its output to ``log``."""
         tag = f"PIC4RL_TEST_TAG={uuid.uuid4().hex}"
-        env = sim_env(domain, dict([tag.split("=", 1)]))
+        # faulthandler on: a launcher that outlives its wait has every process's stacks dumped
+        env = sim_env(domain, {**dict([tag.split("=", 1)]), "PYTHONFAULTHANDLER": "1"})
         with log.open("wb") as out:
             proc = subprocess.Popen([*LAUNCHER, *args], cwd=ROOT, env=env, stdout=out,
                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
@@ -109,7 +110,24 @@ class Launcher:
         try:
             return self.proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
-            pytest.fail(f"pic4rl-run still running after {timeout_s} s:\n{self.output}")
+            self._dump_stacks()
+            pytest.fail(f"pic4rl-run still running after {timeout_s} s (each process's "
+                        f"Python stacks follow its output):\n{self.output}")
+
+    def _dump_stacks(self) -> None:
+        """Every process it started writes its threads' Python stacks to the log (their
+        faulthandler, on SIGABRT): where a hung run waits. All are frozen first (SIGSTOP), then
+        each is let go with its SIGABRT pending, one at a time, so no process sees another die
+        before it has dumped, and no two dumps mix; the launcher last (its sims die with it)."""
+        pids = sorted(processes_with(self.tag, "python"), key=lambda pid: pid == self.proc.pid)
+        for sig in (signal.SIGSTOP, signal.SIGABRT):
+            for pid in pids:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(pid, sig)
+        for pid in pids:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGCONT)
+            time.sleep(0.5)
 
     def left(self, needle: str = SIM) -> list[int]:
         """Pids of processes it started that are still alive (``needle`` in the command)."""
