@@ -6,9 +6,9 @@ variant and the episode's seed give the same field and the same obstacle motion 
 to within the goal tolerance inside the time budget, by a robot that knows every obstacle's
 future: a disc of ``--radius`` (default half the footprint's width) that moves in any direction
 at up to ``--speed`` and may wait. The search is the reachable set on a grid of 5 cm (finer
-for a slow disc), grown each control period by the cells within one period's travel and cut by the static field
-(inflated by the radius) and by where the moving cylinders are at the period's end (inflated by
-both radii). It is optimistic: no heading, no acceleration limit, the moving obstacles checked
+for a slow disc), grown each control period by the cells within one period's travel and cut
+by the static field (inflated by the radius) and by where the moving cylinders are at the
+period's end (inflated by both radii). It is optimistic: no heading, no acceleration limit, the moving obstacles checked
 at the periods' ends only, the footprint's narrow side everywhere. A scene it cannot cross is
 one no robot of that width and speed crosses; one it can is not shown to be easy.
 
@@ -144,19 +144,19 @@ class Episode:
 
 def replay(bag: Path, radius_m: float | None, speed_mps: float) -> Episode:
     """The bag's scene searched as the module says; ``radius_m`` None: half the footprint's
-    width."""
+    width. A bag it cannot replay is a ``MetricsError`` (the caller names the bag)."""
     episode = read_episode(bag)
     f = episode.facts
     missing = [k for k in ("world", "seed", "start", "goal", "goal_tolerance_m",
                            "time_budget_s") if getattr(f, k) is None]
     if missing:
-        raise MetricsError(f"{bag}: no {', '.join(missing)} in its facts")
+        raise MetricsError(f"no {', '.join(missing)} in its facts")
     kind, _, variant = f.world.partition(":")
     if kind != "dynbarn" or not variant.isdigit():
-        raise MetricsError(f"{bag}: world {f.world!r}; expected dynbarn:<variant>")
+        raise MetricsError(f"world {f.world!r}; expected dynbarn:<variant>")
     if radius_m is None:
         if f.footprint is None or f.footprint.width_m is None:
-            raise MetricsError(f"{bag}: no rectangular footprint in its facts; give --radius")
+            raise MetricsError("no rectangular footprint in its facts; give --radius")
         radius_m = f.footprint.width_m / 2
     world = _world(kind, int(variant))
     arrival = _arrival(world, f.seed, tuple(f.start[:2]), (f.goal.x, f.goal.y),
