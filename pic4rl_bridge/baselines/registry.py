@@ -13,6 +13,9 @@ package adds its own without editing it: a ``BaselineSpec`` named in the entry-p
   nav2 and the BARN challenge compare learned planners with.
 - ``planner``: the privileged planner (``pic4rl_bridge.baselines.planner``): the world's shortest
   path with a clearance margin, followed by pure pursuit; it knows the map, no agent does.
+- ``predictive``: the privileged planner with its speed timed against the moving obstacles
+  it tracks from the scan and predicts (``PredictiveController`` in
+  ``pic4rl_bridge.baselines.planner``): the motion-aware reference for the dynamic BARN.
 - ``explorer``: the mapless explorer (``pic4rl_bridge.baselines.explorer``): the shortest path on an
   occupancy grid of its own scans (unknown space free), kept until a new obstacle blocks it,
   followed by the planner's pursuit law; it knows no map, as no agent does. In a depth env it
@@ -102,14 +105,27 @@ def _dwa(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
     return DwaController(robot, settings.dwa, collision_tolerance_m=config.collision_tolerance_m)
 
 
+def _map(name: str, world: WorldSpec | None) -> WorldSpec:
+    """``world``, or ``ConfigError`` for baseline ``name`` when there is none."""
+    if world is None:
+        raise ConfigError(f"--baseline {name}: it plans on the simulated world's map, and "
+                          "this env has none (no 'sim:' section: a real robot)")
+    return world
+
+
 def _planner(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
              settings: BaselinesConfig) -> Baseline:
-    if world is None:
-        raise ConfigError("--baseline planner: it plans on the simulated world's map, and "
-                          "this env has none (no 'sim:' section: a real robot)")
     from .planner import PlannerController
 
-    return PlannerController(robot, world, **dataclasses.asdict(settings.planner))
+    return PlannerController(robot, _map("planner", world), **dataclasses.asdict(settings.planner))
+
+
+def _predictive(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
+                settings: BaselinesConfig) -> Baseline:
+    from .planner import PredictiveController
+
+    planner = {**dataclasses.asdict(settings.planner), **dataclasses.asdict(settings.predictive)}
+    return PredictiveController(robot, _map("predictive", world), **planner)
 
 
 def _explorer(config: EnvConfig, robot: RobotInfo, world: WorldSpec | None,
@@ -175,6 +191,7 @@ BASELINE_TABLE: dict[str, BaselineSpec] = {
     "proportional": BaselineSpec(("goToPose",), lambda c, robot, w, s: GoToGoalController(robot)),
     "dwa": BaselineSpec(("goToPose",), _dwa),
     "planner": BaselineSpec(("goToPose",), _planner, one_world=True, expert="planner"),
+    "predictive": BaselineSpec(("goToPose",), _predictive, one_world=True),
     "explorer": BaselineSpec(("goToPose",), _explorer, expert="explorer"),
     "orca": BaselineSpec(("goToPose",), _orca),
     "centerline": BaselineSpec(("vineyard",), _row_follower("centerline"), one_world=True,

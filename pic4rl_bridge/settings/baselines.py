@@ -90,6 +90,22 @@ class PlannerConfig:
 
 
 @dataclass(frozen=True)
+class PredictiveConfig:
+    """The predictive planner (``pic4rl_bridge.baselines.planner.PredictiveController``): the
+    planner's settings (``planner.*``) but its speed limit, and how far ahead and how wide it
+    times its speed against the moving obstacles it tracks."""
+
+    horizon_s: float = param(2.0, doc="each trial speed's progress along the plan is checked "
+                             "against the movers' predictions this long", unit="s",
+                             range=Range(0.1, 10.0))
+    mover_margin_m: float = param(0.1, doc="beyond the bounding radius and a mover's: the "
+                                  "clearance a trial speed keeps from every mover's "
+                                  "prediction", unit="m", range=NON_NEGATIVE)
+    max_linear_m_s: float = param(0.0, doc="its speed limit (not the planner's); 0: the env's",
+                                  unit="m/s", range=NON_NEGATIVE)
+
+
+@dataclass(frozen=True)
 class ExplorerConfig:
     """The mapless explorer (``pic4rl_bridge.baselines.explorer.ExplorerController``): its plan's
     clearance beyond the footprint's circumscribed radius, when it plans anew, and how fast
@@ -119,11 +135,13 @@ class BaselinesConfig:
 
     dwa: DwaConfig = section(DwaConfig)
     planner: PlannerConfig = section(PlannerConfig)
+    predictive: PredictiveConfig = section(PredictiveConfig)
     explorer: ExplorerConfig = section(ExplorerConfig)
 
     def __post_init__(self) -> None:
         self.dwa.check_as(f"{PREFIX}dwa.")
         check(self.planner, f"{PREFIX}planner.")
+        check(self.predictive, f"{PREFIX}predictive.")
         check(self.explorer, f"{PREFIX}explorer.")
 
 

@@ -103,7 +103,7 @@ def test_the_baselines_table_is_the_baselines_section(doc):
     rows = table_rows(section(doc, "## Baselines"))
     expected = parameter_rows(BaselinesConfig)
     assert set(expected) == {name for name in rows
-                             if name.startswith(("dwa.", "planner.", "explorer."))}
+                             if name.startswith(("dwa.", "planner.", "predictive.", "explorer."))}
     assert all(rows[name][:2] == [kind, default] for name, (kind, default) in expected.items())
     assert not any(name.startswith("baselines.") for name in parameter_rows(EnvConfig))
 

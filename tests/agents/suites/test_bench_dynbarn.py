@@ -1,7 +1,7 @@
-"""``config/suite_dynbarn.yaml``: the agent trained on training scenes, DWA and the planner on
-the dynamic BARN's 60 test scenes with BARN's table, and a cut-down suite run in process into
-that table, its BARN score from the bags (the dynbarn world's reference path marks it as
-BARN's)."""
+"""``config/suite_dynbarn.yaml``: the agent trained on training scenes, DWA, the planner and the
+predictive planner on the dynamic BARN's 60 test scenes with BARN's table, and a cut-down
+suite run in process into that table, its BARN score from the bags (the dynbarn world's
+reference path marks it as BARN's)."""
 
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ REPO = Path(__file__).resolve().parents[3]
 SUITE = REPO / "config" / "suite_dynbarn.yaml"
 
 
-def test_the_suite_is_the_agent_dwa_and_the_planner_on_the_60_test_scenes(tmp_path: Path) -> None:
+def test_the_suite_is_the_agent_and_three_baselines_on_the_60_test_scenes(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "barn" and len(suite.cells) == 3 * 60
-    for agent in ("dynbarn_td3_history", "dwa", "planner"):
+    assert suite.table == "barn" and len(suite.cells) == 4 * 60
+    for agent in ("dynbarn_td3_history", "dwa", "planner", "predictive"):
         cells = [c for c in suite.cells if c.agent == agent]
         assert tuple(c.variant for c in cells) == TEST_SCENES
         assert {c.world for c in cells} == {"dynbarn"} and {c.pairs.episodes for c in cells} == {3}
@@ -44,7 +44,7 @@ def test_two_scenes_run_in_process_into_barns_table(tmp_path: Path) -> None:
     path.write_text(yaml.safe_dump(data))
     suite = load_suite(path, bags_dir=tmp_path / "bags")
     table = bench.bench_suite(suite, workers=2, local=True, progress=False)
-    assert sorted(r[1] for r in table.rows) == ["dwa", "dynbarn_td3_history", "planner"]
+    assert sorted(r[1] for r in table.rows) == ["dwa", "dynbarn_td3_history", "planner", "predictive"]
     for row in table.rows:
         cells = dict(zip(table.header, row))
         assert cells["status"] == "ok" and cells["world"] == "dynbarn:two" and cells["n"] == "2"
