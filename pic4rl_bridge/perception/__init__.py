@@ -5,8 +5,10 @@
 coordinates, and their spaces), ``sensor_parts`` (each observable sensor's part: its
 readings, observation and obstacle points), ``occupancy`` (the rolling occupancy grid of the robot's
 own scans: the memory observation's and the explorer's, whose plan on it is a planner's:
-``pic4rl_bridge.baselines.explorer_plan``) and ``rows`` (the vineyard's centre lines, the
-row being driven). Pure numpy; names are imported on first use.
+``pic4rl_bridge.baselines.explorer_plan``), ``rows`` (the vineyard's centre lines, the
+row being driven), ``frontiers`` (the explore task's seen grid and frontiers) and ``movers``
+(moving obstacles tracked from the scan against a known map). Pure numpy; names are imported
+on first use.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ _EXPORTS = {
     "SensorPart": "sensor_parts", "observable": "sensor_parts",
     "OccupancyGrid": "occupancy", "sensed_scans": "occupancy",
     "centerlines": "rows", "row_centerline": "rows",
+    "MoverTracker": "movers",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
