@@ -227,8 +227,8 @@ class NavEnv(gym.Env[Any, np.ndarray]):
             self._view.begin(frame, self._context)
         self._episode += 1
         obs = self.task.observe(frame, self._context, self._last_action)
-        info = {"episode": self._episode - 1, "seed": self._seed_used,
-                "start": list(self._context.start), "goal": self._context.goal}
+        info = {"episode": self._episode - 1, "seed": self._seed_used, "goal": self._context.goal,
+                "start": list(self._context.start), "world_variant": self.scenario.variant}
         return obs, info
 
     def _pair_kind(self, options: Mapping[str, Any]) -> PairKind | None:

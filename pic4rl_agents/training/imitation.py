@@ -35,6 +35,7 @@ from stable_baselines3.common.vec_env import VecEnv
 from pic4rl_agents.runs.config import NODES, ImitationConfig
 from pic4rl_base import params_file
 from pic4rl_bridge.baselines.registry import Baseline
+from pic4rl_bridge.baselines.registry import BASELINE_TABLE, EXPERT_BASELINES
 from pic4rl_bridge.baselines.registry import make_expert as baseline_expert
 from pic4rl_bridge.config import EnvConfig
 from pic4rl_bridge.errors import ConfigError
@@ -58,15 +59,11 @@ EXPERTS = EXPERT_TASKS
 
 def make_expert(name: str, env: EnvConfig | Scenario, settings: BaselinesConfig | None = None
                 ) -> Baseline:
-    """The expert ``name`` for envs of ``env``: the baseline the baseline table names for it
-    (``pic4rl_bridge.baselines.registry.EXPERT_BASELINES``), labelling with the env's action
-    ranges (``planner``: the privileged planner on the world's map, goToPose; ``explorer``: the
-    mapless explorer, its grid built from the frames the student saw, one per step, goToPose;
-    ``dwa_heading``: DWA with a proportional heading law, personMonitoring, either control;
-    ``centerline``: the row's centre-line follower, vineyard). The planner and the explorer
-    drive with ``settings``, the params files' ``baselines:`` section (defaults when ``None``),
-    as their baselines do. ``env``: its ``Scenario`` when resolved already (one for every
-    expert of a run), else its config, resolved here."""
+    """The expert ``name`` for envs of ``env``: the baseline that labels under it
+    (``pic4rl_bridge.baselines.registry.EXPERT_BASELINES``: the planners on the world's map
+    and the mapless explorer goToPose, ``dwa_heading`` personMonitoring, ``centerline``
+    vineyard), with the env's action ranges and ``settings``, the ``baselines:`` section
+    (defaults when ``None``). ``env``: its ``Scenario`` when resolved already, else its config."""
     given, settings = env, settings or BaselinesConfig()
     env = given.config if isinstance(given, Scenario) else given
     if name not in EXPERTS:
@@ -77,18 +74,13 @@ def make_expert(name: str, env: EnvConfig | Scenario, settings: BaselinesConfig 
         raise ConfigError(f"imitation.expert: {name} drives {EXPERTS[name]}; the env's task is "
                           f"{env.task!r}" + (f" (use {fits[0]})" if fits else ""))
     scenario = given if isinstance(given, Scenario) else Scenario(env)
-    if name == "explorer":
-        if env.goal_input == "explorer":  # the student points along the plan the expert follows
-            theirs = dataclasses.replace(env.explorer, max_linear_m_s=settings.explorer.max_linear_m_s)
-            if theirs != settings.explorer:
-                raise ConfigError("imitation.expert: explorer plans with the baselines: section's "
-                                  f"explorer.* ({settings.explorer}), the env's goal_input explorer "
-                                  f"with nav_env's explorer.* ({env.explorer}); expected the same "
-                                  "plan settings (all but max_linear_m_s)")
-    elif name == "planner" and (scenario.world is None or scenario.variants):
-        raise ConfigError("imitation.expert: planner plans on one simulated world's map, and "
-                          "the env has none (no 'sim:' section) or draws one per episode "
-                          "(episodes.world_variants)")
+    if name == "explorer" and env.goal_input == "explorer":  # the student's plan, the expert's
+        theirs = dataclasses.replace(env.explorer, max_linear_m_s=settings.explorer.max_linear_m_s)
+        if theirs != settings.explorer:
+            raise ConfigError("imitation.expert: explorer plans with the baselines: section's "
+                              f"explorer.* ({settings.explorer}), the env's goal_input explorer "
+                              f"with nav_env's explorer.* ({env.explorer}); expected the same "
+                              "plan settings (all but max_linear_m_s)")
     return baseline_expert(name, env, scenario.robot, scenario.world, settings)
 
 
@@ -152,8 +144,10 @@ class Imitation:
         settings = baselines_config(section, where=" + ".join(sources))  # tuning, as baselines'
         # Resolved once, for every env's expert (the trainer's, when it hands it down).
         scenario = env_config if isinstance(env_config, Scenario) else Scenario(env_config)
-        self.experts = [make_expert(config.expert, scenario, settings)
-                        for _ in range(env.num_envs)]
+        self.experts = [make_expert(config.expert, scenario, settings) for _ in range(env.num_envs)]
+        # A map-aware expert drives each episode's world when the env draws one per episode.
+        self._maps = (scenario, settings) if scenario.variants and BASELINE_TABLE[
+            EXPERT_BASELINES[config.expert]].one_world else None
         self.data = Demonstrations()
         self.batch_size = batch_size
         self.rng = np.random.default_rng(seed)
@@ -205,8 +199,8 @@ class Imitation:
         env, model = self.env, self.model
         if self._obs is None:
             self._obs = env.reset()
-            for expert in self.experts:
-                expert.reset()
+            for i in range(env.num_envs):
+                self._begin(i)
         for _ in range(max(1, steps // env.num_envs)):
             if self._out_of_steps():
                 return False
@@ -222,13 +216,24 @@ class Imitation:
                 model.replay_buffer.add(self._obs, _next_obs(new_obs, dones, infos), actions,
                                         rewards, dones, infos)
             for i in np.flatnonzero(dones):
-                self.experts[i].reset()
+                self._begin(int(i))
             self._obs = new_obs
             model.num_timesteps += env.num_envs
             self.callback.update_locals({"dones": dones, "infos": infos, "rewards": rewards})
             if not self.callback.on_step():
                 return False
         return True
+
+    def _begin(self, i: int) -> None:
+        """Env ``i``'s expert reset at its episode's start; a map-aware one made anew on a new
+        world (its reset's ``world_variant``; ``Scenario.world_at`` builds each world once)."""
+        if self._maps is not None:
+            scenario, settings = self._maps
+            world = scenario.world_at(self.env.unwrapped.reset_infos[i].get("world_variant"))
+            if getattr(self.experts[i], "world", None) is not world:
+                self.experts[i] = baseline_expert(self.config.expert, scenario.config,
+                                                  scenario.robot, world, settings)
+        self.experts[i].reset()
 
     def _out_of_steps(self) -> bool:
         return self.max_steps is not None and self.model.num_timesteps >= self.max_steps

@@ -210,7 +210,7 @@ TASK_TABLE: dict[str, TaskSpec] = {spec.name: spec for spec in (
                     sensors=("lidar", "depth"))),
              sensors=tuple(OBSERVED_TABLE), reward=GoToPoseReward,
              build="pic4rl_bridge.tasks.goto:build",
-             experts=("planner", "explorer"), per_sensor=True),
+             experts=("planner", "explorer", "predictive"), per_sensor=True),
     TaskSpec("vineyard",
              (EnvId("pic4rl/Vineyard-v0", "depth",
                     {"world": "vineyard", "depth.enabled": True}),),

@@ -45,6 +45,7 @@ SHIPPED = {
     "train_crowd_td3_history.yaml": ("td3", "lidar", "crowd_td3_history"),
     "train_crowd_td3_lidar.yaml": ("td3", "lidar", "crowd_td3_lidar"),
     "train_dynbarn_td3_history.yaml": ("td3", "lidar", "dynbarn_td3_history"),
+    "train_dynbarn_td3_predictive.yaml": ("td3", "lidar", "dynbarn_td3_predictive"),
 }
 
 

@@ -1,4 +1,4 @@
-"""``config/suite_dynbarn.yaml``: the agent trained on training scenes, DWA, the planner and the
+"""``config/suite_dynbarn.yaml``: the agents trained on training scenes, DWA, the planner and the
 predictive planner on the dynamic BARN's 60 test scenes with BARN's table, and a cut-down
 suite run in process into that table, its BARN score from the bags (the dynbarn world's
 reference path marks it as BARN's)."""
@@ -19,10 +19,11 @@ REPO = Path(__file__).resolve().parents[3]
 SUITE = REPO / "config" / "suite_dynbarn.yaml"
 
 
-def test_the_suite_is_the_agent_and_three_baselines_on_the_60_test_scenes(tmp_path: Path) -> None:
+def test_the_suite_is_two_agents_and_three_baselines_on_the_60_test_scenes(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "barn" and len(suite.cells) == 4 * 60
-    for agent in ("dynbarn_td3_history", "dwa", "planner", "predictive"):
+    assert suite.table == "barn" and len(suite.cells) == 5 * 60
+    for agent in ("dynbarn_td3_history", "dynbarn_td3_predictive", "dwa", "planner",
+                  "predictive"):
         cells = [c for c in suite.cells if c.agent == agent]
         assert tuple(c.variant for c in cells) == TEST_SCENES
         assert {c.world for c in cells} == {"dynbarn"} and {c.pairs.episodes for c in cells} == {3}
@@ -44,7 +45,8 @@ def test_two_scenes_run_in_process_into_barns_table(tmp_path: Path) -> None:
     path.write_text(yaml.safe_dump(data))
     suite = load_suite(path, bags_dir=tmp_path / "bags")
     table = bench.bench_suite(suite, workers=2, local=True, progress=False)
-    assert sorted(r[1] for r in table.rows) == ["dwa", "dynbarn_td3_history", "planner", "predictive"]
+    assert sorted(r[1] for r in table.rows) == ["dwa", "dynbarn_td3_history", "dynbarn_td3_predictive",
+                                               "planner", "predictive"]
     for row in table.rows:
         cells = dict(zip(table.header, row))
         assert cells["status"] == "ok" and cells["world"] == "dynbarn:two" and cells["n"] == "2"

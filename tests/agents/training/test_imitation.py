@@ -359,7 +359,7 @@ def test_the_heading_expert_labels_the_person_envs_own_action() -> None:
                                           "\\(use dwa_heading\\)"):
         make_expert("planner", person)
     with pytest.raises(ConfigError, match="'nobody' is invalid; expected one of planner, "
-                                          "explorer, centerline, dwa_heading"):
+                                          "explorer, predictive, centerline, dwa_heading"):
         make_expert("nobody", person)
 
 
@@ -373,3 +373,31 @@ def test_the_old_spelling_of_the_heading_expert_is_refused_with_its_new_name() -
                                   "expected its new name 'dwa_heading'")
     config = train_config_from_params({"imitation.expert": "dwa_heading"})
     assert config.imitation.expert == "dwa_heading"
+
+
+def test_a_map_aware_expert_drives_each_episode_s_world() -> None:
+    """With a world drawn per episode (the dynamic BARN's training scenes 1 and 2, 5-step
+    episodes), the predictive planner that labels is made anew on each episode's world: the
+    one the env's reset reports, not the config's first."""
+    run = load_run_config([CONFIG / "train_dynbarn_td3_history.yaml"],
+                          train={**parse_overrides(TINY, flag="test"), "n_envs": 1},
+                          env={"episode_max_steps": 5, "episodes.world_variants": "1,2"})
+    env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
+    try:
+        model = new_model(run.train, env)
+        model.set_logger(configure(None, []))
+        callback = CallbackList([])
+        callback.init_callback(model)
+        config = ImitationConfig(enabled=True, expert="predictive", bc_steps=5, dagger_rounds=0)
+        imitation = Imitation(config, env, run.env, model, callback, batch_size=16)
+        worlds = []
+        for _ in range(4):  # an episode each
+            assert imitation.collect(5, EXPERT)
+            scenario = env.get_attr("scenario")[0]
+            expert = imitation.experts[0]
+            assert expert.world.moving is not None  # the dynamic BARN's, with its movers
+            assert expert.world.name == "dynbarn" and expert.world.seed == scenario.world.seed
+            worlds.append(scenario.variant)
+        assert set(worlds) == {1, 2}
+    finally:
+        env.close()

@@ -177,6 +177,7 @@ def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
     from pic4rl_bridge.settings.tasks import EXPERT_TASKS
 
     assert EXPERT_BASELINES == {"planner": "planner", "explorer": "explorer",
+                                "predictive": "predictive",
                                 "centerline": "centerline", "dwa_heading": "dwa_heading"}
     assert set(EXPERT_BASELINES) == set(EXPERT_TASKS)
     for expert, baseline in EXPERT_BASELINES.items():
@@ -184,6 +185,7 @@ def test_every_expert_is_a_baseline_of_the_table_that_drives_its_task() -> None:
     person = EnvConfig().replace(task="personMonitoring")
     assert isinstance(make_expert("dwa_heading", person, JACKAL, None), HeadingController)
     with pytest.raises(ConfigError, match="imitation.expert: 'dwa' is no baseline's expert; "
-                                          "expected one of planner, explorer, centerline, "
+                                          "expected one of planner, predictive, explorer, "
+                                          "centerline, "
                                           "dwa_heading"):
         make_expert("dwa", EnvConfig(), JACKAL, None)
