@@ -156,3 +156,19 @@ def label_error(model: Any, obs: Any, labels: Any) -> float:
     """Mean squared error of ``model``'s deterministic actions against imitation's labels."""
     acted, _ = model.predict(obs, deterministic=True)
     return float(((acted - labels) ** 2).mean())
+
+
+def imitation_on(run: Any, env: Any, config: Any, *, batch_size: int = 16, **kwargs: Any) -> Any:
+    """An ``Imitation`` of ``config`` (an ``ImitationConfig``) on the vec env ``env`` with a new
+    model of ``run``'s trainer section, no logger output and no callbacks."""
+    from stable_baselines3.common.callbacks import CallbackList
+    from stable_baselines3.common.logger import configure
+
+    from pic4rl_agents.models.algorithms import new_model
+    from pic4rl_agents.training.imitation import Imitation
+
+    model = new_model(run.train, env)
+    model.set_logger(configure(None, []))
+    callback = CallbackList([])
+    callback.init_callback(model)
+    return Imitation(config, env, run.env, model, callback, batch_size=batch_size, **kwargs)

@@ -8,6 +8,7 @@ import dataclasses
 from pathlib import Path
 
 import pytest
+from agents_helpers import imitation_on
 
 from pic4rl_agents.runs.config import EvalConfig
 from pic4rl_agents.training.envs import check_no_test_world, eval_env_config, make_vec_env
@@ -69,26 +70,16 @@ def test_a_test_env_runs_its_own_world_not_the_training_worlds(tmp_path: Path) -
 def test_the_experts_drive_with_the_params_files_baselines_section(tmp_path: Path) -> None:
     """The recipe's ``baselines:`` section (the explorer's BARN tuning) reaches the expert, as
     it reaches ``--baseline explorer``; a file without one leaves the defaults."""
-    from stable_baselines3.common.callbacks import CallbackList
-    from stable_baselines3.common.logger import configure
-
-    from pic4rl_agents.models.algorithms import new_model
     from pic4rl_agents.runs.config import ImitationConfig, load_run_config
-    from pic4rl_agents.training.imitation import Imitation
     from pic4rl_bridge.settings.baselines import ExplorerConfig
 
     recipe = ROOT / "config" / "train_barn_td3_memory.yaml"
     run = load_run_config([recipe], train={"buffer_size": 100, "learning_starts": 10})
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
     try:
-        model = new_model(run.train, env)
-        model.set_logger(configure(None, []))
-        callback = CallbackList([])
-        callback.init_callback(model)
         config = ImitationConfig(enabled=True, expert="explorer", bc_steps=10)
-        tuned = Imitation(config, env, run.env, model, callback, batch_size=16,
-                          sources=(str(recipe),)).experts[0].config
-        plain = Imitation(config, env, run.env, model, callback, batch_size=16).experts[0].config
+        tuned = imitation_on(run, env, config, sources=(str(recipe),)).experts[0].config
+        plain = imitation_on(run, env, config).experts[0].config
     finally:
         env.close()
     assert (tuned.max_linear_m_s, tuned.squeeze_radius_m) == (1.0, 0.27)

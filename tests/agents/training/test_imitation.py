@@ -14,7 +14,8 @@ import pandas as pd
 import pytest
 import torch
 import yaml
-from agents_helpers import CONFIG, label_error, Launcher, LIDAR_TD3, ROS_ARGS, TINY
+from agents_helpers import (CONFIG, imitation_on, label_error, Launcher, LIDAR_TD3, ROS_ARGS,
+                            TINY)
 from ros_helpers import next_domain
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.logger import configure
@@ -384,12 +385,8 @@ def test_a_map_aware_expert_drives_each_episode_s_world() -> None:
                           env={"episode_max_steps": 5, "episodes.world_variants": "1,2"})
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
     try:
-        model = new_model(run.train, env)
-        model.set_logger(configure(None, []))
-        callback = CallbackList([])
-        callback.init_callback(model)
         config = ImitationConfig(enabled=True, expert="predictive", bc_steps=5, dagger_rounds=0)
-        imitation = Imitation(config, env, run.env, model, callback, batch_size=16)
+        imitation = imitation_on(run, env, config)
         worlds = []
         for _ in range(4):  # an episode each
             assert imitation.collect(5, EXPERT)

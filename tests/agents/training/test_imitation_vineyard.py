@@ -9,15 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from agents_helpers import CONFIG, label_error, LIDAR_TD3, TINY
-from stable_baselines3.common.callbacks import CallbackList
-from stable_baselines3.common.logger import configure
+from agents_helpers import CONFIG, imitation_on, label_error, LIDAR_TD3, TINY
 
 from pic4rl_agents.training import train
-from pic4rl_agents.models.algorithms import ALGORITHMS, new_model, load_model
+from pic4rl_agents.models.algorithms import ALGORITHMS, load_model
 from pic4rl_agents.runs.config import ImitationConfig, load_run_config
 from pic4rl_agents.training.envs import make_vec_env
-from pic4rl_agents.training.imitation import EXPERT, Imitation, make_expert
+from pic4rl_agents.training.imitation import EXPERT, make_expert
 from pic4rl_agents.runs.overrides import parse_overrides
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_bridge.baselines.row_followers import CenterlineFollower
@@ -40,21 +38,17 @@ def test_the_cnn_on_depth_learns_the_experts_labels() -> None:
                           env={"episode_max_steps": 300})
     env = make_vec_env(run.env, n_envs=1, seed=0, vec_env="dummy")
     try:
-        model = new_model(run.train, env)
-        model.set_logger(configure(None, []))
-        callback = CallbackList([])
-        callback.init_callback(model)
         config = ImitationConfig(enabled=True, expert="centerline", bc_steps=300)
-        imitation = Imitation(config, env, run.env, model, callback, batch_size=32)
+        imitation = imitation_on(run, env, config, batch_size=32)
         assert imitation.collect(300, EXPERT)
         obs, labels, _ = imitation.data.arrays()
         assert obs.shape == (300, 1, 30, 40) and obs.dtype == np.uint8  # the image alone
         assert (labels[:, 0] > 0.9).mean() > 0.8  # the expert drives on at full speed
         assert labels[:, 1].std() > 0.01  # and steers along the bent rows
 
-        before = label_error(model, obs, labels)
+        before = label_error(imitation.model, obs, labels)
         imitation.fit(300)
-        assert label_error(model, obs, labels) < 0.5 * before
+        assert label_error(imitation.model, obs, labels) < 0.5 * before
     finally:
         env.close()
 
