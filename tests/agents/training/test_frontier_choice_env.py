@@ -97,7 +97,8 @@ def test_the_untrained_policy_favours_the_nearest_candidate():
 
 @pytest.mark.heavy
 def test_a_short_training_run_writes_its_policy_curve_and_validation(tmp_path: Path):
-    summary = train(tmp_path, minutes=0.8, n_envs=1, seed=0, validation=1)
+    # 1.2 min: a loaded CI machine made 107 of the rollout's 128 decisions in 0.8 min
+    summary = train(tmp_path, minutes=1.2, n_envs=1, seed=0, validation=1)
     assert summary["decisions"] >= 128  # at least one PPO rollout
     assert (tmp_path / "model.zip").is_file() and (tmp_path / "0.monitor.csv").is_file()
     (episode,) = summary["validation"]

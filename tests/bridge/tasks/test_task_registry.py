@@ -127,7 +127,8 @@ def test_a_tasks_section_is_its_entrys():
 
 def test_the_baselines_come_from_their_table_and_the_facts_from_the_entries():
     assert BASELINE_TASKS == {"proportional": ("goToPose",), "dwa": ("goToPose",),
-                              "planner": ("goToPose",), "explorer": ("goToPose",),
+                              "planner": ("goToPose",), "predictive": ("goToPose",),
+                              "explorer": ("goToPose",),
                               "orca": ("goToPose",), "centerline": ("vineyard",),
                               "row_follower": ("vineyard",),
                               "dwa_heading": ("personMonitoring",),
