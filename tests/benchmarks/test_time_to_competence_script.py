@@ -42,5 +42,6 @@ def test_a_target_never_reached_is_nan_with_the_best_success() -> None:
     figures, out = results()
     assert math.isnan(figures["time_to_90pct_s"]) and math.isnan(figures["steps_to_90pct"])
     assert figures["best_eval_success_rate"] == 0.0  # 2 m episodes, 4-8 m pairs
-    assert figures["evaluations"] >= 2  # every 1 s until the 4 s budget
+    assert figures["evaluations"] >= 1  # every 1 s in a 4 s budget: how many is speed (a
+    #                                     loaded CI machine made 1), which this does not check
     assert figures["train_wall_s_total"] >= 4.0
