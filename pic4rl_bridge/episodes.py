@@ -17,6 +17,7 @@ sampling stays as it was. With ``episodes.world_variants`` each episode first dr
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import logging
 import math
@@ -228,21 +229,23 @@ class EpisodeSchedule:
 
 
 def save_goals_and_poses(pairs: GoalsAndPoses, path: str | Path, *, comment: str = "",
-                         overwrite: bool = False) -> Path:
-    """Write ``pairs`` as a goals-and-poses JSON (mm, mrad), which ``load_goals_and_poses``
-    reads back; an existing file is kept unless ``overwrite``."""
+                         overwrite: bool = False, exact: bool = False) -> Path:
+    """Write ``pairs`` as a goals-and-poses JSON (mm, mrad; ``exact``: every digit, as a copy
+    needs), read back by ``load_goals_and_poses``; an existing file is kept unless ``overwrite``."""
     path = Path(path)
     if path.exists() and not overwrite:
         raise ConfigError(f"{path}: exists; choose another name or pass overwrite=True")
     doc: dict[str, Any] = {"comment": comment} if comment else {}
+    keep = float if exact else functools.partial(round, ndigits=3)
     if pairs.world:
         doc["world"] = pairs.world
     if pairs.robot_radius_m is not None:
-        doc["robot_radius_m"] = round(pairs.robot_radius_m, 4)
+        radius = pairs.robot_radius_m
+        doc["robot_radius_m"] = float(radius) if exact else round(radius, 4)
     if pairs.initial_pose is not None:
-        doc["initial_pose"] = [round(v, 3) for v in pairs.initial_pose]
-    doc["goals"] = [[round(x, 3), round(y, 3)] for x, y in pairs.goals]
-    doc["poses"] = [[round(p.x, 3), round(p.y, 3), round(p.yaw, 3)] for p in pairs.poses]
+        doc["initial_pose"] = [keep(v) for v in pairs.initial_pose]
+    doc["goals"] = [[keep(x), keep(y)] for x, y in pairs.goals]
+    doc["poses"] = [[keep(p.x), keep(p.y), keep(p.yaw)] for p in pairs.poses]
     path.write_text(json.dumps(doc, separators=(",", ":")))
     return path
 
@@ -289,8 +292,7 @@ class PairSampler:
         """The sampler of a simulated scenario; ``None`` for a real robot (no world)."""
         if scenario.sim is None or scenario.world is None:
             return None
-        radius = scenario.robot.footprint.bounding_radius_m
-        engine = scenario.sim.engine
+        radius, engine = scenario.robot.footprint.bounding_radius_m, scenario.sim.engine
         return cls(scenario.world, robot_radius_m=radius,
                    clearance_m=radius + engine.clearance_m,
                    min_goal_distance_m=engine.min_goal_distance_m,
@@ -331,8 +333,7 @@ class PairSampler:
         """(shortest collision-free path, straight line) from ``start`` to ``goal`` (m);
         the shortest is ``inf`` when there is no path, and free when the draw just searched
         it (the planner keeps its last answers)."""
-        straight = math.dist(start[:2], goal)
-        return self.planner.length(start[:2], goal), straight
+        return self.planner.length(start[:2], goal), math.dist(start[:2], goal)
 
     def goals_and_poses(self, count: int, *, seed: int, kind: PairKind,
                         initial_pose: Pose2D | None = None) -> GoalsAndPoses:

@@ -109,7 +109,7 @@ def _pairs_from(pairs: GoalsAndPoses, first: int, folder: Path) -> None:
     rotated = dataclasses.replace(pairs, goals=tuple(pairs.goals[i] for i in order),
                                   poses=tuple(pairs.poses[i] for i in order))
     with atomic.replacing(_pairs_file(first, folder)) as tmp:
-        save_goals_and_poses(rotated, tmp, overwrite=True)
+        save_goals_and_poses(rotated, tmp, overwrite=True, exact=True)
 
 
 def _set_aside(root: Path, cell: Cell, bags: tuple[Path, ...]) -> None:

@@ -164,6 +164,21 @@ def _children(pid: int) -> list[int]:
     return [int(p) for p in text.split()]
 
 
+def test_a_cells_copy_of_a_pairs_file_drives_the_files_pairs_to_the_last_digit(
+        tmp_path: Path) -> None:
+    # The paper's file starts three pairs at 1.5708 rad: a copy rounded to mrad (1.571) sent
+    # a crowd's chaotic episodes elsewhere than pic4rl-test's with the same file.
+    from pic4rl_bridge.episodes import load_goals_and_poses
+
+    pairs = load_goals_and_poses(PAIRS)
+    benchcell._pairs_from(pairs, 2, tmp_path)
+    copy = load_goals_and_poses(tmp_path / "pairs_from_0002.json")
+    order = [2, 3, 4, 0, 1]
+    assert copy.goals == tuple(pairs.goals[i] for i in order)
+    assert copy.poses == tuple(pairs.poses[i] for i in order)
+    assert copy.poses[0].yaw == 1.5708
+
+
 @pytest.mark.heavy
 def test_a_killed_worker_loses_only_its_unfinished_episode(tmp_path: Path) -> None:
     suite_file = _files(tmp_path, steps=120, baselines=["dwa"], pairs=[
