@@ -20,6 +20,7 @@ from pic4rl_agents.suites import cell as benchcell
 from pic4rl_agents.suites import runner as bench
 from pic4rl_agents.suites import table as benchtable
 from pic4rl_agents.suites.suite import load_suite
+from pic4rl_bridge.episodes import load_goals_and_poses
 from pic4rl_bridge.errors import ConfigError
 from pic4rl_metrics.tables.aggregate import wilson_interval
 
@@ -168,11 +169,9 @@ def test_a_cells_copy_of_a_pairs_file_drives_the_files_pairs_to_the_last_digit(
         tmp_path: Path) -> None:
     # The paper's file starts three pairs at 1.5708 rad: a copy rounded to mrad (1.571) sent
     # a crowd's chaotic episodes elsewhere than pic4rl-test's with the same file.
-    from pic4rl_bridge.episodes import load_goals_and_poses
-
     pairs = load_goals_and_poses(PAIRS)
     benchcell._pairs_from(pairs, 2, tmp_path)
-    copy = load_goals_and_poses(tmp_path / "pairs_from_0002.json")
+    copy = load_goals_and_poses(benchcell._pairs_file(2, tmp_path))
     order = [2, 3, 4, 0, 1]
     assert copy.goals == tuple(pairs.goals[i] for i in order)
     assert copy.poses == tuple(pairs.poses[i] for i in order)
