@@ -11,7 +11,8 @@ Helbing & Molnár, "Social force model for pedestrian dynamics", Phys. Rev. E 51
   off as far as a person is;
 - walls: ``(U0 / R) exp(-d / R)`` away from each obstacle's nearest point at centre distance
   ``d`` (``U0`` 10 m²/s², ``R`` 0.2 m);
-- field of view: a force from behind (outside ``2 phi`` = 200°) weighs ``C`` = 0.5;
+- field of view: a force whose source is behind (outside ``2 phi`` = 200° round the
+  desired direction) weighs ``C`` = 0.5;
 - speed capped at ``MAX_SPEED_FACTOR`` (1.3) times the desired one.
 
 Groups, Moussaïd et al., "The walking behaviour of pedestrian social groups", PLoS ONE 5
@@ -91,9 +92,14 @@ def surface_vectors(pos: np.ndarray, radius: np.ndarray, others: np.ndarray,
 
 
 def field_of_view(direction: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """Weights (n × m): 1 for a force seen in front (``e · f >= |f| cos phi``), else
-    ``BEHIND_WEIGHT``."""
-    seen = np.einsum("nk,nmk->nm", direction, forces) >= (
+    """Weights (n × m): 1 for a force whose source is seen in front, else ``BEHIND_WEIGHT``.
+
+    The paper's ``w(e, f)`` weighs "situations in the desired direction of motion" more; a
+    repulsion points away from its source, so the source lies along ``-f`` and is seen when
+    ``e · (-f) >= |f| cos phi`` (as ``pysocialforce`` calls it, with ``-f_ab``). A walker
+    ahead pushes back and weighs 1; one behind pushes forward and
+    weighs ``BEHIND_WEIGHT``."""
+    seen = -np.einsum("nk,nmk->nm", direction, forces) >= (
         np.hypot(forces[..., 0], forces[..., 1]) * math.cos(PHI_RAD))
     return np.where(seen, 1.0, BEHIND_WEIGHT)
 

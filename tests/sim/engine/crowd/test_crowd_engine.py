@@ -107,6 +107,27 @@ def test_the_robot_driving_into_a_person_collides():
     assert any(collided)  # a contact with a person counts as a collision
 
 
+def test_people_walk_round_a_standing_robot():
+    # 10 people, 30 s, a robot that never moves: touched (a body within the env's 5 cm
+    # collision tolerance of the box) in at most 1 of 10 episodes. With the field of view
+    # turned round (a person ahead weighing 0.5, one behind 1), seeds 0-9 touched it in 5.
+    engine = _engine(10)
+    footprint = JACKAL.footprint
+    touched = 0
+    for seed in range(10):
+        engine.reset(seed=seed)
+        gaps = []
+        for _ in range(300):
+            people = _walk(engine, 1)
+            pose = engine.robot_pose()
+            c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+            d = people - (pose.x, pose.y)
+            body = np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]))
+            gaps.append(footprint.signed_distance(body).min() - 0.25)
+        touched += min(gaps) < 0.05
+    assert touched <= 1
+
+
 def test_a_crowd_that_does_not_fit_is_a_one_line_error():
     world = WorldSpec("small", (-1.5, -1.5, 1.5, 1.5))  # room for the robot, not for 12 more
     with pytest.raises(WorldError, match=r"^crowd.count: 12 is invalid; expected a crowd that "

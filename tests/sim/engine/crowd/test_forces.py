@@ -71,11 +71,17 @@ def test_a_point_inside_an_obstacle_is_pushed_out_through_the_nearest_face():
     np.testing.assert_allclose(away[2, 1], [1.0, 0.0], atol=1e-12)
 
 
-def test_a_force_from_behind_weighs_c():
+def test_a_force_whose_source_is_behind_weighs_c_and_one_from_ahead_weighs_1():
     e = np.array([[1.0, 0.0]])
+    # pushed forward: the source is behind; pushed back: it is ahead; pushed 95° off the
+    # heading: the source lies 85° off it, inside the 100° half field of view
     f = np.array([[[1.0, 0.0], [-1.0, 0.0], [math.cos(math.radians(95)),
                                               math.sin(math.radians(95))]]])
-    np.testing.assert_allclose(forces.field_of_view(e, f), [[1.0, 0.5, 1.0]])
+    np.testing.assert_allclose(forces.field_of_view(e, f), [[0.5, 1.0, 1.0]])
+    # a walker at rest 0.5 m ahead of a walker heading for it repels it with full weight
+    r = np.array([[[-0.5, 0.0]]])  # from the one ahead to the walker
+    pushed = forces.pair_forces(r, np.zeros_like(r))
+    np.testing.assert_allclose(forces.field_of_view(e, pushed), [[1.0]])
 
 
 def test_a_wall_repels_with_u0_over_r_exp_minus_d_over_r_from_its_nearest_point():
