@@ -97,8 +97,7 @@ def field_of_view(direction: np.ndarray, forces: np.ndarray) -> np.ndarray:
     The paper's ``w(e, f)`` weighs "situations in the desired direction of motion" more; a
     repulsion points away from its source, so the source lies along ``-f`` and is seen when
     ``e · (-f) >= |f| cos phi`` (as ``pysocialforce`` calls it, with ``-f_ab``). A walker
-    ahead pushes back and weighs 1; one behind pushes forward and
-    weighs ``BEHIND_WEIGHT``."""
+    ahead pushes back and weighs 1; one behind pushes forward and weighs ``BEHIND_WEIGHT``."""
     seen = -np.einsum("nk,nmk->nm", direction, forces) >= (
         np.hypot(forces[..., 0], forces[..., 1]) * math.cos(PHI_RAD))
     return np.where(seen, 1.0, BEHIND_WEIGHT)

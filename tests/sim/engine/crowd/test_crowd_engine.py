@@ -112,7 +112,7 @@ def test_people_walk_round_a_standing_robot():
     # collision tolerance of the box) in at most 1 of 10 episodes. With the field of view
     # turned round (a person ahead weighing 0.5, one behind 1), seeds 0-9 touched it in 5.
     engine = _engine(10)
-    footprint = JACKAL.footprint
+    footprint, person_m = JACKAL.footprint, engine.config.crowd.radius_m
     touched = 0
     for seed in range(10):
         engine.reset(seed=seed)
@@ -123,7 +123,7 @@ def test_people_walk_round_a_standing_robot():
             c, s = math.cos(pose.yaw), math.sin(pose.yaw)
             d = people - (pose.x, pose.y)
             body = np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]))
-            gaps.append(footprint.signed_distance(body).min() - 0.25)
+            gaps.append(footprint.signed_distance(body).min() - person_m)
         touched += min(gaps) < 0.05
     assert touched <= 1
 
