@@ -18,6 +18,7 @@ import numpy as np
 from pic4rl_base.geometry import wrap_angle
 
 from ..control.actions import normalized_action
+from ..perception.movers import PeopleMotion
 from ..perception.occupancy import to_world
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
@@ -182,24 +183,15 @@ class OrcaController:
         self.responsibility = responsibility
         self.turn_gain, self.slow_m = turn_gain, slow_m
         self.keep_right_rad = keep_right_rad
-        self._last: tuple[int, np.ndarray] | None = None
+        self._people = PeopleMotion()
 
     def reset(self) -> None:
         """Forget the people seen: their velocities start again from zero."""
-        self._last = None
+        self._people.reset()
 
     def people_velocities(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
-        """The people's positions (n × 2) and velocities (n × 2, m/s) by finite difference
-        with the previous frame's reading (zero at first, or when the crowd's size changed)."""
-        people = frame.readings.get("people")
-        xy = np.empty((0, 2)) if people is None else np.asarray(people, dtype=float)[:, :2]
-        velocity = np.zeros_like(xy)
-        if self._last is not None and self._last[1].shape == xy.shape:
-            dt_s = (frame.stamp_ns - self._last[0]) * 1e-9
-            if dt_s > 0.0:
-                velocity = (xy - self._last[1]) / dt_s
-        self._last = (frame.stamp_ns, xy)
-        return xy, velocity
+        """The people's positions (n × 2) and velocities (n × 2, m/s): ``PeopleMotion``."""
+        return self._people.update(frame)
 
     def _scan_obstacles(self, frame: SensorFrame, people: np.ndarray) -> np.ndarray:
         """The scan's nearest return per sector within range, in the world frame, people's

@@ -19,8 +19,9 @@ people close every way); ``people_replan_s`` 0 plans on the world's map alone, a
 people. It plans anew at every new goal and off its plan with the people too.
 
 The ``predictive`` baseline is this planner with its speed timed against the world's moving
-obstacles (``PredictiveController``): neither DWA nor this planner predicts motion, and on the
-dynamic BARN nearly all their collisions are with a moving obstacle (docs/results.md).
+obstacles and the people (``PredictiveController``): neither DWA nor this planner predicts
+motion, and on the dynamic BARN nearly all their collisions are with a moving obstacle
+(docs/results.md).
 
 The controller is the pursuit law of ``pic4rl_bridge.control.pursuit``: it steers toward the
 farthest point of the plan within ``lookahead_m`` that the robot sees in a straight line with
@@ -43,7 +44,7 @@ from pic4rl_sim.engine.worlds.spec import WorldSpec
 
 from ..control.actions import normalized_action
 from ..control.pursuit import pursuit_command
-from ..perception.movers import MoverTracker
+from ..perception.movers import MoverTracker, PeopleMotion
 from ..readings.frame import SensorFrame
 from ..robot_info import RobotInfo
 from .crowd_plan import blocks, plan_around_people
@@ -136,42 +137,60 @@ _SPEED_FRACTIONS = (1.0, 0.75, 0.5, 0.25, 0.0)
 
 
 class PredictiveController(PlannerController):
-    """The privileged planner whose speed is timed against the moving obstacles (a
-    path-velocity decomposition, Kant and Zucker 1986): the plan and the steering are the
-    planner's; the movers are tracked from the scan against the world's map
-    (``pic4rl_bridge.perception.movers``) and predicted at constant velocity. Each step the
-    robot's progress along its plan is simulated for ``horizon_s`` at each of
-    ``_SPEED_FRACTIONS`` of its limit (reached at the robot's acceleration limit), as its
-    bounding disc on the plan; the fastest that stays ``mover_margin_m`` clear of every
-    mover's predicted disc over the horizon caps the pursuit law's speed. When none does, the
-    one whose first contact comes latest (it may be the fastest: a blind mover hits a robot
-    that stops). A world without moving obstacles leaves it the planner."""
+    """The privileged planner whose speed is timed against what moves (a path-velocity
+    decomposition, Kant and Zucker 1986): the plan and the steering are the planner's; the
+    world's moving obstacles are tracked from the scan against its map and the people come
+    with their positions in the ``people`` reading (``pic4rl_bridge.perception.movers``), all
+    predicted at constant velocity. Each step the robot's progress along its plan is simulated
+    for ``horizon_s`` at each of ``_SPEED_FRACTIONS`` of its limit (reached at the robot's
+    acceleration limit), as its bounding disc on the plan; the fastest that stays
+    ``mover_margin_m`` clear of every mover's and person's (a disc of ``person_radius_m``)
+    predicted disc over the horizon caps the pursuit law's speed. When none does, the one
+    whose first contact comes latest (it may be the fastest: a blind mover hits a robot that
+    stops). A world without moving obstacles or people leaves it the planner."""
 
     def __init__(self, robot: RobotInfo, world: WorldSpec, *, horizon_s: float = 2.0,
-                 mover_margin_m: float = 0.1, **planner: float) -> None:
+                 mover_margin_m: float = 0.1, person_radius_m: float = 0.25,
+                 **planner: float) -> None:
         super().__init__(robot, world, **planner)
         moving = world.moving
         self.tracker = None if moving is None else MoverTracker(
             world, moving.radius_m, top_speed_m_s=moving.speed_range_m_s[1])
         self._reach_m = (robot.footprint.bounding_radius_m + mover_margin_m
                          + (moving.radius_m if moving is not None else 0.0))
+        self._person_reach_m = robot.footprint.bounding_radius_m + mover_margin_m + person_radius_m
+        self.people = PeopleMotion()
+        self._people_now = (np.empty((0, 2)), np.empty((0, 2)))
         self._times = robot.control_dt_s * np.arange(
             1, max(1, round(horizon_s / robot.control_dt_s)) + 1)
 
     def reset(self) -> None:
-        """Forget the plan and the tracks."""
+        """Forget the plan, the tracks and the people."""
         super().reset()
         if self.tracker is not None:
             self.tracker.reset()
+        self.people.reset()
+        self._people_now = (np.empty((0, 2)), np.empty((0, 2)))
+
+    def predictions(self) -> tuple[np.ndarray, np.ndarray]:
+        """The tracked movers' and the people's predicted centres over the horizon
+        (K × n × 2) and each one's contact distance from the robot's centre (n, m)."""
+        xy, velocity = self._people_now
+        centres = [xy[None, :, :] + self._times[:, None, None] * velocity[None, :, :]]
+        reach = [np.full(len(xy), self._person_reach_m)]
+        if self.tracker is not None:
+            centres.insert(0, self.tracker.predict(self._times))
+            reach.insert(0, np.full(len(self.tracker.pos), self._reach_m))
+        return np.concatenate(centres, axis=1), np.concatenate(reach)
 
     def speed_cap(self, frame: SensorFrame) -> float:
-        """The speed (m/s) whose progress along the plan keeps clear of the movers' predictions
+        """The speed (m/s) whose progress along the plan keeps clear of the predictions
         longest, the fastest of those that keep clear over the whole horizon."""
-        assert self.tracker is not None and self._path is not None
+        assert self._path is not None
         path, dt = self._path, self.robot.control_dt_s
         along = np.r_[0.0, np.cumsum(np.hypot(*np.diff(path, axis=0).T))]
         start, _ = project(path, (frame.pose.x, frame.pose.y))
-        movers = self.tracker.predict(self._times)  # (K, n, 2)
+        movers, reach = self.predictions()  # (K, n, 2), (n,)
         v0, accel = frame.twist.vx, self.robot.max_linear_accel_m_s2
         best = (-math.inf, 0.0)
         for fraction in _SPEED_FRACTIONS:
@@ -180,8 +199,8 @@ class PredictiveController(PlannerController):
             speed = v0 + np.sign(target - v0) * change
             s = np.minimum(start + np.cumsum(speed * dt), along[-1])
             xy = np.column_stack((np.interp(s, along, path[:, 0]), np.interp(s, along, path[:, 1])))
-            gap = np.hypot(*(movers - xy[:, None, :]).transpose(2, 0, 1)).min(axis=1)
-            contact = gap < self._reach_m
+            gap = np.hypot(*(movers - xy[:, None, :]).transpose(2, 0, 1))
+            contact = (gap < reach[None, :]).any(axis=1)
             first = float(self._times[contact.argmax()]) if contact.any() else math.inf
             if first > best[0]:
                 best = (first, target)
@@ -192,9 +211,9 @@ class PredictiveController(PlannerController):
     def command(self, frame: SensorFrame) -> tuple[float, float]:
         """The planner's (v, ω) for ``frame``, v capped by ``speed_cap``."""
         v, w = super().command(frame)
-        if self.tracker is None:
-            return v, w
-        self.tracker.update(frame)
-        if not len(self.tracker.pos):
+        if self.tracker is not None:
+            self.tracker.update(frame)
+        self._people_now = self.people.update(frame)
+        if not (len(self._people_now[0]) or (self.tracker is not None and len(self.tracker.pos))):
             return v, w
         return min(v, self.speed_cap(frame)), w

@@ -8,6 +8,9 @@ tracks' predictions nearest first within ``gate_m``; each track's position and v
 an alpha-beta filter; a track unseen for ``keep_s`` (hidden behind the field) is dropped, and
 until then coasts at its velocity. A new track's velocity is unknown until it is seen again:
 zero. Pure numpy; the same on a real robot with a map, given the movers' radius.
+
+People come tracked already (the env's ``people`` reading: the crowd's topic, or a people
+tracker's on a real robot): ``PeopleMotion`` gives their velocities by finite difference.
 """
 
 from __future__ import annotations
@@ -122,3 +125,29 @@ class MoverTracker:
         """The tracks' positions at ``times_s`` from now at constant velocity (K × n × 2)."""
         return self.pos[None, :, :] + np.asarray(times_s)[:, None, None] * self.vel[None, :, :]
 
+
+
+class PeopleMotion:
+    """The ``people`` reading's positions and velocities: each velocity the difference of a
+    person's positions over the last two frames' stamps, the array's order their identity
+    (zero at first, or when the crowd's size changed)."""
+
+    def __init__(self) -> None:
+        self._last: tuple[int, np.ndarray] | None = None
+
+    def reset(self) -> None:
+        """Forget the people seen: their velocities start again from zero."""
+        self._last = None
+
+    def update(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
+        """The people's positions (n × 2, world frame) and velocities (n × 2, m/s) in
+        ``frame`` (none without a ``people`` reading)."""
+        people = frame.readings.get("people")
+        xy = np.empty((0, 2)) if people is None else np.asarray(people, dtype=float)[:, :2]
+        velocity = np.zeros_like(xy)
+        if self._last is not None and self._last[1].shape == xy.shape:
+            dt_s = (frame.stamp_ns - self._last[0]) * 1e-9
+            if dt_s > 0.0:
+                velocity = (xy - self._last[1]) / dt_s
+        self._last = (frame.stamp_ns, xy)
+        return xy, velocity

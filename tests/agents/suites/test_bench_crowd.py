@@ -1,5 +1,5 @@
 """``config/suite_crowd.yaml`` (issue 41 items 5 and 6): the shipped TD3-LiDAR agent, the agent
-trained among people, DWA, the planner and ORCA on the paper's 5 indoor pairs among 10 people
+trained among people, DWA, the planner, the predictive planner and ORCA on the paper's 5 indoor pairs among 10 people
 with held-out seeds, and a cut-down suite run in process (the agent trained among people from
 its checkpoint, and ORCA) whose bags carry the social metrics into the suite's table
 (``table: crowd``) and the report's leaderboard."""
@@ -22,11 +22,11 @@ SUITE = REPO / "config" / "suite_crowd.yaml"
 DEMO = REPO / "config" / "suite_crowd_demo.yaml"
 
 
-def test_the_suite_is_five_agents_among_ten_people_on_held_out_seeds(tmp_path: Path) -> None:
+def test_the_suite_is_six_agents_among_ten_people_on_held_out_seeds(tmp_path: Path) -> None:
     suite = load_suite(SUITE, bags_dir=tmp_path)
-    assert suite.table == "crowd" and len(suite.cells) == 5 * 4
+    assert suite.table == "crowd" and len(suite.cells) == 6 * 4
     assert {c.agent for c in suite.cells} == {"td3_lidar", "crowd_td3_history", "dwa",
-                                              "planner", "orca"}
+                                              "planner", "predictive", "orca"}
     assert {c.seed for c in suite.cells} == {1000, 1001, 1002, 1003}
     assert {c.pairs.label for c in suite.cells} == {"paper"}
     env = Path(suite.cells[0].env)

@@ -2,7 +2,8 @@
 itself in a world without movers; the speed cap worked by hand against a mover crossing its
 way (full speed meets it, half speed passes behind it), a mover moving away leaves full speed,
 a mover coming head-on gets the fastest speed that keeps clear over the horizon, or the one
-that meets it latest when none does; made by name
+that meets it latest when none does; a person of the ``people`` reading, whose velocity comes
+from two frames, caps it the same way in a world with no moving obstacles; made by name
 from the ``baselines:`` section, refused without a map."""
 
 from __future__ import annotations
@@ -76,10 +77,40 @@ def test_a_mover_coming_head_on_gets_the_fastest_clear_speed_or_the_latest_conta
     assert near.speed_cap(_frame()) == 0.0
 
 
+def _people_frame(stamp_ns: int, people: list[list[float]]) -> SensorFrame:
+    return SensorFrame(stamp_ns, Pose2D(*START, 0.0), Twist2D(vx=1.0), goal=GOAL,
+                       readings={"people": np.array(people)})
+
+
+def test_a_person_crossing_its_way_caps_the_speed_as_a_mover_does() -> None:
+    # No moving obstacles, one person (a disc of 0.15 m: the same 0.45 m contact distance as
+    # the mover above) walking up across the plan at 1 m/s, seen at (1, -2.1) then (1, -2.0)
+    # 0.1 s later: the crossing of the mover test, so 0.75 m/s passes behind it.
+    still = WorldSpec("room", BOUNDS)
+    controller = PredictiveController(ROBOT, still, mover_margin_m=0.1, person_radius_m=0.15)
+    assert controller.tracker is None
+    controller.command(_people_frame(0, [[1.0, -2.1, 0.0]]))
+    v, _ = controller.command(_people_frame(100_000_000, [[1.0, -2.0, 0.0]]))
+    np.testing.assert_allclose(controller.predictions()[0][-1], [[1.0, 0.0]], atol=1e-9)
+    assert controller.speed_cap(_people_frame(100_000_000, [[1.0, -2.0, 0.0]])) == \
+        pytest.approx(0.75)
+    assert v == pytest.approx(0.75)
+    # Walking away, the person leaves the planner's command as it is.
+    away = PredictiveController(ROBOT, still, mover_margin_m=0.1, person_radius_m=0.15)
+    away.command(_people_frame(0, [[1.0, -1.9, 0.0]]))
+    frame = _people_frame(100_000_000, [[1.0, -2.0, 0.0]])
+    assert away.command(frame) == PlannerController(ROBOT, still).command(frame)
+    away.reset()  # forgotten: the next frame's person stands still
+    away.command(frame)
+    assert not away.predictions()[0].std(axis=0).any()
+
+
 def test_it_is_made_by_name_from_the_baselines_section_and_needs_a_map() -> None:
-    settings = BaselinesConfig(predictive=PredictiveConfig(horizon_s=1.5, mover_margin_m=0.2))
+    settings = BaselinesConfig(predictive=PredictiveConfig(horizon_s=1.5, mover_margin_m=0.2,
+                                                           person_radius_m=0.3))
     controller = make_baseline("predictive", EnvConfig(), ROBOT, ROOM, settings)
     assert isinstance(controller, PredictiveController)
     assert len(controller._times) == 15 and math.isclose(controller._reach_m, 0.55)
+    assert math.isclose(controller._person_reach_m, 0.7)
     with pytest.raises(ConfigError, match="--baseline predictive: it plans on the simulated"):
         make_baseline("predictive", EnvConfig(), ROBOT, None, settings)
