@@ -134,6 +134,8 @@ class PlannerController:
 
 #: The speeds ``PredictiveController`` tries, fractions of its limit, fastest first.
 _SPEED_FRACTIONS = (1.0, 0.75, 0.5, 0.25, 0.0)
+#: No people: their positions and velocities (0 × 2 each).
+_NOBODY = (np.empty((0, 2)), np.empty((0, 2)))
 
 
 class PredictiveController(PlannerController):
@@ -160,7 +162,7 @@ class PredictiveController(PlannerController):
                          + (moving.radius_m if moving is not None else 0.0))
         self._person_reach_m = robot.footprint.bounding_radius_m + mover_margin_m + person_radius_m
         self.people = PeopleMotion()
-        self._people_now = (np.empty((0, 2)), np.empty((0, 2)))
+        self._people_now = _NOBODY
         self._times = robot.control_dt_s * np.arange(
             1, max(1, round(horizon_s / robot.control_dt_s)) + 1)
 
@@ -170,7 +172,7 @@ class PredictiveController(PlannerController):
         if self.tracker is not None:
             self.tracker.reset()
         self.people.reset()
-        self._people_now = (np.empty((0, 2)), np.empty((0, 2)))
+        self._people_now = _NOBODY
 
     def predictions(self) -> tuple[np.ndarray, np.ndarray]:
         """The tracked movers' and the people's predicted centres over the horizon

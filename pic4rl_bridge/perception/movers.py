@@ -126,7 +126,6 @@ class MoverTracker:
         return self.pos[None, :, :] + np.asarray(times_s)[:, None, None] * self.vel[None, :, :]
 
 
-
 class PeopleMotion:
     """The ``people`` reading's positions and velocities: each velocity the difference of a
     person's positions over the last two frames' stamps, the array's order their identity

@@ -103,8 +103,8 @@ class PredictiveConfig:
                                   "prediction", unit="m", range=NON_NEGATIVE)
     max_linear_m_s: float = param(0.0, doc="its speed limit (not the planner's); 0: the env's",
                                   unit="m/s", range=NON_NEGATIVE)
-    person_radius_m: float = param(0.25, doc="each person of the people reading is a disc this "
-                                   "wide (the crowd's crowd.radius_m)", unit="m",
+    person_radius_m: float = param(0.25, doc="each person of the people reading is a disc of "
+                                   "this radius (the crowd's crowd.radius_m)", unit="m",
                                    range=Range(0.05, 1.0))
 
 

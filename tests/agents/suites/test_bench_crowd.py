@@ -1,8 +1,8 @@
 """``config/suite_crowd.yaml`` (issue 41 items 5 and 6): the shipped TD3-LiDAR agent, the agent
-trained among people, DWA, the planner, the predictive planner and ORCA on the paper's 5 indoor pairs among 10 people
-with held-out seeds, and a cut-down suite run in process (the agent trained among people from
-its checkpoint, and ORCA) whose bags carry the social metrics into the suite's table
-(``table: crowd``) and the report's leaderboard."""
+trained among people, DWA, the planner, the predictive planner and ORCA on the paper's 5 indoor
+pairs among 10 people with held-out seeds, and a cut-down suite run in process (the agent
+trained among people from its checkpoint, and ORCA) whose bags carry the social metrics into
+the suite's table (``table: crowd``) and the report's leaderboard."""
 
 from __future__ import annotations
 
